@@ -1,0 +1,69 @@
+"""The two contact LCPs of a model at a given state, shared by both integrators.
+
+- `impact`: velocity-level LCP with Newton's impact law (coefficient model.e_N) on the corners at the ground;
+- `uplift`: acceleration-level LCP on the corners that touch the ground with zero normal velocity; its active
+  set is the contact mode that follows (full contact, rocking on either corner, flight).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .lcp import ContactSolution, solve_contact_lcp
+from .modes import CLOSED, Mode, mode_from_closed
+from .models.base import RockingModel
+
+
+def inverse_mass(model: RockingModel, q: np.ndarray) -> np.ndarray:
+    inv = getattr(model, "inverse_mass_matrix", None)
+    return inv(q) if inv is not None else np.linalg.inv(model.mass_matrix(q))
+
+
+def impact(model: RockingModel, q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
+           e_N: float | None = None) -> ContactSolution:
+    """Post-impact velocities from the impact LCP (Newton's law, sticking on contacts that take impulse).
+
+    ``forced`` contacts are closed plastically (w_N = 0, e_N = 0 on them): the Zeno rule."""
+    e = model.e_N if e_N is None else e_N
+    W_N, W_T = model.contact_jacobians(q)
+    U_minus = W_N.T @ v_minus
+    b_N = e * np.minimum(U_minus, 0.0)
+    for i in forced:
+        b_N[i] = 0.0
+    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, np.zeros(2),
+                             candidates, forced)
+
+
+def uplift(model: RockingModel, q: np.ndarray, v: np.ndarray, ag: float, candidates,
+           forced=()) -> ContactSolution:
+    """Acceleration-level LCP: which of ``candidates`` stay closed (active) and their contact forces."""
+    W_N, W_T = model.contact_jacobians(q)
+    a_N, a_T = model.contact_drift(q, v)
+    Minv = inverse_mass(model, q)
+    acc_free = Minv @ model.forces(q, v, ag)
+    return solve_contact_lcp(Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced)
+
+
+def closed_candidates(model: RockingModel, q: np.ndarray, v: np.ndarray, gap_tol: float,
+                      v_tol: float) -> list[int]:
+    """Corners at the ground (|g_N| <= gap_tol) with zero normal velocity (|U_N| <= v_tol)."""
+    g = model.gaps(q)
+    W_N, _ = model.contact_jacobians(q)
+    U = W_N.T @ v
+    return [i for i in (0, 1) if g[i] <= gap_tol and abs(U[i]) <= v_tol]
+
+
+def next_mode(model: RockingModel, q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
+              v_tol: float) -> Mode:
+    """Contact mode that follows a consistent state (q, v), decided by the uplift LCP."""
+    cand = closed_candidates(model, q, v, gap_tol, v_tol)
+    if not cand:
+        return Mode.FLIGHT
+    return mode_from_closed(uplift(model, q, v, ag, cand).active)
+
+
+def mode_forces(model: RockingModel, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
+    """Normal contact forces [N] of the closed corners of ``mode`` (bilateral), shape (2,)."""
+    closed = CLOSED[mode]
+    if not closed:
+        return np.zeros(2)
+    return uplift(model, q, v, ag, closed, forced=closed).P_N

@@ -1,0 +1,130 @@
+"""Common interface of the rocking models.
+
+A model bundles, in the Siconos sense,
+- the dynamical system: generalized coordinates q (full description, ground frame), mass matrix M(q),
+  non-contact generalized forces f(q, v, ag) (gravity, elastic, damping, gyroscopic, and the inertial force
+  of the ground acceleration ag);
+- the contact relation: the two base corners (index 0 = left, 1 = right), their normal gaps g_N(q), the
+  normal and tangential Jacobians W_N, W_T (columns per contact) and the drift terms W_dot^T v;
+- the reduced coordinates r of each contact mode (`Mode`), with the embedding q = q(r), v = J(r) r_dot.
+
+The nonsmooth law (Newton impact, sticking) and the one-step problems (LCPs) live in `rocking_model.lcp`;
+the integrators only talk to this interface.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from ..modes import Mode
+
+
+class RockingModel(ABC):
+    """Abstract planar body with two base corners on a horizontally moving rigid ground."""
+
+    #: names of the full generalized coordinates, in order
+    dof_names: tuple[str, ...] = ()
+    #: index of the rotation phi in q
+    phi_index: int = -1
+    #: coefficient of restitution of Newton's impact law [1]
+    e_N: float = 0.0
+    #: gravity [m/s2]
+    g: float = 9.81
+
+    @property
+    def n_dof(self) -> int:
+        return len(self.dof_names)
+
+    # ------------------------------------------------------------------ dynamical system
+    @abstractmethod
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q), shape (n, n)."""
+
+    @abstractmethod
+    def forces(self, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
+        """Non-contact generalized forces f(q, v, ag), shape (n,), so that M q_ddot = f + contact forces."""
+
+    def stiff_jacobians(self, q: np.ndarray, v: np.ndarray):
+        """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f, treated implicitly by the time-stepper.
+
+        None when f has no stiff part (the rigid block)."""
+        return None
+
+    # ------------------------------------------------------------------ contact relation
+    @abstractmethod
+    def gaps(self, q: np.ndarray) -> np.ndarray:
+        """Normal gaps g_N of the left and right corners [m], shape (2,)."""
+
+    @abstractmethod
+    def contact_jacobians(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(W_N, W_T), each shape (n, 2): normal and tangential velocity of corner i is W[:, i] . v."""
+
+    @abstractmethod
+    def contact_drift(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(a_N, a_T), each shape (2,): the terms (d/dt W)^T v of the corner accelerations."""
+
+    # ------------------------------------------------------------------ contact modes
+    @abstractmethod
+    def mode_dofs(self, mode: Mode) -> tuple[int, ...]:
+        """Indices in q of the reduced coordinates r integrated in ``mode``."""
+
+    @abstractmethod
+    def embed(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Full (q, v) from the reduced state of ``mode`` (closed contacts stuck to the ground)."""
+
+    @abstractmethod
+    def mode_jacobian(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(J, J_dot r_dot): v = J r_dot and v_dot = J r_ddot + J_dot r_dot for ``mode``."""
+
+    def reduce(self, mode: Mode, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reduced state of ``mode`` read from a full state that satisfies the mode's constraints."""
+        idx = list(self.mode_dofs(mode))
+        return np.array(q, dtype=float)[idx], np.array(v, dtype=float)[idx]
+
+    def reduced_acceleration(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray, ag: float) -> np.ndarray:
+        """r_ddot of ``mode``: (J^T M J) r_ddot = J^T (f - M J_dot r_dot) (Lagrange on the constrained system)."""
+        if len(r) == 0:
+            return np.zeros(0)
+        q, v = self.embed(mode, r, r_dot)
+        J, jd = self.mode_jacobian(mode, r, r_dot)
+        M = self.mass_matrix(q)
+        rhs = J.T @ (self.forces(q, v, ag) - M @ jd)
+        return np.linalg.solve(J.T @ M @ J, rhs)
+
+    # ------------------------------------------------------------------ quantities
+    @abstractmethod
+    def rest_position(self) -> np.ndarray:
+        """q at rest in full contact."""
+
+    @abstractmethod
+    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic + potential energy relative to rest, in the ground frame [J]."""
+
+    @abstractmethod
+    def outputs(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
+        """Named outputs of a full state (the FMU output names)."""
+
+    @property
+    @abstractmethod
+    def length_scale(self) -> float:
+        """Characteristic length for tolerances [m]."""
+
+    @property
+    @abstractmethod
+    def time_scale(self) -> float:
+        """Characteristic time of the rocking motion, 1/p [s]."""
+
+    @abstractmethod
+    def initial_state(self, phi_0: float = 0.0, phi_dot_0: float = 0.0, **extra) -> tuple[Mode, np.ndarray, np.ndarray]:
+        """(mode, q, v) of an initial condition; a non-zero tilt starts on the corresponding pivot.
+
+        Raises ValueError naming the variable and its allowed range for unphysical values."""
+
+    def mode_of_initial_state(self, phi_0: float, phi_dot_0: float) -> Mode:
+        """Mode of an initial tilt: phi > 0 (or phi = 0 rotating positive) pivots on the left corner."""
+        if phi_0 > 0.0 or (phi_0 == 0.0 and phi_dot_0 > 0.0):
+            return Mode.LEFT
+        if phi_0 < 0.0 or (phi_0 == 0.0 and phi_dot_0 < 0.0):
+            return Mode.RIGHT
+        return Mode.FULL

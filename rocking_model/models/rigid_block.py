@@ -1,0 +1,186 @@
+"""Rigid rocking block (Giouvanidis & Dimitrakopoulos 2017, Sect. 2; Housner 1963).
+
+Rectangular block of half-width b [m], half-height h [m] and mass m [kg] on a rigid ground moving
+horizontally with acceleration ag [m/s2]. Full coordinates q = [x, y, phi]: centroid position in the ground
+frame (y absolute, y = h at rest) and rotation phi, positive counter-clockwise; phi > 0 pivots on the left
+corner. Corner i sits at body coordinates (s_i b, -h), s = (-1, +1).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..modes import Mode, pivot_sign
+from ..validation import check_real
+from .base import RockingModel
+
+_S = (-1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class RigidBlock(RockingModel):
+    """Rigid block: b, h [m] half-dimensions, m [kg], g [m/s2], e_N [1] in [0, 1]."""
+
+    b: float = 0.2
+    h: float = 1.0
+    m: float = 1.0
+    g: float = 9.81
+    e_N: float = 0.0
+    dof_names: tuple = field(default=("x", "y", "phi"), init=False, repr=False)
+    phi_index: int = field(default=2, init=False, repr=False)
+
+    def __post_init__(self):
+        for name in ("b", "h", "m", "g"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=0.0, lo_open=True))
+        object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
+        M = np.diag([self.m, self.m, self.I_c])
+        object.__setattr__(self, "_M", M)
+        object.__setattr__(self, "_Minv", np.diag(1.0 / np.diag(M)))
+
+    # ------------------------------------------------------------------ derived parameters
+    @property
+    def R(self) -> float:
+        """Half-diagonal sqrt(b^2 + h^2) [m]."""
+        return math.hypot(self.b, self.h)
+
+    @property
+    def alpha(self) -> float:
+        """Slenderness angle atan(b/h) [rad]."""
+        return math.atan2(self.b, self.h)
+
+    @property
+    def I_c(self) -> float:
+        """Centroidal moment of inertia m R^2 / 3 [kg m2]."""
+        return self.m * self.R ** 2 / 3.0
+
+    @property
+    def I_O(self) -> float:
+        """Moment of inertia about a corner 4/3 m R^2 [kg m2]."""
+        return 4.0 * self.m * self.R ** 2 / 3.0
+
+    @property
+    def p(self) -> float:
+        """Frequency parameter sqrt(3 g / (4 R)) [rad/s]."""
+        return math.sqrt(3.0 * self.g / (4.0 * self.R))
+
+    @property
+    def housner_r(self) -> float:
+        """Housner's coefficient of restitution 1 - 1.5 sin^2(alpha) [1]."""
+        return 1.0 - 1.5 * math.sin(self.alpha) ** 2
+
+    @property
+    def length_scale(self) -> float:
+        return self.R
+
+    @property
+    def time_scale(self) -> float:
+        return 1.0 / self.p
+
+    # ------------------------------------------------------------------ dynamical system
+    def mass_matrix(self, q):
+        return self._M
+
+    def inverse_mass_matrix(self, q):
+        return self._Minv
+
+    def forces(self, q, v, ag):
+        # ground frame: inertial force -m ag along x, gravity along -y
+        return np.array([-self.m * ag, -self.m * self.g, 0.0])
+
+    # ------------------------------------------------------------------ contact relation
+    def gaps(self, q):
+        y, phi = q[1], q[2]
+        sp, cp = math.sin(phi), math.cos(phi)
+        return np.array([y + s * self.b * sp - self.h * cp for s in _S])
+
+    def contact_jacobians(self, q):
+        phi = q[2]
+        sp, cp = math.sin(phi), math.cos(phi)
+        b, h = self.b, self.h
+        W_N = np.array([[0.0, 0.0], [1.0, 1.0], [-b * cp + h * sp, b * cp + h * sp]])
+        W_T = np.array([[1.0, 1.0], [0.0, 0.0], [b * sp + h * cp, -b * sp + h * cp]])
+        return W_N, W_T
+
+    def contact_drift(self, q, v):
+        phi, w = q[2], v[2]
+        sp, cp = math.sin(phi), math.cos(phi)
+        b, h = self.b, self.h
+        a_N = np.array([(-s * b * sp + h * cp) * w * w for s in _S])
+        a_T = np.array([(-s * b * cp - h * sp) * w * w for s in _S])
+        return a_N, a_T
+
+    # ------------------------------------------------------------------ contact modes
+    def mode_dofs(self, mode):
+        if mode == Mode.FULL:
+            return ()
+        if mode == Mode.FLIGHT:
+            return (0, 1, 2)
+        return (2,)
+
+    def embed(self, mode, r, r_dot):
+        if mode == Mode.FULL:
+            return np.array([0.0, self.h, 0.0]), np.zeros(3)
+        if mode == Mode.FLIGHT:
+            return np.array(r, dtype=float), np.array(r_dot, dtype=float)
+        s = pivot_sign(mode)
+        phi, w = float(r[0]), float(r_dot[0])
+        sp, cp = math.sin(phi), math.cos(phi)
+        b, h = self.b, self.h
+        q = np.array([s * b * (1.0 - cp) - h * sp, -s * b * sp + h * cp, phi])
+        v = np.array([(s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w, w])
+        return q, v
+
+    def mode_jacobian(self, mode, r, r_dot):
+        if mode == Mode.FULL:
+            return np.zeros((3, 0)), np.zeros(3)
+        if mode == Mode.FLIGHT:
+            return np.eye(3), np.zeros(3)
+        s = pivot_sign(mode)
+        phi, w = float(r[0]), float(r_dot[0])
+        sp, cp = math.sin(phi), math.cos(phi)
+        b, h = self.b, self.h
+        J = np.array([[s * b * sp - h * cp], [-s * b * cp - h * sp], [1.0]])
+        jd = np.array([(s * b * cp + h * sp) * w * w, (s * b * sp - h * cp) * w * w, 0.0])
+        return J, jd
+
+    def rocking_acceleration(self, phi: float, ag: float, s: int) -> float:
+        """phi_ddot on pivot s (-1 left, +1 right): p^2 [(ag/g) cos(alpha + s phi) + s sin(alpha + s phi)]."""
+        a = self.alpha + s * phi
+        return self.p ** 2 * ((ag / self.g) * math.cos(a) + s * math.sin(a))
+
+    def reduced_acceleration(self, mode, r, r_dot, ag):
+        if mode == Mode.FULL:
+            return np.zeros(0)
+        if mode == Mode.FLIGHT:
+            return np.array([-ag, -self.g, 0.0])
+        return np.array([self.rocking_acceleration(float(r[0]), ag, pivot_sign(mode))])
+
+    # ------------------------------------------------------------------ quantities
+    def rest_position(self):
+        return np.array([0.0, self.h, 0.0])
+
+    def initial_state(self, phi_0=0.0, phi_dot_0=0.0, **extra):
+        if extra:
+            raise ValueError(f"unknown initial values for RigidBlock: {sorted(extra)}; allowed: phi_0, phi_dot_0")
+        phi_0 = check_real("phi_0", phi_0, lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
+        phi_dot_0 = check_real("phi_dot_0", phi_dot_0)
+        mode = self.mode_of_initial_state(phi_0, phi_dot_0)
+        if mode == Mode.FULL:
+            q, v = self.embed(mode, np.zeros(0), np.zeros(0))
+        else:
+            q, v = self.embed(mode, np.array([phi_0]), np.array([phi_dot_0]))
+        return mode, q, v
+
+    def energy(self, q, v):
+        kin = 0.5 * (self.m * (v[0] ** 2 + v[1] ** 2) + self.I_c * v[2] ** 2)
+        return kin + self.m * self.g * (q[1] - self.h)
+
+    def outputs(self, q, v):
+        return {
+            "phi": float(q[2]), "phi_dot": float(v[2]),
+            "x": float(q[0]), "y": float(q[1] - self.h),
+            "x_dot": float(v[0]), "y_dot": float(v[1]),
+            "energy": float(self.energy(q, v)),
+        }

@@ -1,0 +1,43 @@
+"""Contact modes shared by all models (the integer codes are an FMU contract)."""
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class Mode(IntEnum):
+    """Which base corners touch the ground.
+
+    FULL: both corners closed; LEFT: rocking on the left corner (phi > 0);
+    RIGHT: rocking on the right corner (phi < 0); FLIGHT: both corners open.
+    """
+
+    FULL = 0
+    LEFT = 1
+    RIGHT = 2
+    FLIGHT = 3
+
+
+#: closed contacts (0 = left corner, 1 = right corner) of each mode
+CLOSED = {
+    Mode.FULL: (0, 1),
+    Mode.LEFT: (0,),
+    Mode.RIGHT: (1,),
+    Mode.FLIGHT: (),
+}
+
+
+def mode_from_closed(closed) -> Mode:
+    """The mode whose closed contact set is ``closed`` (an iterable of 0/1)."""
+    s = frozenset(closed)
+    if s == {0, 1}:
+        return Mode.FULL
+    if s == {0}:
+        return Mode.LEFT
+    if s == {1}:
+        return Mode.RIGHT
+    return Mode.FLIGHT
+
+
+def pivot_sign(mode: Mode) -> int:
+    """s of the pivot corner at body abscissa s*b: -1 left, +1 right."""
+    return -1 if mode == Mode.LEFT else 1
