@@ -80,6 +80,8 @@ class EventDriven:
         self.max_events = max_events
         self.impacts = 0
         self.impact_times: list[float] = []
+        #: (t, v_minus, v_plus) of every impact, full velocities
+        self.impact_log: list[tuple] = []
         self.overturned = False
         self.n_steps = 0
         self._h = None
@@ -254,6 +256,7 @@ class EventDriven:
         if any(U_minus[i] < -self.v_tol for i in cand):
             self.impacts += 1
             self.impact_times.append(t)
+            self.impact_log.append((t, np.array(v), np.array(sol.v)))
         self._enter(q, sol.v, ag_t)
 
     def _select_mode(self, q, v, ag_t) -> Mode:
