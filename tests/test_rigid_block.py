@@ -240,3 +240,17 @@ def test_bad_simulator_input():
         sim.advance(0.5, 0.0)
     with pytest.raises(ValueError, match="ag"):
         sim.advance(2.0, float("inf"))
+
+
+def test_closed_form_contact_forces_equal_lcp():
+    from rocking_model.contact import mode_forces
+    block = RigidBlock(b=0.3, h=1.1, m=2.5)
+    rng = np.random.default_rng(3)
+    for mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+        for _ in range(10):
+            k = len(block.mode_dofs(mode))
+            r = rng.uniform(-0.3, 0.3, k) * (1 if mode != Mode.RIGHT else -1)
+            q, v = block.embed(mode, r, rng.uniform(-1, 1, k))
+            ag = rng.uniform(-4, 4)
+            assert block.contact_forces(mode, q, v, ag) == pytest.approx(
+                mode_forces(block, mode, q, v, ag), rel=1e-10, abs=1e-10)

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, mode_forces, uplift
+from ..contact import closed_candidates, impact, uplift
 from ..modes import CLOSED, Mode, mode_from_closed, pivot_sign
 from .rk import DOP853
 
@@ -142,6 +142,11 @@ class EventDriven:
     def _settle(self, t, ag_t):
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
         q, v = self.state()
+        closed = CLOSED[self.mode]
+        if all(i in closed for i in closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)):
+            lam = self.model.contact_forces(self.mode, q, v, ag_t)
+            if all(lam[i] > 0.0 for i in closed):
+                return      # the current active set solves the uplift LCP
         mode = self._select_mode(q, v, ag_t)
         if mode != self.mode:
             self._set_state(mode, q, v)
@@ -166,7 +171,7 @@ class EventDriven:
         if mode == Mode.FULL:
             def G(t, y):
                 q, v = model.embed(mode, y[:k], y[k:])
-                return mode_forces(model, mode, q, v, ag(t)) / F
+                return model.contact_forces(mode, q, v, ag(t)) / F
             return G, (_KIND_RELEASE, _KIND_RELEASE), (0, 1)
         if mode == Mode.FLIGHT:
             def G(t, y):
@@ -179,7 +184,7 @@ class EventDriven:
 
         def G(t, y):
             q, v = model.embed(mode, y[:k], y[k:])
-            lam = mode_forces(model, mode, q, v, ag(t))[pivot] / F
+            lam = model.contact_forces(mode, q, v, ag(t))[pivot] / F
             phi = y[ip]
             return np.array([-s * phi, lam, 0.5 * math.pi - abs(phi)])
         return G, (_KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN), (1 - pivot, pivot, None)

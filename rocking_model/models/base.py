@@ -92,6 +92,14 @@ class RockingModel(ABC):
         rhs = J.T @ (self.forces(q, v, ag) - M @ jd)
         return np.linalg.solve(J.T @ M @ J, rhs)
 
+    def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
+        """Normal forces [N] of the closed corners of ``mode`` held closed (bilateral), shape (2,).
+
+        Generic: the acceleration-level problem with the mode's corners forced closed; models may override
+        with a closed form."""
+        from ..contact import mode_forces
+        return mode_forces(self, mode, q, v, ag)
+
     # ------------------------------------------------------------------ quantities
     @abstractmethod
     def rest_position(self) -> np.ndarray:

@@ -157,6 +157,24 @@ class RigidBlock(RockingModel):
             return np.array([-ag, -self.g, 0.0])
         return np.array([self.rocking_acceleration(float(r[0]), ag, pivot_sign(mode))])
 
+    def contact_forces(self, mode, q, v, ag):
+        m, g = self.m, self.g
+        if mode == Mode.FULL:
+            # vertical and moment equilibrium with the horizontal sticking force m ag at y = -h
+            d = 0.5 * m * ag * self.h / self.b
+            return np.array([0.5 * m * g + d, 0.5 * m * g - d])
+        if mode == Mode.FLIGHT:
+            return np.zeros(2)
+        # vertical Newton's law of the centroid: lambda_N = m (y_ddot + g)
+        s = pivot_sign(mode)
+        phi, w = float(q[2]), float(v[2])
+        acc = self.rocking_acceleration(phi, ag, s)
+        y_dd = (-s * self.b * math.cos(phi) - self.h * math.sin(phi)) * acc + \
+            (s * self.b * math.sin(phi) - self.h * math.cos(phi)) * w * w
+        out = np.zeros(2)
+        out[0 if s < 0 else 1] = m * (y_dd + g)
+        return out
+
     # ------------------------------------------------------------------ quantities
     def rest_position(self):
         return np.array([0.0, self.h, 0.0])
