@@ -2,10 +2,11 @@
 rocking oscillator with unilateral corner contacts, Newton's impact law and sticking, impact and uplift as
 LCPs, a Moreau-Jean time-stepper and an event-driven scheme."""
 from .ground_motion import ConstantMotion, FunctionMotion, GroundMotion, SampledMotion, SinePulse
+from .models.flexible_oscillator import FlexibleOscillator
 from .models.rigid_block import RigidBlock
 from .modes import Mode
 from .simulation import Result, Simulator, simulate
 
-__all__ = ["RigidBlock", "Mode", "Simulator", "simulate", "Result", "GroundMotion", "ConstantMotion",
+__all__ = ["RigidBlock", "FlexibleOscillator", "Mode", "Simulator", "simulate", "Result", "GroundMotion", "ConstantMotion",
            "FunctionMotion", "SampledMotion", "SinePulse"]
 __version__ = "0.1.0"

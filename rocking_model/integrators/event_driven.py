@@ -204,20 +204,42 @@ class EventDriven:
                          max_step=self.dt_max, first_step=self._h)
         g_prev = G(self.t, self.y)
         armed = g_prev > 0.0
+        dip_ids = [i for i, kind in enumerate(kinds) if kind != _KIND_OVERTURN]
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
             g_new = G(stepper.t, stepper.y)
             hits = np.nonzero(armed & (g_new <= 0.0))[0]
-            if hits.size:
+            dense = None
+            t0, t_hit = stepper.t_old, stepper.t
+            if not hits.size and dip_ids:
+                # a gap or a contact force can dip below zero and come back within one step (a short
+                # excursion of the base of a vibrating column): look inside the step when its midpoint dips
                 dense = stepper.dense_output()
-                t0 = stepper.t_old
+                tm = 0.5 * (t0 + stepper.t)
+                gm = G(tm, dense(tm))
+                dip = [i for i in dip_ids if armed[i] and gm[i] < min(g_prev[i], g_new[i])]
+                if dip:
+                    ts = np.linspace(t0, stepper.t, 17)[1:-1]
+                    for j, tj in enumerate(ts):
+                        gj = G(tj, dense(tj))
+                        neg = [i for i in dip if gj[i] <= 0.0]
+                        if neg:
+                            ta = t0 if j == 0 else ts[j - 1]
+                            ga = g_prev if j == 0 else G(ta, dense(ta))
+                            hits = np.array(neg)
+                            g_prev, g_new = ga, gj
+                            t0, t_hit = ta, tj
+                            break
+            if hits.size:
+                if dense is None:
+                    dense = stepper.dense_output()
                 xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
                 best = None
                 for i in hits:
                     def gi(t, i=i):
                         return G(t, dense(t))[i]
-                    te = _locate(gi, t0, g_prev[i], stepper.t, g_new[i], xtol)
+                    te = _locate(gi, t0, g_prev[i], t_hit, g_new[i], xtol)
                     if best is None or te < best[0]:
                         best = (te, i)
                 te, i = best
