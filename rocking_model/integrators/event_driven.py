@@ -273,6 +273,13 @@ class EventDriven:
         model = self.model
         g = model.gaps(q)
         cand = [i for i in (0, 1) if g[i] <= self.gap_tol]
+        classical = getattr(model, "classical_impact_velocity", None)
+        if classical is not None and self.mode in (Mode.LEFT, Mode.RIGHT) and len(cand) == 2:
+            v_plus = classical(q, v, self.mode)
+            if v_plus is not None:
+                self._record_impact(t, v, v_plus)
+                self._enter(q, v_plus, ag_t)
+                return
         sol = impact(model, q, v, cand)
         W_N, _ = model.contact_jacobians(q)
         U_plus = W_N.T @ sol.v
@@ -281,10 +288,13 @@ class EventDriven:
             sol = impact(model, q, v, cand, forced=zeno)
         U_minus = W_N.T @ v
         if any(U_minus[i] < -self.v_tol for i in cand):
-            self.impacts += 1
-            self.impact_times.append(t)
-            self.impact_log.append((t, np.array(v), np.array(sol.v)))
+            self._record_impact(t, v, sol.v)
         self._enter(q, sol.v, ag_t)
+
+    def _record_impact(self, t, v_minus, v_plus):
+        self.impacts += 1
+        self.impact_times.append(t)
+        self.impact_log.append((t, np.array(v_minus), np.array(v_plus)))
 
     def _select_mode(self, q, v, ag_t) -> Mode:
         """The mode that the acceleration LCP selects at the consistent state (q, v)."""

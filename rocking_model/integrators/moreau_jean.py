@@ -6,9 +6,9 @@ Per step of size dt (Acary & Brogliato 2008, Ch. 10; Siconos' MoreauJeanOSI):
     W_hat = M(q) + dt theta C + dt^2 theta^2 K        (K, C: stiff linear part of -df/dq, -df/dv)
     q+ = q + dt [(1 - theta) v + theta v+]
 
-A corner is active when its predicted gap g_N + dt [(1 - theta) U_N + theta U_N,free] <= 0 (the gap at the end
-of the step without contact percussion; with the free velocity rather than U_N alone, a resting or pivoting
-corner stays active instead of free-falling for one step); on active corners Newton's law
+A corner is active when its predicted gap g_N + (dt/2) U_N <= 0 (up to round-off) or when the free motion
+would close it within the step, g_N + dt [(1 - theta) U_N + theta U_N,free] <= 0 (so a resting or pivoting
+corner never free-falls for one step); on active corners Newton's law
 0 <= U_N+ + e_N U_N ⊥ P_N >= 0 with sticking where P_N > 0 (the impact LCP of `rocking_model.lcp`).
 theta = 1/2 keeps the stiff column free of numerical damping; theta = 1 damps it.
 After the step, the positions of the corners that carried impulse are projected back onto the ground
@@ -83,9 +83,26 @@ class MoreauJean:
         g = model.gaps(q)
         W_N, W_T = model.contact_jacobians(q)
         U = W_N.T @ v
-        # predicted gap at the end of the step if no percussion acted
-        g_pred = g + dt * ((1.0 - theta) * U + theta * (W_N.T @ v_free))
-        active = [i for i in (0, 1) if g_pred[i] <= 0.0]
+        classical = getattr(model, "classical_impact_velocity", None)
+        rule_impact = False
+        if classical is not None and self.mode in (Mode.LEFT, Mode.RIGHT):
+            hitting = 1 if self.mode == Mode.LEFT else 0
+            if g[hitting] + dt * U[hitting] <= 0.0 and U[hitting] < 0.0:
+                # classical impact rule: replace the pre-impact velocity by the rule's post-impact one; the
+                # step's LCP (e_N applied to the new, non-approaching velocity) then keeps the contacts closed
+                v_rule = classical(q, v, self.mode)
+                if v_rule is not None:
+                    v = v_rule
+                    v_free = v + (v_free - self.v)
+                    U = W_N.T @ v
+                    rule_impact = True
+        # a corner enters the LCP if it closes by the classical prediction g + dt/2 U (with a round-off margin
+        # for corners just projected onto the ground) or if the free motion would close it within the step;
+        # a needless candidate only gets a zero percussion from the LCP
+        g_half = g + 0.5 * dt * U
+        g_free = g + dt * ((1.0 - theta) * U + theta * (W_N.T @ v_free))
+        margin = 1e-12 * model.length_scale
+        active = [i for i in (0, 1) if g_half[i] <= margin or g_free[i] <= 0.0]
         if active:
             b_N = model.e_N * np.minimum(U, 0.0)
             sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(2), active)
@@ -96,7 +113,7 @@ class MoreauJean:
             closed = set()
         v_scale = 1e-9 * math.sqrt(model.g * model.length_scale)
         new = [i for i in closed - self._closed if U[i] < -v_scale]
-        if new:
+        if new or rule_impact:
             self.impacts += 1
             self.impact_times.append(t + dt)
         self._closed = closed

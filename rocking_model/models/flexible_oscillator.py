@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..modes import Mode, pivot_sign
-from ..validation import check_real
+from ..validation import check_choice, check_real
 from .base import RockingModel
 
 
@@ -38,7 +38,9 @@ class FlexibleOscillator(RockingModel):
     Parameters (SI units): m top mass [kg] (> 0), m_c column mass [kg] (>= 0), m_b base mass [kg] (>= 0),
     rho radius of gyration of the base [m] (>= 0), h column height [m] (> 0), b base half-width [m] (> 0),
     EI flexural rigidity [N m2] (> 0), zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
-    [1] in [0, 1], g gravity [m/s2] (> 0). The mass matrix must be non-singular, which needs rotary inertia
+    [1] in [0, 1], g gravity [m/s2] (> 0), impact_rule 0 (LCP with Newton's law, default) or 1 (classical
+    rule of the earlier literature: angular momentum about the impacting corner conserved, u_dot continuous,
+    rocking on about the new corner; `rocking_model.post_impact.classical_impact`). The mass matrix must be non-singular, which needs rotary inertia
     besides the top mass: m_c > 0 or m_b rho^2 > 0 (with m_c = 0 and I_mb = 0 the base rotation and u both
     move the top mass only, and M is singular at u = 0).
 
@@ -61,6 +63,7 @@ class FlexibleOscillator(RockingModel):
     EI: float = 9.45e5
     zeta: float = 0.02
     e_N: float = 0.0
+    impact_rule: int = 0
     g: float = 9.81
     dof_names: tuple = field(default=("u", "x", "y", "phi"), init=False, repr=False)
     phi_index: int = field(default=3, init=False, repr=False)
@@ -72,6 +75,8 @@ class FlexibleOscillator(RockingModel):
                           ("b", pos), ("EI", pos), ("zeta", nonneg), ("g", pos)):
             object.__setattr__(self, name, check_real(name, getattr(self, name), **rng))
         object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
+        object.__setattr__(self, "impact_rule", check_choice(
+            "impact_rule", self.impact_rule, {0: 0, 1: 1, "lcp": 0, "classical": 1}))
         if self.m_c == 0.0 and self.m_b * self.rho ** 2 == 0.0:
             bad = "rho" if self.rho == 0.0 else "m_b"
             raise ValueError(
@@ -284,6 +289,14 @@ class FlexibleOscillator(RockingModel):
     # ------------------------------------------------------------------ quantities
     def rest_position(self):
         return np.zeros(4)
+
+    def classical_impact_velocity(self, q, v_minus, pivot):
+        """Post-impact velocities of the classical rule (``impact_rule = 1``) for an impact at phi = 0 while
+        rocking on ``pivot``; None when the LCP with Newton's law is the rule (the default)."""
+        if self.impact_rule == 0:
+            return None
+        from ..post_impact import classical_impact
+        return classical_impact(self, float(q[0]), float(v_minus[0]), float(v_minus[3]), pivot).v_plus
 
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, u_0=0.0, u_dot_0=0.0, **extra):
         if extra:
