@@ -91,10 +91,10 @@ def test_moreau_jean_converges_to_event_driven():
 
 def test_schemes_agree_on_impacts_and_pulse_response():
     model = FlexibleOscillator()
-    pulse = SinePulse(A=0.6 * 9.81, omega_p=2 * math.pi * 1.0)
+    pulse = SinePulse(A=0.25 * 9.81, omega_p=2 * math.pi * 1.0)   # max |phi| ~ 0.1 rad, no overturning
     ed = simulate(model, pulse, 3.0, scheme="event_driven", tolerance=1e-10, output_interval=0.01)
     mj = simulate(model, pulse, 3.0, scheme="moreau_jean", dt_max=1e-4, output_interval=0.01)
-    assert ed.phi.max() > 5e-3
+    assert np.abs(ed.phi).max() > 5e-3 and not ed.overturned[-1]
     assert np.max(np.abs(mj.phi - ed.phi)) < 0.05 * np.abs(ed.phi).max()
     # Moreau-Jean counts every re-closing of a corner as an impact (short base bounces a step long), so
     # only the first impact time is compared (after a long excursion near the overturning boundary the phase
