@@ -1,0 +1,248 @@
+"""RigidRockingBlock FMU: build, validation, equivalence with the Python Simulator, error paths."""
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+pytest.importorskip("pythonfmu")
+from fmpy.simulation import Input  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from rocking_model.fmi import FMUError, run_fmu  # noqa: E402
+from rocking_model.models.rigid_block import RigidBlock  # noqa: E402
+from rocking_model.simulation import Simulator  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+PARAMS = dict(b=0.2, h=1.0, m=1.0, g=9.81, e_N=0.0, phi_0=0.0, phi_dot_0=0.0, dt_max=1e-3, tolerance=1e-8)
+OUTPUTS = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"]
+
+
+def _load_build_module():
+    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="session")
+def fmu(tmp_path_factory) -> Path:
+    dest = tmp_path_factory.mktemp("fmus")
+    built = _load_build_module().build_all(dest, names=["RigidRockingBlock"])
+    assert [p.name for p in built] == ["RigidRockingBlock.fmu"]
+    return built[0]
+
+
+def pulse_table(amplitude, t_end=2.0, period=1.0, n=201):
+    """One-sine ground-acceleration pulse as an fmpy input table (no duplicate times: no input events)."""
+    t = np.linspace(0.0, t_end, n)
+    ag = np.where(t < period, amplitude * np.sin(2 * np.pi * t / period), 0.0)
+    return np.array(list(zip(t, ag)), dtype=[("time", np.float64), ("ag", np.float64)])
+
+
+def reference(table, scheme, start, stop, h, params=PARAMS):
+    """Drive the Simulator as fmpy drives the FMU: communication points start + n h, the input set at the
+    start of each step from fmpy's interpolant of the table (zero-order hold over the step)."""
+    p = params
+    sim = Simulator(RigidBlock(b=p["b"], h=p["h"], m=p["m"], g=p["g"], e_N=p["e_N"]), scheme=scheme,
+                    dt_max=p["dt_max"], tolerance=p["tolerance"], t0=start, phi_0=p["phi_0"],
+                    phi_dot_0=p["phi_dot_0"])
+    values = table["ag"].reshape(1, -1)
+    times, rows = [start], [sim.outputs()]
+    time, n = start, 0
+    frozen = False
+    while not (time > stop or math.isclose(time, stop)):
+        nxt = start + (n + 1) * h
+        ag = float(Input.interpolate(time=time, t=table["time"], table=values, after_event=True)[0][0])
+        if not frozen:  # the FMU stops integrating once the block has overturned
+            sim.advance(time + (nxt - time), ag)
+            frozen = sim.outputs()["overturned"]
+        time = nxt
+        n += 1
+        times.append(time)
+        rows.append(sim.outputs())
+    return np.array(times), {k: np.array([r[k] for r in rows]) for k in rows[0]}
+
+
+def model_description(fmu_path):
+    with zipfile.ZipFile(fmu_path) as zf:
+        return ElementTree.fromstring(zf.read("modelDescription.xml"))
+
+
+# ---------------------------------------------------------------------------------------------- XML
+def test_validate_fmu_reports_no_problems(fmu):
+    assert validate_fmu(str(fmu)) == []
+
+
+def test_model_description_units_variability_structure(fmu):
+    root = model_description(fmu)
+    assert [c.tag for c in root] == ["CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment",
+                                     "ModelVariables", "ModelStructure"]
+    assert root.get("description")
+    cs = root.find("CoSimulation")
+    assert cs.get("canInterpolateInputs") == "false"
+    assert cs.get("canGetAndSetFMUstate") == "false"
+    units = {u.get("name"): u.find("BaseUnit").attrib for u in root.find("UnitDefinitions")}
+    assert units["m/s2"] == {"m": "1", "s": "-2"}
+    assert units["J"] == {"kg": "1", "m": "2", "s": "-2"}
+    assert units["rad/s"] == {"rad": "1", "s": "-1"}
+    expected_units = dict(b="m", h="m", m="kg", g="m/s2", e_N="1", phi_0="rad", phi_dot_0="rad/s",
+                          dt_max="s", tolerance="1", ag="m/s2", phi="rad", phi_dot="rad/s", x="m", y="m",
+                          x_dot="m/s", y_dot="m/s", energy="J")
+    variables = {}
+    for i, sv in enumerate(root.find("ModelVariables"), start=1):
+        (typ,) = list(sv)
+        variables[sv.get("name")] = (i, sv, typ)
+        assert sv.get("description"), sv.get("name")
+        assert sv.get("variability"), sv.get("name")
+        if typ.tag == "Real":
+            assert typ.get("unit") in units, sv.get("name")
+    assert {n: v[2].get("unit") for n, v in variables.items() if v[2].tag == "Real"} == expected_units
+    assert set(variables) == set(expected_units) | {"scheme", "contact", "impacts", "overturned"}
+    for name in ("b", "h", "m", "g", "e_N", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance"):
+        sv = variables[name][1]
+        assert (sv.get("causality"), sv.get("variability"), sv.get("initial")) == ("parameter", "fixed", "exact")
+        assert variables[name][2].get("start") is not None
+    assert float(variables["b"][2].get("start")) == 0.2
+    assert float(variables["g"][2].get("start")) == 9.81
+    assert variables["scheme"][2].tag == "Integer"
+    assert (variables["ag"][1].get("causality"), variables["ag"][1].get("variability")) == ("input", "continuous")
+    for name in OUTPUTS:
+        sv, typ = variables[name][1], variables[name][2]
+        assert sv.get("causality") == "output" and sv.get("initial") == "calculated"
+        assert sv.get("variability") == ("continuous" if typ.tag == "Real" else "discrete")
+        assert typ.get("start") is None
+    assert variables["contact"][2].tag == "Integer" and variables["impacts"][2].tag == "Integer"
+    assert variables["overturned"][2].tag == "Boolean"
+    structure = root.find("ModelStructure")
+    out_idx = sorted(variables[n][0] for n in OUTPUTS)
+    assert sorted(int(u.get("index")) for u in structure.find("Outputs")) == out_idx
+    assert sorted(int(u.get("index")) for u in structure.find("InitialUnknowns")) == out_idx
+
+
+def test_fmu_bundles_package_without_bytecode(fmu):
+    names = zipfile.ZipFile(fmu).namelist()
+    assert "resources/rocking_model/fmi.py" in names
+    assert "resources/rocking_model/simulation.py" in names
+    assert "resources/RigidRockingBlock.py" in names
+    assert not [n for n in names if "__pycache__" in n or n.endswith(".pyc")]
+
+
+# ---------------------------------------------------------------------------------------------- runs
+@pytest.mark.parametrize("scheme", [0, 1])
+def test_fmu_matches_python_simulator(fmu, scheme):
+    table = pulse_table(2.5)
+    start, stop, h = 0.0, 2.0, 0.01
+    res = fmpy.simulate_fmu(str(fmu), start_time=start, stop_time=stop, output_interval=h, input=table,
+                            start_values={**PARAMS, "scheme": scheme})
+    t_ref, ref = reference(table, scheme, start, stop, h)
+    assert len(res) == len(t_ref) == 201
+    np.testing.assert_array_equal(res["time"], t_ref)
+    assert np.abs(res["phi"]).max() > 0.1  # it rocks
+    assert res["impacts"][-1] >= 1
+    for name in OUTPUTS:
+        np.testing.assert_allclose(res[name].astype(float), ref[name].astype(float), rtol=0, atol=1e-12,
+                                   err_msg=name)
+
+
+def test_overturning_freezes_outputs_and_keeps_stepping(fmu):
+    table = pulse_table(6.0)
+    res = run_fmu(fmu, stop_time=2.0, output_interval=0.01, input=table, start_values={"scheme": 1})
+    assert math.isclose(res["time"][-1], 2.0)
+    over = np.flatnonzero(res["overturned"])
+    assert over.size and over[-1] == len(res) - 1 and np.all(np.diff(over) == 1)
+    k = over[0]
+    assert abs(res["phi"][k]) >= 0.5 * math.pi - 1e-6
+    for name in ("phi", "phi_dot", "x", "y", "energy", "contact", "impacts"):
+        assert np.all(res[name][k:] == res[name][k]), name
+
+
+def test_default_start_values_run(fmu):
+    res = run_fmu(fmu, stop_time=0.1, output_interval=0.01)
+    assert len(res) == 11
+    assert np.abs(res["phi"]).max() < 1e-12 and np.all(res["contact"] == 0) and not res["overturned"].any()
+
+
+# ---------------------------------------------------------------------------------------------- errors
+@pytest.mark.parametrize("start_values, pattern", [
+    ({"b": -1.0}, r"b = -1 is out of range; allowed range \(0, inf\)"),
+    ({"scheme": 5}, r"scheme = 5 is not supported"),
+    ({"e_N": 1.5}, r"e_N = 1.5 is out of range; allowed range \[0, 1\]"),
+    ({"phi_0": 2.0}, r"phi_0 = 2 is out of range"),
+])
+def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern):
+    messages = []
+
+    def logger(env, instance, status, category, message):
+        messages.append((status, message.decode()))
+
+    # plain fmpy: the FMU discards the first step and reports itself terminated, so fmpy stops at t0
+    res = fmpy.simulate_fmu(str(fmu), stop_time=1.0, output_interval=0.01, start_values=start_values,
+                            debug_logging=True, logger=logger)
+    assert res["time"][-1] == 0.0
+    errors = [m for s, m in messages if s == 3]  # fmi2Error
+    assert errors and all(m.startswith("invalid parameters: ") for m in errors)
+    assert any(__import__("re").search(pattern, m) for m in errors)
+    # run_fmu turns that into an exception naming the variable
+    with pytest.raises(FMUError, match=pattern):
+        run_fmu(fmu, stop_time=1.0, output_interval=0.01, start_values=start_values)
+    # the process (and the embedded interpreter) is fine
+    res = run_fmu(fmu, stop_time=0.05, output_interval=0.01)
+    assert math.isclose(res["time"][-1], 0.05)
+
+
+def test_non_finite_input_is_rejected(fmu):
+    table = np.array([(0.0, 0.0), (0.05, 0.0), (0.06, np.nan), (1.0, np.nan)],
+                     dtype=[("time", np.float64), ("ag", np.float64)])
+    with pytest.raises(FMUError, match=r"input ag = nan at t = 0.06 is invalid") as info:
+        run_fmu(fmu, stop_time=1.0, output_interval=0.01, input=table)
+    assert math.isclose(info.value.result["time"][-1], 0.06)
+
+
+def test_slave_api_directly():
+    """Life cycle without the C wrapper: rejected late parameter change, zero step, time mismatch."""
+    spec = importlib.util.spec_from_file_location("RigidRockingBlock", ROOT / "fmu_src" / "RigidRockingBlock.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    slave = module.RigidRockingBlock(instance_name="test")
+    vr = {v.name: v.value_reference for v in slave.vars.values()}
+    slave.setup_experiment(1.0)
+    slave.enter_initialization_mode()
+    slave.set_real([vr["phi_0"]], [0.05])
+    slave.exit_initialization_mode()
+    assert slave.get_real([vr["phi"]]) == [0.05]
+    assert slave.do_step(1.0, 0.0) is True  # zero-length step: no-op
+    assert slave.do_step(1.0, 0.01) is True
+    phi = slave.get_real([vr["phi"]])[0]
+    assert 0.0 < phi < 0.05
+    slave.log_queue.clear()
+    # a fixed parameter cannot change after initialization: rejected, the next step is discarded once
+    slave.set_real([vr["b"]], [0.3])
+    assert slave.get_real([vr["b"]]) == [0.2]
+    assert slave.do_step(1.01, 0.01) is False
+    assert slave.do_step(1.01, 0.01) is True
+    # setting the same value again is harmless
+    slave.set_real([vr["b"]], [0.2])
+    assert slave.do_step(1.02, 0.01) is True
+    # steps must be contiguous, non-negative
+    assert slave.do_step(0.5, 0.01) is False
+    assert slave.do_step(1.03, -0.01) is False
+    # outputs cannot be set; wrong value references are logged, not raised
+    slave.set_real([vr["phi"]], [1.0])
+    slave.set_real([9999], [1.0])
+    assert slave.get_integer([vr["phi"]]) == [0]
+    errors = [m.msg for m in slave.log_queue if m.status == 3]
+    assert any("parameter b is 'fixed'" in m for m in errors)
+    assert any("current_time = 0.5" in m for m in errors)
+    assert any("step_size = -0.01" in m for m in errors)
+    assert any("phi is an output" in m for m in errors)
+    assert len(errors) >= 7
+    assert slave.do_step(1.03, 0.01) is True
