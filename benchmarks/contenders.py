@@ -1,0 +1,140 @@
+"""The contenders of a scene, timed in the same process: the package's schemes, the scipy baseline and
+(in a subprocess under the system interpreter) Siconos."""
+from __future__ import annotations
+
+import gc
+import json
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rocking_model import Simulator, simulate
+
+from .baseline import rigid_solve_ivp
+from .scenes import Scene
+
+HERE = Path(__file__).resolve().parent
+SICONOS_PYTHON = os.environ.get("SICONOS_PYTHON", "/usr/bin/python3")
+
+
+def timed(fn, repeats: int = 3, budget: float = 6.0):
+    """Run ``fn`` up to ``repeats`` times (fewer once the runs used ``budget`` seconds, at least once);
+    return (result of the last run, list of wall times [s])."""
+    times, out = [], None
+    for _ in range(max(1, repeats)):
+        gc.collect()
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+        if sum(times) > budget:
+            break
+    return out, times
+
+
+def grid_of(scene: Scene) -> np.ndarray:
+    n = int(math.ceil(scene.t_end / scene.grid - 1e-9))
+    return np.minimum(scene.grid * np.arange(n + 1), scene.t_end)
+
+
+def _outputs(res) -> dict:
+    out = {"phi": np.asarray(res.phi, float), "impact_times": np.asarray(res.impact_times, float),
+           "n_steps": int(res.n_steps), "overturned": bool(res.overturned[-1])}
+    if "top_displacement" in res.values:
+        out["top_displacement"] = np.asarray(res.top_displacement, float)
+    return out
+
+
+def run_package(scene: Scene, scheme: str, **settings) -> dict:
+    """One run of ``simulate`` (the public API) on the scene's grid."""
+    res = simulate(scene.model(), scene.ground_motion(), scene.t_end, scheme=scheme, output_interval=scene.grid,
+                   hold="exact", **scene.initial, **settings)
+    return _outputs(res)
+
+
+def reference(scene: Scene, hold: str = "exact") -> dict:
+    """Event-driven at the scene's reference tolerance with its steps capped at grid/8, through `Simulator`
+    (as `simulate` does) so that the impact log (pre-/post-impact velocities) is available for the
+    closed-form cross-check. The cap makes the reference's step sequence differ from every contender's
+    (on a 0.01 s grid the event-driven contenders take about one step per output interval whatever their
+    tolerance); its own uncertainty is estimated apart (`reference_floor`)."""
+    model = scene.model()
+    sim = Simulator(model, "event_driven", tolerance=scene.ref_tol, dt_max=scene.grid / scene.ref_cap,
+                    **scene.initial)
+    gm = scene.ground_motion()
+    from rocking_model.ground_motion import as_ground_motion
+    gm = as_ground_motion(gm)
+    grid = grid_of(scene)
+    recs = [sim.outputs()]
+    t0 = time.perf_counter()
+    from rocking_model.ground_motion import ConstantMotion
+    for tk0, tk in zip(grid[:-1], grid[1:]):
+        sim.advance(float(tk), ConstantMotion(gm(float(tk0))) if hold == "zoh" else gm)
+        recs.append(sim.outputs())
+    elapsed = time.perf_counter() - t0
+    out = {"phi": np.array([r["phi"] for r in recs]), "impact_times": np.array(sim.impact_times),
+           "n_steps": sim.integrator.n_steps, "overturned": bool(recs[-1]["overturned"]), "time": elapsed,
+           "impact_log": [(t, np.asarray(vm), np.asarray(vp)) for t, vm, vp in sim.integrator.impact_log],
+           "contact": np.array([r["contact"] for r in recs])}
+    if "top_displacement" in recs[0]:
+        out["top_displacement"] = np.array([r["top_displacement"] for r in recs])
+    return out
+
+
+def run_baseline(scene: Scene, rtol: float, max_step: float = math.inf, method: str = "DOP853") -> dict:
+    """The solve_ivp baseline (rigid block only); atol = rtol (phi in rad, phi_dot in rad/s are O(1))."""
+    block = scene.model()
+    gm = scene.ground_motion()
+    samples = None
+    if scene.motion[0] == "sampled":
+        ts, a = scene.motion[1], scene.motion[2]
+        samples = (ts, a)
+        # what a user writes for a record: linear interpolation with np.interp
+        ag = lambda t, ts=ts, a=a: float(np.interp(t, ts, a, left=0.0, right=0.0))  # noqa: E731
+    elif scene.motion[0] == "none":
+        ag = 0.0
+    else:
+        ag = gm
+    return rigid_solve_ivp(block, ag, scene.t_end, grid_of(scene), rtol=rtol, atol=rtol, samples=samples,
+                           max_step=max_step, method=method,
+                           phi_0=scene.initial.get("phi_0", 0.0), phi_dot_0=scene.initial.get("phi_dot_0", 0.0))
+
+
+def siconos_available() -> tuple[bool, str]:
+    if not Path(SICONOS_PYTHON).exists():
+        return False, f"{SICONOS_PYTHON} not found"
+    if shutil.which("gcc") is None:
+        return False, "gcc not found (Siconos relations need a compiled plugin)"
+    r = subprocess.run([SICONOS_PYTHON, "-c", "import siconos.kernel"], capture_output=True, text=True)
+    if r.returncode != 0:
+        return False, ("python3-siconos is not installed for " + SICONOS_PYTHON +
+                       " (Debian: apt-get install python3-siconos)")
+    return True, ""
+
+
+def run_siconos(scene: Scene, dts, repeats: int, budget: float = 3.0, mu: float = 100.0) -> dict:
+    """Siconos Moreau-Jean on a rigid-block scene (subprocess); {"runs": [...]} or {"error": ...}."""
+    block = scene.model()
+    with tempfile.TemporaryDirectory(prefix="rocking_siconos_") as tmp:
+        job = {"b": block.b, "h": block.h, "m": block.m, "g": block.g, "phi_0": scene.initial.get("phi_0", 0.0),
+               "t_end": scene.t_end, "grid": scene.grid, "dts": list(dts), "repeats": repeats, "budget": budget,
+               "motion": scene.motion_json(), "mu": mu, "tmp": tmp}
+        job_file, out_file = Path(tmp) / "job.json", Path(tmp) / "result.json"
+        job_file.write_text(json.dumps(job))
+        r = subprocess.run([SICONOS_PYTHON, str(HERE / "siconos_runner.py"), str(job_file), str(out_file)],
+                           capture_output=True, text=True, timeout=1800)
+        if r.returncode != 0 or not out_file.exists():
+            return {"error": f"siconos runner failed (exit {r.returncode}): {r.stderr.strip()[-500:]}"}
+        result = json.loads(out_file.read_text())
+        result["stdout_lines"] = len(r.stdout.splitlines())
+        return result
+
+
+def median(xs):
+    return statistics.median(xs) if xs else math.nan
