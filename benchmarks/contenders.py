@@ -43,9 +43,19 @@ def grid_of(scene: Scene) -> np.ndarray:
     return np.minimum(scene.grid * np.arange(n + 1), scene.t_end)
 
 
+def wrong_side(sol: dict, eps: float = 1e-9) -> bool:
+    """True if a package run rotates on the wrong side of its pivot (contact 1 = left pivot needs phi >= 0,
+    contact 2 = right pivot needs phi <= 0): the body is then rocking through the ground."""
+    if "contact" not in sol:
+        return False
+    c, phi = np.asarray(sol["contact"]), np.asarray(sol["phi"], float)
+    return bool(np.any((c == 1) & (phi < -eps)) or np.any((c == 2) & (phi > eps)))
+
+
 def _outputs(res) -> dict:
     out = {"phi": np.asarray(res.phi, float), "impact_times": np.asarray(res.impact_times, float),
-           "n_steps": int(res.n_steps), "overturned": bool(res.overturned[-1])}
+           "n_steps": int(res.n_steps), "overturned": bool(res.overturned[-1]),
+           "contact": np.asarray(res.contact)}
     if "top_displacement" in res.values:
         out["top_displacement"] = np.asarray(res.top_displacement, float)
     return out

@@ -130,7 +130,8 @@ def rigid_scenes(quick: bool = False) -> list[Scene]:
               ("sine", PULSE_ABOVE_G * G, w), 4.0),
         Scene("record", "Rigid block, 30 s synthetic record", "rigid", RECORD_BLOCK,
               ("sampled", t_rec, a_rec), 30.0,
-              mj_dts=(1e-2, 5e-3, 2e-3, 1e-3)),
+              mj_dts=(1e-2, 5e-3, 2e-3, 1e-3),
+              base_tols=(1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)),
     ]
     if quick:
         for s in scenes:
@@ -140,6 +141,7 @@ def rigid_scenes(quick: bool = False) -> list[Scene]:
             s.sic_dts = (1e-2, 1e-3)
         scenes[0].t_end = 3.0
         scenes[3].t_end = 8.0
+        scenes[3].base_tols = (1e-4, 1e-8)
     return scenes
 
 
