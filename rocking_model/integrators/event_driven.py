@@ -75,6 +75,8 @@ class EventDriven:
         self.gap_tol = 1e-9 * L
         self.v_tol = 1e-10 * math.sqrt(model.g * L)
         self.v_zeno = zeno_tol * math.sqrt(model.g * L)
+        #: [1] how far below zero a disarmed (normalised) event function may go before it fires
+        self.event_tol = 1e-10
         q_rest = model.rest_position()
         self.force_scale = float(np.linalg.norm(model.forces(q_rest, np.zeros_like(q_rest), 0.0)))
         self.max_events = max_events
@@ -204,12 +206,17 @@ class EventDriven:
                          max_step=self.dt_max, first_step=self._h)
         g_prev = G(self.t, self.y)
         armed = g_prev > 0.0
+        # a disarmed event (zero at the segment start: just handled, or a grazing mode entry) still fires
+        # once its function falls clearly below zero, e.g. a block that enters rocking with zero acceleration
+        # at the uplift threshold and then turns back towards the ground
+        tol = self.event_tol
+        watch = ~armed & (g_prev > -tol)
         dip_ids = [i for i, kind in enumerate(kinds) if kind != _KIND_OVERTURN]
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
             g_new = G(stepper.t, stepper.y)
-            hits = np.nonzero(armed & (g_new <= 0.0))[0]
+            hits = np.nonzero(armed & (g_new <= 0.0) | watch & (g_new <= -tol))[0]
             dense = None
             t0, t_hit = stepper.t_old, stepper.t
             if not hits.size and dip_ids:
@@ -237,9 +244,11 @@ class EventDriven:
                 xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
                 best = None
                 for i in hits:
-                    def gi(t, i=i):
-                        return G(t, dense(t))[i]
-                    te = _locate(gi, t0, g_prev[i], t_hit, g_new[i], xtol)
+                    shift = 0.0 if armed[i] else tol
+
+                    def gi(t, i=i, shift=shift):
+                        return G(t, dense(t))[i] + shift
+                    te = _locate(gi, t0, g_prev[i] + shift, t_hit, g_new[i] + shift, xtol)
                     if best is None or te < best[0]:
                         best = (te, i)
                 te, i = best
@@ -251,6 +260,7 @@ class EventDriven:
                 self._handle(kinds[i], contacts[i], te, ag)
                 return True
             armed |= g_new > 0.0
+            watch &= ~armed
             g_prev = g_new
         self.t = stepper.t
         self.y = stepper.y
@@ -287,7 +297,7 @@ class EventDriven:
         if zeno:
             sol = impact(model, q, v, cand, forced=zeno)
         U_minus = W_N.T @ v
-        if any(U_minus[i] < -self.v_tol for i in cand):
+        if any(U_minus[i] < -self.v_zeno for i in cand):
             self._record_impact(t, v, sol.v)
         self._enter(q, sol.v, ag_t)
 
