@@ -27,6 +27,31 @@ class GroundMotion:
         """First time > t at which ag is not smooth (math.inf if none)."""
         return math.inf
 
+    #: (t_start, t_end) [s] outside which ag is zero, or None when unbounded or unknown
+    support: tuple[float, float] | None = None
+
+    def scaled(self, factor: float) -> "GroundMotion":
+        """This motion times ``factor`` [1] (same breakpoints)."""
+        return ScaledMotion(self, factor)
+
+    def resampled(self, dt: float, t_start: float | None = None, t_end: float | None = None) -> "SampledMotion":
+        """Samples every ``dt`` [s] from ``t_start`` to ``t_end`` [s] (default: the support), linear in
+        between. No anti-alias filter: a dt coarser than the motion's content cuts its peaks."""
+        dt = check_real("dt", dt, lo=0.0, lo_open=True)
+        span = self.support
+        if t_start is None or t_end is None:
+            if span is None:
+                raise ValueError(f"{type(self).__name__} has no finite support: give t_start and t_end [s] "
+                                 "to resample it")
+            t_start = span[0] if t_start is None else t_start
+            t_end = span[1] if t_end is None else t_end
+        t_start = check_real("t_start", t_start)
+        t_end = check_real("t_end", t_end, lo=t_start + dt)
+        # grid t_start + k dt; the 1e-9 absorbs round-off so that an exact multiple keeps its last sample
+        n = int(math.floor((t_end - t_start) / dt + 1e-9)) + 1
+        t = t_start + dt * np.arange(n)
+        return SampledMotion(t, [self(float(ti)) for ti in t])
+
 
 class ConstantMotion(GroundMotion):
     """ag(t) = value (the zero-order hold of a co-simulation step)."""
@@ -90,6 +115,43 @@ class SampledMotion(GroundMotion):
         i = int(np.searchsorted(self.t, t, side="right"))
         return float(self.t[i]) if i < self.t.size else math.inf
 
+    @property
+    def support(self):
+        return (self._tl[0], self._tl[-1])
+
+    @property
+    def dt(self) -> float:
+        """Mean sample spacing [s]."""
+        return (self._tl[-1] - self._tl[0]) / (len(self._tl) - 1)
+
+    @property
+    def pga(self) -> float:
+        """Peak |ag| over the samples [m/s2]."""
+        return float(np.max(np.abs(self.ag)))
+
+    def scaled(self, factor: float) -> "SampledMotion":
+        factor = check_real("factor", factor)
+        return SampledMotion(self.t, factor * self.ag)
+
+
+class ScaledMotion(GroundMotion):
+    """``factor`` [1] times another ground motion (same breakpoints and support)."""
+
+    def __init__(self, motion: GroundMotion, factor: float):
+        self.motion = as_ground_motion(motion)
+        self.factor = check_real("factor", factor)
+        self.constant = self.motion.constant
+        self.support = self.motion.support
+
+    def __call__(self, t):
+        return self.factor * self.motion(t)
+
+    def next_breakpoint(self, t):
+        return self.motion.next_breakpoint(t)
+
+    def scaled(self, factor):
+        return ScaledMotion(self.motion, self.factor * check_real("factor", factor))
+
 
 class SinePulse(GroundMotion):
     """One-sine pulse ag = A sin(omega_p (t - t0)) for t0 <= t <= t0 + 2 pi / omega_p, else 0.
@@ -112,6 +174,104 @@ class SinePulse(GroundMotion):
             if tb > t:
                 return tb
         return math.inf
+
+    @property
+    def support(self):
+        return (self.t0, self.t1)
+
+    def scaled(self, factor):
+        return SinePulse(self.A * check_real("factor", factor), self.omega_p, self.t0)
+
+
+#: width of the sliver after a jump [s, relative to max(1, |t|)], see `_jump_breakpoints`
+JUMP_SLIVER = 1e-10
+
+
+def _jump_breakpoints(times) -> list[float]:
+    """Breakpoints of jumps at ``times``: each jump time tb and tb + sliver.
+
+    A jump motion takes its left limit at tb and its right value after tb. The integrators evaluate ag at
+    both ends of a segment, so the segment ending at tb sees the left limit, the sliver (tb, tb + sliver]
+    is the only one that sees a wrong end value (an error ~ sliver * jump), and the segment starting at
+    tb + sliver sees the right value. With a single breakpoint the last (or first) Runge-Kutta stage of a
+    neighbouring step would use the wrong side, an O(step) error."""
+    out = []
+    for tb in times:
+        out += [tb, tb + JUMP_SLIVER * max(1.0, abs(tb))]
+    return sorted(out)
+
+
+class _JumpBreakpoints:
+    _bp: list = []
+
+    def next_breakpoint(self, t):
+        for tb in self._bp:
+            if tb > t:
+                return tb
+        return math.inf
+
+
+class CosinePulse(_JumpBreakpoints, SinePulse):
+    """One-cosine pulse ag = A cos(omega_p (t - t0)) for t0 < t <= t0 + 2 pi / omega_p, else 0.
+
+    A [m/s2] amplitude, omega_p [rad/s] circular frequency, t0 [s] start. ag jumps by A at both ends (it
+    takes the left limit at each jump time); the ground velocity and displacement return to zero (Makris'
+    type-B pulse in acceleration)."""
+
+    def __init__(self, A: float, omega_p: float, t0: float = 0.0):
+        super().__init__(A, omega_p, t0)
+        self._bp = _jump_breakpoints((self.t0, self.t1))
+
+    def __call__(self, t):
+        if t <= self.t0 or t > self.t1:
+            return 0.0
+        return self.A * math.cos(self.omega_p * (t - self.t0))
+
+    def scaled(self, factor):
+        return CosinePulse(self.A * check_real("factor", factor), self.omega_p, self.t0)
+
+
+class RickerPulse(GroundMotion):
+    """Symmetric Ricker wavelet ag = A (1 - w^2 tau^2 / 2) exp(-w^2 tau^2 / 4), tau = t - t_c, w = omega_p.
+
+    A [m/s2] peak (at t_c), omega_p [rad/s] = 2 pi f_p with f_p the peak of the Fourier spectrum, t_c [s]
+    centre, default 1.5 T_p (T_p = 2 pi / omega_p) so that |ag(0)| < 1e-8 A. Smooth, no breakpoints; its
+    integral (the residual ground velocity) is zero; zeros at tau = +-sqrt(2) / omega_p."""
+
+    def __init__(self, A: float, omega_p: float, t_c: float | None = None):
+        self.A = check_real("A", A)
+        self.omega_p = check_real("omega_p", omega_p, lo=0.0, lo_open=True)
+        T_p = 2.0 * math.pi / self.omega_p
+        self.t_c = 1.5 * T_p if t_c is None else check_real("t_c", t_c)
+        # ag is below 1e-14 A beyond 2 T_p from the centre: a support for resampling and plots
+        self.support = (self.t_c - 2.0 * T_p, self.t_c + 2.0 * T_p)
+
+    def __call__(self, t):
+        x = 0.25 * (self.omega_p * (t - self.t_c)) ** 2
+        return self.A * (1.0 - 2.0 * x) * math.exp(-x)
+
+    def scaled(self, factor):
+        return RickerPulse(self.A * check_real("factor", factor), self.omega_p, self.t_c)
+
+
+class RectangularPulse(_JumpBreakpoints, GroundMotion):
+    """Rectangular pulse ag = A for t0 < t <= t0 + duration, else 0 (Housner 1963).
+
+    A [m/s2] amplitude, duration [s] > 0, t0 [s] start; jumps at both ends (left limit at each)."""
+
+    def __init__(self, A: float, duration: float, t0: float = 0.0):
+        self.A = check_real("A", A)
+        self.duration = check_real("duration", duration, lo=0.0, lo_open=True)
+        self.t0 = check_real("t0", t0)
+        self.t1 = self.t0 + self.duration
+        self.support = (self.t0, self.t1)
+        self._bp = _jump_breakpoints((self.t0, self.t1))
+
+    def __call__(self, t):
+        return self.A if self.t0 < t <= self.t1 else 0.0
+
+    def scaled(self, factor):
+        return RectangularPulse(self.A * check_real("factor", factor), self.duration, self.t0)
 
 
 def as_ground_motion(ag) -> GroundMotion:
