@@ -1,0 +1,433 @@
+"""Co-simulation of several FMUs: a minimal fixed-step master on top of fmpy, the same system run in
+Open Simulation Platform's libcosim (libcosimpy), and the ground-motion source behind the
+GroundMotionSource FMU.
+
+System description. A system is read from an OSP system structure file (``OspSystemStructure.xml``, the
+format libcosim reads): ``<StartTime>``, ``<BaseStepSize>``, ``<Simulators>`` (name, FMU ``source``
+relative to the file, optional ``stepSize``, ``<InitialValues>``) and ``<Connections>`` /
+``<VariableConnection>`` (two ``<Variable simulator=... name=...>``; the output end is found from the
+causalities). The same file drives both masters, so their results can be compared.
+
+Master algorithm (`FmpyMaster`, mirroring libcosim's ``fixedStep`` algorithm). Time is counted in
+integer nanoseconds as in libcosim: communication point n is ``t_n = (t0_ns + n * h_ns) / 1e9`` and every
+step is ``h_ns / 1e9`` long, so both masters hand the FMUs the same doubles. In each base step, every
+component whose step (a multiple of the base step) is due gets its inputs set (connected values, then
+overrides) and steps from t_n; then the outputs of the components that stepped are copied to the connected
+inputs (Jacobi: a value produced at t_{n+1} is used in the step that starts at t_{n+1}). Inputs are held
+constant over a step. After initialization the outputs are copied once, so the first step uses the
+values at t0.
+
+fmpy has no multi-FMU master; libcosimpy is optional (``pip install rocking-model[cosim]``).
+"""
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+from xml.etree import ElementTree
+
+import numpy as np
+
+from .ground_motion import GroundMotion, SampledMotion, SinePulse
+from .validation import check_real
+
+__all__ = ["MotionSource", "load_record", "ground_motion_from_parameters", "Component", "Connection",
+           "System", "read_osp_system_structure", "FmpyMaster", "run_fmpy", "run_libcosim", "NS"]
+
+NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
+
+
+# ------------------------------------------------------------------------------------------------------
+# the ground-motion source component
+def load_record(path) -> SampledMotion:
+    """Read a ground-motion record: a text/CSV file with two columns, time [s] and ag [m/s2], separated by
+    commas, semicolons or white space; lines that do not start with a number (headers, comments) are
+    skipped."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"record = {str(path)!r}: no such file")
+    t, a = [], []
+    with open(path, newline="") as f:
+        for line in f:
+            fields = line.replace(",", " ").replace(";", " ").split()
+            if len(fields) < 2:
+                continue
+            try:
+                ti, ai = float(fields[0]), float(fields[1])
+            except ValueError:
+                continue
+            t.append(ti)
+            a.append(ai)
+    if len(t) < 2:
+        raise ValueError(f"record = {str(path)!r}: fewer than two (time, ag) rows")
+    return SampledMotion(t, a)
+
+
+def ground_motion_from_parameters(p: Mapping[str, Any]) -> GroundMotion:
+    """The ground motion named by the GroundMotionSource parameters: ``motion`` 0 = one-sine pulse
+    (``A`` [m/s2], ``omega_p`` [rad/s], ``t_start`` [s]), 1 = sampled record file ``record`` (see
+    `load_record`), both multiplied by ``scale``."""
+    motion = int(p.get("motion", 0))
+    if motion == 0:
+        gm = SinePulse(A=p["A"], omega_p=p["omega_p"], t0=p.get("t_start", 0.0))
+    elif motion == 1:
+        record = str(p.get("record", ""))
+        if not record:
+            raise ValueError("record = '' : motion = 1 needs the path of a record file")
+        gm = load_record(record)
+    else:
+        raise ValueError(f"motion = {motion} is not supported; allowed values 0 (sine pulse), 1 (record)")
+    return _Scaled(gm, check_real("scale", p.get("scale", 1.0)))
+
+
+class _Scaled(GroundMotion):
+    def __init__(self, motion: GroundMotion, scale: float):
+        self.motion, self.scale = motion, scale
+
+    def __call__(self, t):
+        return self.scale * self.motion(t)
+
+    def next_breakpoint(self, t):
+        return self.motion.next_breakpoint(t)
+
+
+class MotionSource:
+    """A ground motion as a stepwise component (``t``, ``advance(t_end)``, ``outputs()``): the output
+    ``ag`` at a communication point t is ag(t), exactly as the standalone FMU would be driven by a table
+    sampled at the communication points."""
+
+    def __init__(self, motion: GroundMotion, t0: float = 0.0):
+        self.motion = motion
+        self.t = float(t0)
+
+    def advance(self, t_end: float) -> None:
+        if t_end < self.t:
+            raise ValueError(f"t_end = {t_end!r} is before the current time {self.t!r}")
+        self.t = float(t_end)
+
+    def outputs(self) -> dict:
+        value = float(self.motion(self.t))
+        if not math.isfinite(value):
+            raise ValueError(f"ag({self.t:g}) = {value!r} is not finite")
+        return {"ag": value}
+
+
+# ------------------------------------------------------------------------------------------------------
+# system description
+@dataclass
+class Component:
+    name: str
+    fmu: Path
+    step_size: Optional[float] = None            # None: the base step
+    start_values: Dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Connection:
+    source: Tuple[str, str]                       # (component, output)
+    target: Tuple[str, str]                       # (component, input)
+
+
+@dataclass
+class System:
+    components: List[Component]
+    connections: List[Connection]
+    step_size: float
+    start_time: float = 0.0
+
+    def component(self, name: str) -> Component:
+        for c in self.components:
+            if c.name == name:
+                return c
+        raise KeyError(f"no component {name!r}; components: {[c.name for c in self.components]}")
+
+
+_OSP = "{http://opensimulationplatform.com/MSMI/OSPSystemStructure}"
+
+
+def _strip(tag: str) -> str:
+    return tag.split("}", 1)[-1]
+
+
+def _children(node, name):
+    return [c for c in node if _strip(c.tag) == name]
+
+
+def _child(node, name):
+    found = _children(node, name)
+    return found[0] if found else None
+
+
+def read_osp_system_structure(path) -> System:
+    """Parse an OspSystemStructure.xml (FMU paths resolved relative to the file; the direction of each
+    connection from the causalities in the modelDescriptions)."""
+    from fmpy import read_model_description
+
+    path = Path(path)
+    root = ElementTree.parse(path).getroot()
+    if _strip(root.tag) != "OspSystemStructure":
+        raise ValueError(f"{path}: root element is {_strip(root.tag)!r}, expected 'OspSystemStructure'")
+    start = _child(root, "StartTime")
+    base = _child(root, "BaseStepSize")
+    if base is None:
+        raise ValueError(f"{path}: <BaseStepSize> is required")
+    algo = _child(root, "Algorithm")
+    if algo is not None and algo.text.strip() != "fixedStep":
+        raise ValueError(f"{path}: only the fixedStep algorithm is supported, got {algo.text.strip()!r}")
+    components = []
+    causality: Dict[Tuple[str, str], str] = {}
+    for sim in _children(_child(root, "Simulators"), "Simulator"):
+        fmu = (path.parent / sim.get("source")).resolve()
+        values = {}
+        init = _child(sim, "InitialValues")
+        for iv in (_children(init, "InitialValue") if init is not None else []):
+            (typed,) = list(iv)
+            kind, text = _strip(typed.tag), typed.get("value")
+            values[iv.get("variable")] = {"Real": float, "Integer": int, "String": str,
+                                          "Boolean": lambda s: s.strip().lower() in ("true", "1")}[kind](text)
+        step = sim.get("stepSize")
+        components.append(Component(sim.get("name"), fmu, None if step is None else float(step), values))
+        for v in read_model_description(str(fmu)).modelVariables:
+            causality[(sim.get("name"), v.name)] = v.causality
+    connections = []
+    conns = _child(root, "Connections")
+    for vc in (_children(conns, "VariableConnection") if conns is not None else []):
+        a, b = [(v.get("simulator"), v.get("name")) for v in _children(vc, "Variable")]
+        for end in (a, b):
+            if end not in causality:
+                raise ValueError(f"{path}: connection end {end[0]}.{end[1]} does not exist")
+        if causality[a] == "output" and causality[b] == "input":
+            connections.append(Connection(a, b))
+        elif causality[b] == "output" and causality[a] == "input":
+            connections.append(Connection(b, a))
+        else:
+            raise ValueError(f"{path}: connection {a} - {b} must join an output and an input")
+    return System(components, connections, float(base.text),
+                  0.0 if start is None else float(start.text))
+
+
+def _ticks(seconds: float) -> int:
+    return int(round(float(seconds) * NS))
+
+
+def _step(t_ticks: int, step_ticks: int) -> float:
+    """Step length in seconds as libcosim computes it (``to_double_duration``): the difference of the two
+    communication points as doubles, so that t + dt lands on the next point as the FMU computes it."""
+    return (t_ticks + step_ticks) / NS - t_ticks / NS
+
+
+# ------------------------------------------------------------------------------------------------------
+# fmpy master
+class _Slave:
+    def __init__(self, comp: Component, base_ticks: int, tmp: Path):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.name = comp.name
+        self.md = read_model_description(str(comp.fmu))
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        step = base_ticks if comp.step_size is None else _ticks(comp.step_size)
+        if step % base_ticks:
+            raise ValueError(f"{comp.name}: stepSize must be a multiple of the base step")
+        self.decimation = step // base_ticks
+        self.step_ticks = step
+        unzip = extract(str(comp.fmu), unzipdir=str(tmp / comp.name))
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzip,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=comp.name)
+        self.start_values = dict(comp.start_values)
+        self.pending: Dict[str, Any] = {}
+
+    def var(self, name):
+        try:
+            return self.vars[name]
+        except KeyError:
+            raise KeyError(f"{self.name} has no variable {name!r}") from None
+
+    def set(self, name, value):
+        v = self.var(name)
+        vr = [v.valueReference]
+        if v.type == "Real":
+            self.fmu.setReal(vr, [float(value)])
+        elif v.type in ("Integer", "Enumeration"):
+            self.fmu.setInteger(vr, [int(value)])
+        elif v.type == "Boolean":
+            self.fmu.setBoolean(vr, [bool(value)])
+        else:
+            self.fmu.setString(vr, [str(value)])
+
+    def get(self, name):
+        v = self.var(name)
+        vr = [v.valueReference]
+        if v.type == "Real":
+            return self.fmu.getReal(vr)[0]
+        if v.type in ("Integer", "Enumeration"):
+            return self.fmu.getInteger(vr)[0]
+        if v.type == "Boolean":
+            return self.fmu.getBoolean(vr)[0]
+        return self.fmu.getString(vr)[0]
+
+
+class FmpyMaster:
+    """Fixed-step Jacobi master for a `System` of FMI 2.0 co-simulation FMUs, driven through fmpy.
+
+    ``inputs`` maps "component.variable" to a callable f(t) evaluated at the start of each step (an
+    override, like a libcosim override manipulator). ``run`` returns a structured array with "time" and
+    one column "component.variable" per requested output (values at every base communication point).
+    """
+
+    def __init__(self, system: System):
+        self.system = system
+
+    def run(self, stop_time: float, outputs: Sequence[str], inputs: Optional[Mapping[str, Callable]] = None,
+            start_values: Optional[Mapping[str, Any]] = None) -> np.ndarray:
+        sysm = self.system
+        base, t0 = _ticks(sysm.step_size), _ticks(sysm.start_time)
+        n_steps = int(round((_ticks(stop_time) - t0) / base))
+        overrides = {tuple(k.split(".", 1)): f for k, f in (inputs or {}).items()}
+        extra = {tuple(k.split(".", 1)): v for k, v in (start_values or {}).items()}
+        probes = [tuple(k.split(".", 1)) for k in outputs]
+        with tempfile.TemporaryDirectory(prefix="rocking_cosim_") as tmp:
+            slaves = {c.name: _Slave(c, base, Path(tmp)) for c in sysm.components}
+            try:
+                for c, _ in list(extra) + list(overrides) + probes:
+                    if c not in slaves:
+                        raise KeyError(f"no component {c!r}")
+                for s in slaves.values():
+                    s.start_values.update({v: x for (c, v), x in extra.items() if c == s.name})
+                    s.fmu.instantiate()
+                    s.fmu.setupExperiment(startTime=t0 / NS)
+                    s.fmu.enterInitializationMode()
+                    for name, value in s.start_values.items():
+                        s.set(name, value)
+                    s.fmu.exitInitializationMode()
+                self._transfer(slaves, set(slaves))
+                rows = [self._sample(slaves, probes, t0 / NS)]
+                for n in range(n_steps):
+                    t_ticks = t0 + n * base
+                    stepped = set()
+                    for s in slaves.values():
+                        if n % s.decimation:
+                            continue
+                        for name, value in s.pending.items():
+                            s.set(name, value)
+                        for (c, v), f in overrides.items():
+                            if c == s.name:
+                                s.set(v, f(t_ticks / NS))
+                        try:  # fmpy raises FMICallException for fmi2Discard / fmi2Error
+                            s.fmu.doStep(currentCommunicationPoint=t_ticks / NS,
+                                         communicationStepSize=_step(t_ticks, s.step_ticks))
+                        except Exception as exc:
+                            raise RuntimeError(f"{s.name}: doStep at t = {t_ticks / NS:g} s failed: {exc}") from exc
+                        stepped.add(s.name)
+                    self._transfer(slaves, stepped)
+                    rows.append(self._sample(slaves, probes, (t_ticks + base) / NS))
+            finally:
+                for s in slaves.values():
+                    try:
+                        s.fmu.terminate()
+                        s.fmu.freeInstance()
+                    except Exception:
+                        pass
+        dtype = [("time", np.float64)] + [(f"{c}.{v}", np.float64) for c, v in probes]
+        return np.array([tuple(r) for r in rows], dtype=dtype)
+
+    def _transfer(self, slaves, stepped):
+        for con in self.system.connections:
+            if con.source[0] in stepped:
+                slaves[con.target[0]].pending[con.target[1]] = slaves[con.source[0]].get(con.source[1])
+
+    @staticmethod
+    def _sample(slaves, probes, t):
+        return [t] + [float(slaves[c].get(v)) for c, v in probes]
+
+
+def run_fmpy(osp_file, stop_time: float, outputs: Sequence[str], **kwargs) -> np.ndarray:
+    """Run the system of an OspSystemStructure.xml with `FmpyMaster`."""
+    return FmpyMaster(read_osp_system_structure(osp_file)).run(stop_time, outputs, **kwargs)
+
+
+# ------------------------------------------------------------------------------------------------------
+# libcosim (Open Simulation Platform) through libcosimpy
+def run_libcosim(osp_file, stop_time: float, outputs: Sequence[str],
+                 inputs: Optional[Mapping[str, Callable]] = None,
+                 start_values: Optional[Mapping[str, Any]] = None) -> np.ndarray:
+    """Run the system of an OspSystemStructure.xml in libcosim, one base step at a time, and return the
+    same structured array as `FmpyMaster.run`. ``inputs`` ("component.variable" -> f(t)) are applied with
+    an override manipulator before each step; ``start_values`` override the file's initial values."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+
+    log_output_level(CosimLogLevel.WARNING)
+
+    osp_file = Path(osp_file)
+    system = read_osp_system_structure(osp_file)
+    execution = CosimExecution.from_osp_config_file(str(osp_file.resolve().parent))
+    return _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
+                           CosimManipulator, CosimObserver)
+
+
+def _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values, CosimManipulator,
+                    CosimObserver):
+    index = {info.name.decode(): info.index for info in execution.slave_infos()}
+    variables = {}
+    for name, i in index.items():
+        variables[name] = {v.name.decode(): (v.reference, v.type) for v in execution.slave_variables(i)}
+
+    def lookup(key):
+        comp, var = key.split(".", 1)
+        if comp not in index or var not in variables[comp]:
+            raise KeyError(f"libcosim: no variable {key!r}")
+        return index[comp], variables[comp][var]
+
+    for key, value in (start_values or {}).items():
+        i, (vr, typ) = lookup(key)
+        setter = {0: execution.real_initial_value, 1: execution.integer_initial_value,
+                  2: execution.string_initial_value, 3: execution.boolean_initial_value}[typ]
+        setter(i, vr, value)
+    manipulator = CosimManipulator.create_override()
+    execution.add_manipulator(manipulator)
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    probes = [lookup(k) for k in outputs]
+    overrides = [(lookup(k), f) for k, f in (inputs or {}).items()]
+    getters = {0: observer.last_real_values, 1: observer.last_integer_values,
+               2: observer.last_string_values, 3: observer.last_boolean_values}
+
+    def sample():
+        return [float(getters[typ](i, [vr])[0]) for i, (vr, typ) in probes]
+
+    base, t0 = _ticks(system.step_size), _ticks(system.start_time)
+    n_steps = int(round((_ticks(stop_time) - t0) / base))
+    rows = []
+    for n in range(n_steps):
+        t_ticks = t0 + n * base
+        for (i, (vr, typ)), f in overrides:
+            manipulator.slave_real_values(i, [vr], [float(f(t_ticks / NS))])
+        if not execution.step():
+            raise RuntimeError(f"libcosim: step at t = {t_ticks / NS:g} failed: {execution.status()}")
+        if n == 0:
+            # the observer has values only once the execution is initialized (the first step does it);
+            # the values at t0 are the start values, which both masters report from initialization
+            rows.append(None)
+        rows.append([(t_ticks + base) / NS] + sample())
+    status = execution.status()
+    if status.current_time != t0 + n_steps * base:
+        raise RuntimeError(f"libcosim: stopped at {status.current_time} ns, expected {t0 + n_steps * base}")
+    dtype = [("time", np.float64)] + [(k, np.float64) for k in outputs]
+    result = np.array([tuple(r) for r in rows[1:]], dtype=dtype)
+    return result
+
+
+def write_csv(path, result: np.ndarray) -> None:
+    """Write a structured result array as CSV (header = column names)."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(result.dtype.names)
+        for row in result:
+            w.writerow([repr(float(x)) for x in row])

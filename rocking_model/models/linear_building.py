@@ -1,0 +1,111 @@
+"""Linear building storey: a damped single-degree-of-freedom floor on a horizontally moving ground.
+
+The storey is a floor mass on a massless, linear elastic frame with viscous damping (SI units throughout).
+With u [m] the horizontal displacement of the floor relative to the ground, ag [m/s2] the ground
+acceleration, omega = 2 pi / T [rad/s] the circular frequency of the fixed-base storey (period T [s]) and
+zeta [1] its damping ratio::
+
+    u'' + 2 zeta omega u' + omega^2 u = -ag(t)
+
+The absolute (inertial) acceleration of the floor, the "ground" acceleration felt by equipment or a
+rocking block standing on it, follows from the same equation without the input::
+
+    a_floor = u'' + ag = -(2 zeta omega u' + omega^2 u)
+
+so a_floor is a function of the state only (no direct feed-through from ag). The equipment is assumed
+light compared with the floor (no feedback of the block on the storey).
+
+Time integration is exact for a ground acceleration held constant over each step (the zero-order hold
+of a co-simulation step): x_{n+1} = Phi x_n + Gamma ag_n with Phi = expm(A dt), Gamma = int_0^dt
+expm(A s) ds B, both from the matrix exponential of the augmented 3x3 system (cached per step length).
+The scheme is unconditionally stable, so a very stiff storey (small T) needs no small steps.
+
+T = 0 is the infinitely stiff (rigid) storey: the floor moves with the ground, u = u' = 0 and
+a_floor = ag (the value held over the last step).
+"""
+from __future__ import annotations
+
+import math
+from typing import Dict, Tuple
+
+import numpy as np
+from scipy.linalg import expm
+
+from ..validation import check_real
+
+__all__ = ["LinearStorey", "StoreySimulator"]
+
+
+class LinearStorey:
+    """Damped SDOF storey: period T [s] (>= 0; 0 = rigid), damping ratio zeta [1] (>= 0)."""
+
+    def __init__(self, T: float = 0.5, zeta: float = 0.05):
+        self.T = check_real("T", T, lo=0.0)
+        self.zeta = check_real("zeta", zeta, lo=0.0)
+
+    @property
+    def rigid(self) -> bool:
+        return self.T == 0.0
+
+    @property
+    def omega(self) -> float:
+        """Circular frequency [rad/s] (inf for the rigid storey)."""
+        return math.inf if self.rigid else 2.0 * math.pi / self.T
+
+    def state_matrix(self) -> np.ndarray:
+        """A of x' = A x + B ag, x = [u, u']."""
+        w = self.omega
+        return np.array([[0.0, 1.0], [-w * w, -2.0 * self.zeta * w]])
+
+    def floor_acceleration(self, u: float, u_dot: float) -> float:
+        """Absolute floor acceleration [m/s2] of the elastic storey at state (u, u')."""
+        w = self.omega
+        return -(2.0 * self.zeta * w * u_dot + w * w * u)
+
+    def transition(self, dt: float) -> Tuple[np.ndarray, np.ndarray]:
+        """(Phi, Gamma) of the exact zero-order-hold discretization over a step dt [s]."""
+        M = np.zeros((3, 3))
+        M[:2, :2] = self.state_matrix()
+        M[1, 2] = -1.0  # B = [0, -1]
+        E = expm(M * dt)
+        return E[:2, :2], E[:2, 2]
+
+
+class StoreySimulator:
+    """Stepwise integration of a `LinearStorey` (the interface the FMU plumbing expects: ``t``,
+    ``advance(t_end, ag)``, ``outputs()``)."""
+
+    def __init__(self, storey: LinearStorey, t0: float = 0.0, u_0: float = 0.0, u_dot_0: float = 0.0):
+        self.storey = storey
+        self.t = check_real("t0", t0)
+        u_0 = check_real("u_0", u_0)
+        u_dot_0 = check_real("u_dot_0", u_dot_0)
+        if storey.rigid and (u_0 != 0.0 or u_dot_0 != 0.0):
+            raise ValueError("u_0 and u_dot_0 must be 0 for a rigid storey (T = 0); allowed range [0, 0]")
+        self.x = np.array([u_0, u_dot_0])
+        self.ag = 0.0        # ground acceleration held over the last step (rigid storey output)
+        self._cache: Dict[float, Tuple[np.ndarray, np.ndarray]] = {}
+
+    def advance(self, t_end: float, ag: float) -> None:
+        """Integrate exactly to t_end [s] with ag [m/s2] held constant."""
+        ag = check_real("ag", ag)
+        dt = float(t_end) - self.t
+        if dt < 0.0:
+            raise ValueError(f"t_end = {t_end!r} is before the current time {self.t!r}")
+        if dt > 0.0 and not self.storey.rigid:
+            if dt not in self._cache:
+                if len(self._cache) > 16:
+                    self._cache.clear()
+                self._cache[dt] = self.storey.transition(dt)
+            Phi, Gamma = self._cache[dt]
+            self.x = Phi @ self.x + Gamma * ag
+        self.ag = ag
+        self.t = float(t_end)
+
+    def outputs(self) -> dict:
+        u, u_dot = float(self.x[0]), float(self.x[1])
+        if self.storey.rigid:
+            a_floor = self.ag
+        else:
+            a_floor = self.storey.floor_acceleration(u, u_dot)
+        return {"u": u, "u_dot": u_dot, "a_floor": float(a_floor)}
