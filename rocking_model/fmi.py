@@ -27,7 +27,20 @@ What the base class provides:
   feed-through: ``dependencies=""``) and ``ModelStructure/InitialUnknowns``;
 * ``do_step(t, dt)``: advances the simulator to ``t + dt`` with the inputs held constant over the step
   (zero-order hold, the importer sets the inputs at the start of each step) and copies
-  ``Simulator.outputs()`` to the output variables.
+  ``Simulator.outputs()`` to the output variables;
+* FMU state (``canGetAndSetFMUstate`` and ``canSerializeFMUstate`` are true): ``fmi2GetFMUstate`` captures
+  a deep copy of the complete internal state -- the whole `Simulator` (integrator arrays, contact mode,
+  counters, impact log, step-size memory), the values of every parameter, input and output, the
+  communication time and the status flags (initialized, frozen, failed, pending error) -- and
+  ``fmi2SetFMUstate`` restores it, in the same or in another instance of the same FMU, so that
+  save -> step -> restore -> step gives bit-identical outputs (rollback for iterative masters).
+  ``fmi2SerializeFMUstate`` writes the state as a pickle (protocol 5) behind a header and a SHA-256 digest;
+  ``fmi2DeSerializeFMUstate`` checks both and unpickles with a restricted unpickler that only loads
+  ``rocking_model`` classes, numpy arrays and plain builtins. A state of another FMU, a corrupted byte
+  string or a failed capture is rejected when it is set: error log, the instance keeps its state and the
+  next ``do_step`` is discarded once;
+* ``fmi2Reset``: the pythonfmu 0.7 C wrapper re-creates the Python object (start values, not initialized);
+  :meth:`RockingSlave.reset` does the same in place for direct use of the class.
 
 Error handling. No Python exception ever reaches the pythonfmu C wrapper: there an exception becomes
 ``fmi2Fatal`` and the wrapper releases the Python instance, so any later call on the instance (e.g.
@@ -39,22 +52,31 @@ raising (use :func:`run_fmu` to get an exception). ``exit_initialization_mode`` 
 * invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range)
   are caught in ``exit_initialization_mode`` and logged with ``Fmi2Status.error``; every ``do_step``
   then logs the message again and returns False;
-* an invalid input (non-finite, or outside the declared ``min``/``max``), a negative / non-finite step
-  or a ``current_time`` that does not match the FMU's time: error log, ``do_step`` returns False, the
+* an invalid input (non-finite, or outside the declared ``min``/``max``), a step size that is not
+  positive and finite, or a ``current_time`` that does not match the FMU's time (after a rollback with
+  ``fmi2SetFMUstate`` the FMU's time is the restored one): error log, ``do_step`` returns False, the
   state is unchanged (the step can be retried with a valid input);
 * an exception inside the integrator: error log, the instance is marked failed, ``do_step`` returns
   False from then on;
 * a ``fixed`` parameter set to a new value after initialization: the value is rejected (the old one is
   kept), an error is logged and the next ``do_step`` is discarded once, so the mistake is not silent;
-* zero-length steps are no-ops; once the output named by ``freeze_output`` (``"overturned"``) is true the
-  integration stops, the outputs stay frozen and ``do_step`` keeps returning True.
+* once the output named by ``freeze_output`` (``"overturned"``) is true the integration stops, the outputs
+  stay frozen and ``do_step`` keeps returning True.
+
+pythonfmu 0.7 can only report fmi2OK, fmi2Discard (``do_step`` returns False) or -- for an exception --
+fmi2Fatal; it has no way to return fmi2Error from Python. Every error therefore goes out as an error log
+(status fmi2Error in the logger callback) plus fmi2Discard of the next ``do_step``.
 
 Log messages reach the importer only when it instantiates the FMU with ``loggingOn = fmi2True``
 (``fmpy.simulate_fmu(..., debug_logging=True)``); that is a property of the pythonfmu 0.7 C wrapper.
 """
 from __future__ import annotations
 
+import copy
+import hashlib
+import io
 import math
+import pickle
 from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, Iterable, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
@@ -240,6 +262,9 @@ class RockingSlave(Fmi2Slave):
     freeze_output: ClassVar[Optional[str]] = "overturned"
     #: relative tolerance on current_time versus the FMU's own communication time
     time_tolerance: ClassVar[float] = 1e-9
+    #: names of further instance attributes that belong to the FMU state (e.g. a String parameter kept outside
+    #: the Var table); the base class captures the simulator, the variable values, time and status flags
+    extra_state_attributes: ClassVar[Sequence[str]] = ()
 
     log_categories = {
         "logStatusWarning": "Log messages with fmi2Warning status.",
@@ -251,13 +276,7 @@ class RockingSlave(Fmi2Slave):
         super().__init__(**kwargs)
         self._specs: Dict[str, Var] = {}
         self._values: Dict[str, Any] = {}
-        self._sim = None
-        self._initialized = False
-        self._error: Optional[str] = None        # permanent failure (bad parameters, integrator crash)
-        self._pending: Optional[str] = None      # one-shot failure of the next do_step
-        self._frozen = False
-        self._t = 0.0                            # current communication point [s]
-        self._t0 = 0.0
+        self._clear_state()
         names = set()
         for spec in self.variables:
             if spec.name in names:
@@ -269,6 +288,28 @@ class RockingSlave(Fmi2Slave):
             self._specs[spec.name] = spec
             self._values[spec.name] = spec.default
             self.register_variable(self._make_variable(spec), nested=False)
+
+    def _clear_state(self) -> None:
+        # everything listed in _STATE_FIELDS is the FMU state (fmi2GetFMUstate / fmi2SetFMUstate)
+        self._sim = None
+        self._initialized = False
+        self._error: Optional[str] = None        # permanent failure (bad parameters, integrator crash)
+        self._pending: Optional[str] = None      # one-shot failure of the next do_step
+        self._frozen = False
+        self._t = 0.0                            # current communication point [s]
+        self._t0 = 0.0
+
+    def reset(self) -> None:
+        """fmi2Reset in place: start values, not initialized, no error (the log queue is kept).
+
+        The pythonfmu 0.7 C wrapper implements fmi2Reset by creating a new Python object, which has the
+        same effect; this method serves direct users of the class (and later pythonfmu versions)."""
+        try:
+            self._clear_state()
+            for name, spec in self._specs.items():
+                self._values[name] = spec.default
+        except Exception as exc:  # pragma: no cover - never raise into the C wrapper
+            self.log(f"reset failed: {_describe(exc)}", Fmi2Status.error)
 
     # ------------------------------------------------------------------ variable registration
     def _make_variable(self, spec: Var):
@@ -325,6 +366,8 @@ class RockingSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ model description
     def to_xml(self, model_options: Dict[str, str] = dict()) -> Element:
+        # the complete internal state can be captured, restored and serialized (see _get_fmu_state)
+        model_options = {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True, **dict(model_options)}
         root = super().to_xml(model_options)
         cosim = root.find("CoSimulation")
         if cosim is not None:
@@ -411,13 +454,12 @@ class RockingSlave(Fmi2Slave):
         if self._pending is not None:
             msg, self._pending = self._pending, None
             return self._fail(msg)
-        if not math.isfinite(dt) or dt < 0.0:
-            return self._fail(f"step_size = {dt!r} is invalid; allowed range [0, inf)")
+        if not math.isfinite(dt) or dt <= 0.0:
+            return self._fail(f"step_size = {dt!r} is invalid; allowed range (0, inf)")
         if not math.isfinite(t) or abs(t - self._t) > self.time_tolerance * max(1.0, abs(self._t)):
-            return self._fail(f"current_time = {t!r} does not match the FMU time {self._t!r}; steps must "
-                              f"be contiguous (no rollback: canGetAndSetFMUstate is false)")
-        if dt == 0.0:
-            return True
+            return self._fail(f"current_time = {t!r} does not match the FMU time {self._t!r}; allowed value "
+                              f"{self._t!r}: each step starts where the last one ended (to go back, restore "
+                              f"a state saved with fmi2GetFMUstate)")
         inputs = self.input_values
         for name, value in inputs.items():
             spec = self._specs[name]
@@ -452,6 +494,78 @@ class RockingSlave(Fmi2Slave):
     def _fail(self, msg: str) -> bool:
         self.log(msg, Fmi2Status.error)
         return False
+
+    # ------------------------------------------------------------------ FMU state
+    # pythonfmu 0.7 calls _get_fmu_state / _set_fmu_state on the instance and _fmu_state_to_bytes /
+    # _fmu_state_from_bytes on the class; the C wrapper keeps the returned object as the fmi2FMUstate and
+    # releases it in fmi2FreeFMUstate. None of them may raise (an exception there is fmi2Fatal).
+    def _get_fmu_state(self) -> Dict[str, Any]:
+        try:
+            fields = copy.deepcopy({name: getattr(self, name) for name in self._state_fields()})
+            return {"format": _STATE_FORMAT, "fmu": type(self).__name__, "variables": self._state_signature(),
+                    "fields": fields}
+        except Exception as exc:
+            msg = f"fmi2GetFMUstate failed: {_describe(exc)}"
+            self.log(msg, Fmi2Status.error)
+            return {"format": _STATE_FORMAT, "invalid": msg}
+
+    def _set_fmu_state(self, state: Dict[str, Any]) -> None:
+        try:
+            problem = self._state_problem(state)
+            if problem is None:
+                fields = copy.deepcopy(state["fields"])  # the saved state may be restored again later
+                for name in self._state_fields():
+                    setattr(self, name, fields[name])
+                return
+        except Exception as exc:
+            problem = _describe(exc)
+        msg = f"fmi2SetFMUstate: state rejected, the instance keeps its current state: {problem}"
+        self.log(msg, Fmi2Status.error)
+        self._pending = msg
+
+    def _state_fields(self) -> tuple:
+        return tuple(_STATE_FIELDS) + tuple(self.extra_state_attributes)
+
+    def _state_signature(self) -> List[tuple]:
+        return [(s.name, s.causality, s.type) for s in self.variables]
+
+    def _state_problem(self, state) -> Optional[str]:
+        if not isinstance(state, dict) or state.get("format") != _STATE_FORMAT:
+            return f"not an FMU state of this package (format {_STATE_FORMAT})"
+        if "invalid" in state:
+            return str(state["invalid"])
+        if state.get("fmu") != type(self).__name__ or state.get("variables") != self._state_signature():
+            return f"the state belongs to FMU {state.get('fmu')!r}, not to {type(self).__name__!r}"
+        fields = state.get("fields")
+        if not isinstance(fields, dict) or set(fields) != set(self._state_fields()):
+            return "incomplete state"
+        return None
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: Dict[str, Any]) -> bytes:
+        try:
+            payload = pickle.dumps(state, protocol=5)
+        except Exception as exc:
+            payload = pickle.dumps({"format": _STATE_FORMAT,
+                                    "invalid": f"fmi2SerializeFMUstate failed: {_describe(exc)}"}, protocol=5)
+        return _STATE_MAGIC + hashlib.sha256(payload).digest() + payload
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes) -> Dict[str, Any]:
+        try:
+            data = bytes(data)
+            n = len(_STATE_MAGIC)
+            if not data.startswith(_STATE_MAGIC):
+                raise ValueError("not a serialized state of a rocking_model FMU (bad header)")
+            digest, payload = data[n:n + 32], data[n + 32:]
+            if hashlib.sha256(payload).digest() != digest:
+                raise ValueError("the serialized state is corrupted (SHA-256 mismatch)")
+            state = _StateUnpickler(io.BytesIO(payload)).load()
+            if not isinstance(state, dict):
+                raise ValueError("the serialized state is not a state dictionary")
+            return state
+        except Exception as exc:
+            return {"format": _STATE_FORMAT, "invalid": f"fmi2DeSerializeFMUstate failed: {_describe(exc)}"}
 
     # ------------------------------------------------------------------ robust accessors
     # pythonfmu raises TypeError/KeyError for a wrong value reference; turn that into an error log so no
@@ -495,6 +609,29 @@ def _same(a, b) -> bool:
 def _describe(exc: BaseException) -> str:
     text = str(exc)
     return text if isinstance(exc, ValueError) and text else f"{type(exc).__name__}: {text}"
+
+
+# FMU state: the slave attributes that make up the state, the version of its layout, the serialization header
+_STATE_FIELDS = ("_values", "_sim", "_initialized", "_error", "_pending", "_frozen", "_t", "_t0")
+_STATE_FORMAT = 1
+_STATE_MAGIC = b"rocking_model FMU state v1\n"
+
+_SAFE_BUILTINS = frozenset({"set", "frozenset", "list", "dict", "tuple", "complex", "float", "int", "bool",
+                            "str", "bytes", "bytearray", "slice", "range"})
+_SAFE_NUMPY = frozenset({("numpy", "ndarray"), ("numpy", "dtype"),
+                         ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
+                         ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
+                         ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer")})
+
+
+class _StateUnpickler(pickle.Unpickler):
+    """Unpickler for serialized FMU states: rocking_model classes, numpy arrays and plain builtins only."""
+
+    def find_class(self, module, name):
+        if (module == "rocking_model" or module.startswith("rocking_model.")
+                or (module == "builtins" and name in _SAFE_BUILTINS) or (module, name) in _SAFE_NUMPY):
+            return super().find_class(module, name)
+        raise pickle.UnpicklingError(f"global {module}.{name} is not allowed in an FMU state")
 
 
 # ----------------------------------------------------------------------------------------------------
