@@ -69,19 +69,21 @@ class FlexibleOscillator(RockingModel):
     phi_index: int = field(default=3, init=False, repr=False)
 
     def __post_init__(self):
-        pos = dict(lo=0.0, lo_open=True)
-        nonneg = dict(lo=0.0)
-        for name, rng in (("m", pos), ("m_c", nonneg), ("m_b", nonneg), ("rho", nonneg), ("h", pos),
-                          ("b", pos), ("EI", pos), ("zeta", nonneg), ("g", pos)):
+        # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
+        mass, length = dict(lo=1e-9, hi=1e12), dict(lo=1e-6, hi=1e3)
+        for name, rng in (("m", mass), ("m_c", dict(lo=0.0, hi=1e12)), ("m_b", dict(lo=0.0, hi=1e12)),
+                          ("rho", dict(lo=0.0, hi=1e3)), ("h", length), ("b", length),
+                          ("EI", dict(lo=0.0, lo_open=True, hi=1e15)), ("zeta", dict(lo=0.0, hi=10.0)),
+                          ("g", dict(lo=1e-3, hi=1e3))):
             object.__setattr__(self, name, check_real(name, getattr(self, name), **rng))
         object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
         object.__setattr__(self, "impact_rule", check_choice(
             "impact_rule", self.impact_rule, {0: 0, 1: 1, "lcp": 0, "classical": 1}))
         if self.m_c == 0.0 and self.m_b * self.rho ** 2 == 0.0:
-            bad = "rho" if self.rho == 0.0 else "m_b"
+            bad = "m_b" if self.m_b == 0.0 else "rho"  # rho > 0 can still give m_b*rho^2 = 0 (underflow)
             raise ValueError(
-                f"{bad} = 0 is out of range when m_c = 0: the mass matrix is singular unless m_c > 0 or "
-                f"m_b*rho^2 > 0; allowed range with m_c = 0: m_b in (0, inf) and rho in (0, inf)")
+                f"{bad} = {getattr(self, bad):g} is out of range when m_c = 0: the mass matrix is singular unless m_c > 0 or "
+                f"m_b*rho^2 > 0; allowed range with m_c = 0: m_b in (0, 1e+12] and rho in (0, 1000]")
         m, m_c, h = self.m, self.m_c, self.h
         d = dict(
             m_tilde=m + 33.0 / 140.0 * m_c,
@@ -303,9 +305,9 @@ class FlexibleOscillator(RockingModel):
             raise ValueError(f"unknown initial values for FlexibleOscillator: {sorted(extra)}; "
                              f"allowed: phi_0, phi_dot_0, u_0, u_dot_0")
         phi_0 = check_real("phi_0", phi_0, lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
-        phi_dot_0 = check_real("phi_dot_0", phi_dot_0)
-        u_0 = check_real("u_0", u_0)
-        u_dot_0 = check_real("u_dot_0", u_dot_0)
+        phi_dot_0 = check_real("phi_dot_0", phi_dot_0, lo=-1e4, hi=1e4)
+        u_0 = check_real("u_0", u_0, lo=-self.h, hi=self.h)  # tip deflection at most the column height
+        u_dot_0 = check_real("u_dot_0", u_dot_0, lo=-1e4, hi=1e4)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, np.array([u_0]), np.array([u_dot_0]))

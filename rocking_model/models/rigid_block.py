@@ -32,8 +32,9 @@ class RigidBlock(RockingModel):
     phi_index: int = field(default=2, init=False, repr=False)
 
     def __post_init__(self):
-        for name in ("b", "h", "m", "g"):
-            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=0.0, lo_open=True))
+        # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
+        for name, lo, hi in (("b", 1e-6, 1e3), ("h", 1e-6, 1e3), ("m", 1e-9, 1e12), ("g", 1e-3, 1e3)):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=lo, hi=hi))
         object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
         M = np.diag([self.m, self.m, self.I_c])
         object.__setattr__(self, "_M", M)
@@ -183,7 +184,7 @@ class RigidBlock(RockingModel):
         if extra:
             raise ValueError(f"unknown initial values for RigidBlock: {sorted(extra)}; allowed: phi_0, phi_dot_0")
         phi_0 = check_real("phi_0", phi_0, lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
-        phi_dot_0 = check_real("phi_dot_0", phi_dot_0)
+        phi_dot_0 = check_real("phi_dot_0", phi_dot_0, lo=-1e4, hi=1e4)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, np.zeros(0), np.zeros(0))
