@@ -36,7 +36,7 @@ from .ground_motion import GroundMotion, SampledMotion, SinePulse
 from .validation import check_real
 
 __all__ = ["MotionSource", "load_record", "ground_motion_from_parameters", "Component", "Connection",
-           "System", "read_osp_system_structure", "FmpyMaster", "run_fmpy", "run_libcosim", "NS"]
+           "System", "read_osp_system_structure", "write_osp_system_structure", "FmpyMaster", "run_fmpy", "run_libcosim", "NS"]
 
 NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
 
@@ -210,6 +210,42 @@ def read_osp_system_structure(path) -> System:
                   0.0 if start is None else float(start.text))
 
 
+def write_osp_system_structure(system: System, path) -> Path:
+    """Write ``system`` as an OspSystemStructure.xml (FMU paths absolute); return the path."""
+    path = Path(path)
+    ns = _OSP[1:-1]
+    root = ElementTree.Element("OspSystemStructure", {"xmlns": ns, "version": "0.1"})
+    ElementTree.SubElement(root, "StartTime").text = repr(float(system.start_time))
+    ElementTree.SubElement(root, "BaseStepSize").text = repr(float(system.step_size))
+    ElementTree.SubElement(root, "Algorithm").text = "fixedStep"
+    sims = ElementTree.SubElement(root, "Simulators")
+    for c in system.components:
+        attrs = {"name": c.name, "source": str(Path(c.fmu).resolve())}
+        if c.step_size is not None:
+            attrs["stepSize"] = repr(float(c.step_size))
+        sim = ElementTree.SubElement(sims, "Simulator", attrs)
+        if c.start_values:
+            init = ElementTree.SubElement(sim, "InitialValues")
+            for name, value in c.start_values.items():
+                iv = ElementTree.SubElement(init, "InitialValue", {"variable": name})
+                if isinstance(value, bool):
+                    ElementTree.SubElement(iv, "Boolean", {"value": "true" if value else "false"})
+                elif isinstance(value, int):
+                    ElementTree.SubElement(iv, "Integer", {"value": str(value)})
+                elif isinstance(value, float):
+                    ElementTree.SubElement(iv, "Real", {"value": repr(value)})
+                else:
+                    ElementTree.SubElement(iv, "String", {"value": str(value)})
+    conns = ElementTree.SubElement(root, "Connections")
+    for con in system.connections:
+        vc = ElementTree.SubElement(conns, "VariableConnection")
+        for comp, var in (con.source, con.target):
+            ElementTree.SubElement(vc, "Variable", {"simulator": comp, "name": var})
+    ElementTree.indent(root)
+    ElementTree.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    return path
+
+
 def _ticks(seconds: float) -> int:
     return int(round(float(seconds) * NS))
 
@@ -345,19 +381,28 @@ class FmpyMaster:
         return [t] + [float(slaves[c].get(v)) for c, v in probes]
 
 
-def run_fmpy(osp_file, stop_time: float, outputs: Sequence[str], **kwargs) -> np.ndarray:
-    """Run the system of an OspSystemStructure.xml with `FmpyMaster`."""
-    return FmpyMaster(read_osp_system_structure(osp_file)).run(stop_time, outputs, **kwargs)
+def run_fmpy(system, stop_time: float, outputs: Sequence[str], **kwargs) -> np.ndarray:
+    """Run a `System` or the system of an OspSystemStructure.xml with `FmpyMaster` (keyword arguments as
+    `FmpyMaster.run`)."""
+    if not isinstance(system, System):
+        system = read_osp_system_structure(system)
+    return FmpyMaster(system).run(stop_time, outputs, **kwargs)
 
 
 # ------------------------------------------------------------------------------------------------------
 # libcosim (Open Simulation Platform) through libcosimpy
-def run_libcosim(osp_file, stop_time: float, outputs: Sequence[str],
+def run_libcosim(system, stop_time: float, outputs: Sequence[str],
                  inputs: Optional[Mapping[str, Callable]] = None,
                  start_values: Optional[Mapping[str, Any]] = None) -> np.ndarray:
-    """Run the system of an OspSystemStructure.xml in libcosim, one base step at a time, and return the
-    same structured array as `FmpyMaster.run`. ``inputs`` ("component.variable" -> f(t)) are applied with
-    an override manipulator before each step; ``start_values`` override the file's initial values."""
+    """Run a `System` or the system of an OspSystemStructure.xml in libcosim, one base step at a time, and
+    return the same structured array as `FmpyMaster.run` without its first row (libcosim's observers have
+    values only from the first step on: the rows are t0 + h, t0 + 2h, ...). ``inputs``
+    ("component.variable" -> f(t)) are applied with an override manipulator before each step;
+    ``start_values`` ("component.variable" -> value) override the initial values."""
+    if isinstance(system, System):
+        with tempfile.TemporaryDirectory(prefix="rocking_osp_") as tmp:
+            osp = write_osp_system_structure(system, Path(tmp) / "OspSystemStructure.xml")
+            return run_libcosim(osp, stop_time, outputs, inputs, start_values)
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimManipulator import CosimManipulator
@@ -365,9 +410,9 @@ def run_libcosim(osp_file, stop_time: float, outputs: Sequence[str],
 
     log_output_level(CosimLogLevel.WARNING)
 
-    osp_file = Path(osp_file)
+    osp_file = Path(system).resolve()
     system = read_osp_system_structure(osp_file)
-    execution = CosimExecution.from_osp_config_file(str(osp_file.resolve().parent))
+    execution = CosimExecution.from_osp_config_file(str(osp_file))
     return _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
                            CosimManipulator, CosimObserver)
 
