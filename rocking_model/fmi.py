@@ -86,6 +86,8 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real
 
+from .validation import check_real
+
 __all__ = ["UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
@@ -463,11 +465,10 @@ class RockingSlave(Fmi2Slave):
         inputs = self.input_values
         for name, value in inputs.items():
             spec = self._specs[name]
-            bad = (spec.type == "Real" and not math.isfinite(value)) or \
-                (spec.min is not None and value < spec.min) or (spec.max is not None and value > spec.max)
-            if bad:
-                return self._fail(f"input {name} = {value!r} at t = {t!r} is invalid; allowed range "
-                                  f"{spec.range_text()} (finite)")
+            try:  # the same check and message as the Python API (rocking_model.validation)
+                check_real(name, value, lo=spec.min, hi=spec.max)
+            except ValueError as exc:
+                return self._fail(f"input {name} = {value!r} at t = {t!r} is invalid: {exc}")
         t_end = t + dt
         if not self._frozen:
             try:

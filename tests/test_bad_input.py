@@ -1,0 +1,364 @@
+"""Bad input (issue 5): every case through the Python API (ValueError naming the variable and its allowed
+range) and through the FMUs driven by fmpy's FMU2Slave (error log with the same message, fmi2Discard of the
+step; nothing crashes, the instance can be reset or freed and other instances keep working)."""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import math
+from ctypes import byref
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+pytest.importorskip("pythonfmu")
+from fmpy import extract, read_model_description  # noqa: E402
+from fmpy.fmi1 import FMICallException  # noqa: E402
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,  # noqa: E402
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+FMI2_ERROR, FMI2_DISCARD = 3, 2
+RIGID, FLEX = "RigidRockingBlock", "FlexibleRockingOscillator"
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    dest = tmp_path_factory.mktemp("fmus")
+    paths = build.build_all(dest, names=[RIGID, FLEX])
+    return {p.stem: (p, read_model_description(str(p)), extract(str(p))) for p in paths}
+
+
+class Instance:
+    """One FMU2Slave instance with a logger that records (status, message)."""
+
+    def __init__(self, fmu, name="instance"):
+        path, md, unzip = fmu
+        self.vars = {v.name: v for v in md.modelVariables}
+        self.messages: list[tuple[int, str]] = []
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(self._log)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        from fmpy.logging import addLoggerProxy
+        addLoggerProxy(byref(cb))
+        self._cb = cb  # keep the callbacks alive
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(loggingOn=True, callbacks=cb)
+        self.t = 0.0
+
+    def _log(self, env, instance, status, category, message):
+        self.messages.append((int(status), message.decode("utf-8", "replace")))
+
+    def set(self, **values):
+        for name, value in values.items():
+            var = self.vars[name]
+            if var.type == "Real":
+                self.fmu.setReal([var.valueReference], [float(value)])
+            elif var.type == "Integer":
+                self.fmu.setInteger([var.valueReference], [int(value)])
+            else:
+                self.fmu.setBoolean([var.valueReference], [bool(value)])
+
+    def get(self, *names):
+        out = []
+        for name in names:
+            var = self.vars[name]
+            getter = {"Real": self.fmu.getReal, "Integer": self.fmu.getInteger,
+                      "Boolean": self.fmu.getBoolean}[var.type]
+            out.append(getter([var.valueReference])[0])
+        return out
+
+    def init(self, t0=0.0, **params):
+        self.fmu.setupExperiment(startTime=t0)
+        self.fmu.enterInitializationMode()
+        self.set(**params)
+        self.fmu.exitInitializationMode()
+        self.t = t0
+
+    def step(self, dt=0.01, t=None):
+        """doStep; return the status (0 OK, 2 discard) and advance self.t on success."""
+        t = self.t if t is None else t
+        try:
+            self.fmu.doStep(t, dt)
+        except FMICallException as exc:
+            return exc.status
+        self.t = t + dt
+        return 0
+
+    def errors(self):
+        return [m for s, m in self.messages if s == FMI2_ERROR]
+
+    def free(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def python_simulator(kind, params):
+    """The Python API with the FMU's parameter names (the FMU scripts' create_simulator, spelled out)."""
+    p = dict(params)
+    solver = {k: p.pop(k) for k in ("scheme", "dt_max", "tolerance") if k in p}
+    initial = {k: p.pop(k) for k in ("phi_0", "phi_dot_0", "u_0", "u_dot_0") if k in p}
+    model = RigidBlock(**p) if kind == RIGID else FlexibleOscillator(**p)
+    return Simulator(model, **{"scheme": 0, **solver}, **initial)
+
+
+def python_error(kind, params) -> str:
+    with pytest.raises(ValueError) as info:
+        python_simulator(kind, params)
+    return str(info.value)
+
+
+# ---------------------------------------------------------------------------------------------- parameters
+NAN, INF = float("nan"), float("inf")
+BAD_PARAMETERS = [
+    # (FMU, parameter values, variable, allowed range as printed)
+    (RIGID, {"b": -1.0}, "b", "[1e-06, 1000]"),
+    (RIGID, {"b": 0.0}, "b", "[1e-06, 1000]"),
+    (RIGID, {"b": NAN}, "b", "[1e-06, 1000]"),
+    (RIGID, {"b": 1e200}, "b", "[1e-06, 1000]"),
+    (RIGID, {"h": 0.0}, "h", "[1e-06, 1000]"),
+    (RIGID, {"h": INF}, "h", "[1e-06, 1000]"),
+    (RIGID, {"m": 0.0}, "m", "[1e-09, 1e+12]"),
+    (RIGID, {"m": -2.0}, "m", "[1e-09, 1e+12]"),
+    (RIGID, {"g": 0.0}, "g", "[0.001, 1000]"),
+    (RIGID, {"g": -9.81}, "g", "[0.001, 1000]"),
+    (RIGID, {"e_N": 1.5}, "e_N", "[0, 1]"),
+    (RIGID, {"e_N": -0.1}, "e_N", "[0, 1]"),
+    (RIGID, {"e_N": NAN}, "e_N", "[0, 1]"),
+    (RIGID, {"phi_0": math.pi / 2}, "phi_0", "(-1.5708, 1.5708)"),
+    (RIGID, {"phi_0": -2.0}, "phi_0", "(-1.5708, 1.5708)"),
+    (RIGID, {"phi_dot_0": NAN}, "phi_dot_0", "[-10000, 10000]"),
+    (RIGID, {"phi_dot_0": 1e5}, "phi_dot_0", "[-10000, 10000]"),
+    (RIGID, {"dt_max": 0.0}, "dt_max", "(0, inf)"),
+    (RIGID, {"dt_max": -1e-3}, "dt_max", "(0, inf)"),
+    (RIGID, {"scheme": 1, "tolerance": 0.0}, "tolerance", "[1e-14, 0.01]"),
+    (RIGID, {"scheme": 1, "tolerance": 0.5}, "tolerance", "[1e-14, 0.01]"),
+    (RIGID, {"scheme": 1, "dt_max": INF}, "dt_max", "(0, inf)"),
+    (RIGID, {"scheme": 2}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
+    (RIGID, {"scheme": -1}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
+    (FLEX, {"EI": 0.0}, "EI", "(0, 1e+15]"),
+    (FLEX, {"EI": -9.45e5}, "EI", "(0, 1e+15]"),
+    (FLEX, {"EI": INF}, "EI", "(0, 1e+15]"),
+    (FLEX, {"rho": -0.1}, "rho", "[0, 1000]"),
+    (FLEX, {"zeta": -0.01}, "zeta", "[0, 10]"),
+    (FLEX, {"zeta": NAN}, "zeta", "[0, 10]"),
+    (FLEX, {"m": 0.0}, "m", "[1e-09, 1e+12]"),
+    (FLEX, {"m_c": -1.0}, "m_c", "[0, 1e+12]"),
+    (FLEX, {"m_b": -1.0}, "m_b", "[0, 1e+12]"),
+    (FLEX, {"m_c": 0.0, "m_b": 0.0}, "m_b", "m_b in (0, 1e+12] and rho in (0, 1000]"),
+    (FLEX, {"m_c": 0.0, "rho": 0.0}, "rho", "m_b in (0, 1e+12] and rho in (0, 1000]"),
+    (FLEX, {"h": 0.0}, "h", "[1e-06, 1000]"),
+    (FLEX, {"b": -0.25}, "b", "[1e-06, 1000]"),
+    (FLEX, {"g": 0.0}, "g", "[0.001, 1000]"),
+    (FLEX, {"e_N": 2.0}, "e_N", "[0, 1]"),
+    (FLEX, {"phi_0": -math.pi / 2}, "phi_0", "(-1.5708, 1.5708)"),
+    (FLEX, {"u_0": 2.0}, "u_0", "[-1.5, 1.5]"),
+    (FLEX, {"u_0": NAN}, "u_0", "[-1.5, 1.5]"),
+    (FLEX, {"u_dot_0": -INF}, "u_dot_0", "[-10000, 10000]"),
+    (FLEX, {"impact_rule": 3}, "impact_rule", "allowed values: 0, 1, 'lcp', 'classical'"),
+    (FLEX, {"scheme": 7}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
+    (FLEX, {"dt_max": NAN}, "dt_max", "(0, inf)"),
+]
+IDS = [f"{k[:5]}-{'-'.join(f'{n}={v}' for n, v in p.items())}" for k, p, _, _ in BAD_PARAMETERS]
+
+
+@pytest.mark.parametrize("kind, params, name, allowed", BAD_PARAMETERS, ids=IDS)
+def test_bad_parameter_python_api(kind, params, name, allowed):
+    msg = python_error(kind, params)
+    assert msg.startswith(f"{name} = "), msg
+    assert allowed in msg and "allowed" in msg, msg
+
+
+@pytest.mark.parametrize("kind, params, name, allowed", BAD_PARAMETERS, ids=IDS)
+def test_bad_parameter_fmu(fmus, kind, params, name, allowed):
+    py_msg = python_error(kind, params)
+    inst = Instance(fmus[kind])
+    inst.init(**params)  # exit_initialization_mode returns fmi2OK and logs the error
+    errors = inst.errors()
+    assert errors == [f"invalid parameters: {py_msg}"]
+    # every step is discarded with the same message; the outputs stay at their start values
+    for _ in range(2):
+        assert inst.step() == FMI2_DISCARD
+    assert inst.errors()[-1] == f"invalid parameters: {py_msg}"
+    # the instance can be reset and used with valid parameters
+    inst.fmu.reset()
+    inst.init(phi_0=0.05)
+    assert inst.step() == 0 and inst.step() == 0
+    assert 0.0 < inst.get("phi")[0] < 0.05
+    inst.free()
+
+
+def test_parameters_inside_the_ranges_are_accepted():
+    # the bounds themselves are supported
+    RigidBlock(b=1e-6, h=1e3, m=1e-9, g=1e3)
+    RigidBlock(b=1e3, h=1e-6, m=1e12, g=1e-3, e_N=1.0)
+    FlexibleOscillator(m=1e12, m_c=0.0, m_b=1e12, rho=1e3, h=1e3, b=1e-6, EI=1e15, zeta=10.0, g=1e-3)
+    FlexibleOscillator().initial_state(u_0=-1.5, u_dot_0=1e4, phi_dot_0=-1e4)
+    # huge but allowed values give finite outputs (no overflow inside the supported ranges)
+    for model in (RigidBlock(b=1e3, h=1e3, m=1e12, g=1e3), RigidBlock(b=1e-6, h=1e-6, m=1e-9, g=1e-3)):
+        for scheme in (0, 1):
+            sim = Simulator(model, scheme, dt_max=1e-3, phi_0=0.3, phi_dot_0=1e4 if model.b < 1 else -1.0)
+            sim.advance(0.01, 0.3 * model.g)
+            assert all(math.isfinite(float(v)) for v in sim.outputs().values())
+
+
+# ---------------------------------------------------------------------------------------------- steps
+@pytest.mark.parametrize("kind", [RIGID, FLEX])
+@pytest.mark.parametrize("dt", [0.0, -0.01, NAN, INF])
+def test_bad_step_size(fmus, kind, dt):
+    inst = Instance(fmus[kind])
+    inst.init(phi_0=0.02)
+    assert inst.step() == 0
+    before = inst.get("phi", "phi_dot", "energy")
+    assert inst.step(dt) == FMI2_DISCARD
+    assert inst.errors() == [f"step_size = {dt!r} is invalid; allowed range (0, inf)"]
+    assert inst.get("phi", "phi_dot", "energy") == before  # the state is unchanged
+    assert inst.step() == 0  # the step can be retried
+    inst.free()
+
+
+def test_bad_step_python_api():
+    sim = Simulator(RigidBlock(), phi_0=0.02)
+    sim.advance(1.0, 0.0)
+    with pytest.raises(ValueError, match=r"^t_end = 0\.5 is before the current time; allowed range \[1, inf\)"):
+        sim.advance(0.5, 0.0)
+    with pytest.raises(ValueError, match=r"^t_end = nan is not finite"):
+        sim.advance(float("nan"), 0.0)
+    for interval in (0.0, -0.01):
+        with pytest.raises(ValueError, match=r"^output_interval = .* allowed range \(0, inf\)"):
+            simulate(RigidBlock(), 0.0, 1.0, output_interval=interval)
+    with pytest.raises(ValueError, match=r"^t_end = 0\.5 is out of range; allowed range \[1, inf\)"):
+        simulate(RigidBlock(), 0.0, 0.5, t0=1.0)
+
+
+@pytest.mark.parametrize("kind", [RIGID, FLEX])
+@pytest.mark.parametrize("offset", [-0.005, 0.005, -0.02, NAN])
+def test_communication_point_must_follow_the_last_one(fmus, kind, offset):
+    inst = Instance(fmus[kind])
+    inst.init(phi_0=0.02)
+    for _ in range(3):
+        assert inst.step() == 0
+    before = inst.get("phi", "phi_dot", "energy")
+    t_bad = inst.t + offset
+    assert inst.step(0.01, t=t_bad) == FMI2_DISCARD
+    (msg,) = inst.errors()
+    assert msg.startswith(f"current_time = {t_bad!r} does not match the FMU time {inst.t!r}; allowed value "
+                          f"{inst.t!r}")
+    assert inst.get("phi", "phi_dot", "energy") == before
+    assert inst.step() == 0
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------- inputs
+@pytest.mark.parametrize("kind", [RIGID, FLEX])
+@pytest.mark.parametrize("ag", [NAN, INF, -INF])
+def test_non_finite_ag(fmus, kind, ag):
+    sim = python_simulator(kind, {})
+    with pytest.raises(ValueError) as info:
+        sim.advance(0.01, ag)
+    py_msg = str(info.value)
+    assert py_msg == f"ag = {ag!r} is not finite; allowed range (-inf, inf)"
+    inst = Instance(fmus[kind])
+    inst.init()
+    assert inst.step() == 0
+    inst.set(ag=ag)
+    assert inst.step() == FMI2_DISCARD
+    assert inst.errors() == [f"input ag = {ag!r} at t = 0.01 is invalid: {py_msg}"]
+    inst.set(ag=0.0)  # a valid input: the step goes through
+    assert inst.step() == 0 and math.isclose(inst.t, 0.02)
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------- late changes
+@pytest.mark.parametrize("kind, name, value", [(RIGID, "b", 0.3), (RIGID, "e_N", 0.5), (RIGID, "scheme", 1),
+                                               (FLEX, "EI", 1e5), (FLEX, "impact_rule", 1)])
+def test_fixed_parameter_changed_after_initialization(fmus, kind, name, value):
+    inst = Instance(fmus[kind])
+    inst.init(phi_0=0.02)
+    assert inst.step() == 0
+    old = inst.get(name)[0]
+    inst.set(**{name: value})
+    assert inst.get(name) == [old]  # rejected, the old value is kept
+    (msg,) = inst.errors()
+    assert msg.startswith(f"parameter {name} is 'fixed' and cannot be changed after initialization "
+                          f"(requested {value!r}")
+    assert inst.step() == FMI2_DISCARD  # the next step is discarded once, so the mistake is not silent
+    assert inst.errors()[-1] == msg
+    assert inst.step() == 0
+    inst.free()
+
+
+def test_python_models_are_immutable():
+    block = RigidBlock()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        block.b = 0.3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        FlexibleOscillator().EI = 1.0
+
+
+def test_unknown_initial_values_python_api():
+    with pytest.raises(ValueError, match=r"unknown initial values for RigidBlock: \['u_0'\]; allowed: phi_0"):
+        Simulator(RigidBlock(), u_0=0.1)
+
+
+def test_no_initial_penetration():
+    """The initial state comes from phi_0 alone (the pivot corner on the ground): it cannot penetrate."""
+    for model in (RigidBlock(b=0.3, h=0.7), FlexibleOscillator()):
+        for phi_0 in np.linspace(-1.5707, 1.5707, 41):
+            for phi_dot_0 in (-1.0, 0.0, 1.0):
+                mode, q, v = model.initial_state(phi_0=float(phi_0), phi_dot_0=phi_dot_0)
+                gaps = model.gaps(q)
+                assert gaps.min() >= -1e-15 * model.length_scale
+                assert abs(gaps.min()) <= 1e-15 * model.length_scale  # resting on a corner
+
+
+# ---------------------------------------------------------------------------------------------- robustness
+def test_errors_do_not_disturb_other_instances(fmus):
+    """An instance that fails (bad parameters, bad steps, bad inputs) leaves the others in the process
+    untouched: the good instance gives bit-identical outputs to a run without the bad one."""
+    table = [2.0 * math.sin(2 * math.pi * k / 100) for k in range(100)]
+
+    def run(with_bad):
+        good = Instance(fmus[RIGID], "good")
+        good.init(phi_0=0.0)
+        bad = [Instance(fmus[RIGID], "bad"), Instance(fmus[FLEX], "bad2")] if with_bad else []
+        if with_bad:
+            bad[0].init(b=-1.0)
+            bad[1].init(EI=0.0)
+        out = []
+        for k, ag in enumerate(table):
+            good.set(ag=ag)
+            assert good.step() == 0
+            out.append(good.get("phi", "phi_dot", "x", "y", "energy", "impacts"))
+            for inst in bad:
+                inst.set(ag=NAN if k % 3 == 0 else ag)
+                assert inst.step(dt=0.0 if k % 2 else 0.01) == FMI2_DISCARD
+        for inst in bad:
+            inst.free()  # freeing a failed instance is fine
+        good.free()
+        return out
+
+    assert run(True) == run(False)
+
+
+def test_reset_after_error_brings_back_the_start_values(fmus):
+    inst = Instance(fmus[FLEX])
+    inst.init(zeta=-1.0)
+    assert inst.step() == FMI2_DISCARD
+    inst.fmu.reset()
+    assert inst.get("zeta") == [0.02]  # start value again
+    inst.init(phi_0=0.01)
+    assert inst.errors() == [m for m in inst.errors() if "zeta" in m]  # no new error
+    for _ in range(5):
+        assert inst.step() == 0
+    inst.free()
