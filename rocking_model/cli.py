@@ -1,0 +1,362 @@
+"""The ``rocking`` command line.
+
+    rocking simulate --model rigid --b 0.2 --h 1.0 --pulse sine --amplitude 3 --frequency 2 --out results/
+    rocking simulate --record RSN6_IMPVALL.I_I-ELC180.AT2 --scale 1.5 --scheme moreau_jean
+    rocking ensemble --pulse sine --amplitude-ratios 1:6:11 --frequency-ratios 1:10:10 --workers 2
+    rocking build-fmu [--dest dist]          (source checkout only)
+    rocking benchmark [--quick] [--ensemble] (source checkout only)
+
+Only argument handling and reporting live here; the physics is in `rocking_model.simulation`. Bad input
+prints one line ``rocking <command>: error: ...`` and exits with status 2 (never a traceback).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+PULSES = ("sine", "cosine", "ricker", "rectangular")
+UNITS_OF = {"phi": "rad", "phi_dot": "rad/s", "x": "m", "y": "m", "x_dot": "m/s", "y_dot": "m/s", "energy": "J",
+            "u": "m", "u_dot": "m/s", "top_displacement": "m", "contact": "0 full/1 left/2 right/3 flight"}
+RIGID_PARAMS = ("b", "h", "m", "g", "e_N")
+FLEX_PARAMS = ("b", "h", "m", "g", "e_N", "m_c", "m_b", "rho", "EI", "zeta", "impact_rule")
+
+
+class UsageError(ValueError):
+    """Bad command-line input (exit status 2)."""
+
+
+# --------------------------------------------------------------------------------------------- helpers
+def _values(text: str) -> list[float]:
+    """A number, or start:stop:num (num evenly spaced values, both ends included)."""
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            n = int(n)
+            if n < 1:
+                raise ValueError
+            return list(np.linspace(float(a), float(b), n))
+        return [float(text)]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number or start:stop:num") from None
+
+
+def _flat(lists) -> list[float] | None:
+    return None if lists is None else [float(x) for sub in lists for x in sub]
+
+
+def _repo_root() -> Path:
+    if not ((ROOT / "build_fmu.py").is_file() and (ROOT / "benchmarks").is_dir()):
+        raise UsageError(f"this command needs a source checkout of rocking-model (build_fmu.py and "
+                         f"benchmarks/ next to the package); {ROOT} has none")
+    return ROOT
+
+
+def _model(args):
+    from .models.flexible_oscillator import FlexibleOscillator
+    from .models.rigid_block import RigidBlock
+
+    allowed = RIGID_PARAMS if args.model == "rigid" else FLEX_PARAMS
+    given = {k: getattr(args, k) for k in FLEX_PARAMS if getattr(args, k, None) is not None}
+    extra = sorted(set(given) - set(allowed))
+    if extra:
+        raise UsageError(f"--{extra[0].replace('_', '-')} is not a parameter of the {args.model} model; "
+                         f"allowed: " + ", ".join("--" + k.replace("_", "-") for k in allowed))
+    return (RigidBlock if args.model == "rigid" else FlexibleOscillator)(**given)
+
+
+def _motion(args):
+    """(GroundMotion, description, default t_end [s])."""
+    from . import ground_motion as gm
+    from .records import load_motion, unit_factor
+
+    if args.record and args.pulse:
+        raise UsageError("give either --record or --pulse, not both")
+    if args.record:
+        rec = load_motion(args.record, args.units)
+        if args.resample:
+            rec = rec.resampled(args.resample)
+        if args.scale != 1.0:
+            rec = rec.scaled(args.scale)
+        desc = f"record {rec.name}: {rec.t.size} samples, dt = {rec.dt:g} s, PGA = {rec.pga:.3g} m/s2"
+        return rec, desc, float(rec.t[-1]) + 5.0
+    if not args.pulse:
+        if args.scale != 1.0 or args.resample:
+            raise UsageError("--scale and --resample apply to a --record or --pulse")
+        return gm.ConstantMotion(0.0), "no ground motion", 5.0
+    if args.amplitude is None:
+        raise UsageError("--pulse needs --amplitude (in --amplitude-units, default m/s2)")
+    A = args.amplitude * unit_factor(args.amplitude_units) * args.scale
+    if args.pulse == "rectangular":
+        if args.duration is None:
+            raise UsageError("--pulse rectangular needs --duration [s]")
+        m = gm.RectangularPulse(A, args.duration, args.t0)
+        desc = f"rectangular pulse A = {A:.4g} m/s2, duration {args.duration:g} s"
+    else:
+        if args.frequency is None:
+            raise UsageError(f"--pulse {args.pulse} needs --frequency [Hz]")
+        w = 2.0 * math.pi * args.frequency
+        cls = {"sine": gm.SinePulse, "cosine": gm.CosinePulse, "ricker": gm.RickerPulse}[args.pulse]
+        m = cls(A, w) if args.pulse == "ricker" and args.t0 == 0.0 else cls(A, w, args.t0)
+        desc = f"{args.pulse} pulse A = {A:.4g} m/s2, f_p = {args.frequency:g} Hz"
+    if args.resample:
+        m = m.resampled(args.resample)
+    return m, desc, m.support[1] + 5.0
+
+
+# --------------------------------------------------------------------------------------------- commands
+def cmd_simulate(args) -> int:
+    from .simulation import simulate
+
+    model = _model(args)
+    motion, desc, t_default = _motion(args)
+    t_end = args.t_end if args.t_end is not None else t_default
+    kw = {}
+    if args.dt_max is not None:
+        kw["dt_max"] = args.dt_max
+    if args.scheme == "event_driven":
+        kw["tolerance"] = args.tolerance
+    for k in ("phi_0", "phi_dot_0", "u_0", "u_dot_0"):
+        if getattr(args, k) is not None:
+            if k.startswith("u") and args.model == "rigid":
+                raise UsageError(f"--{k.replace('_', '-')} applies to the flexible model")
+            kw[k] = getattr(args, k)
+    t0 = time.perf_counter()
+    res = simulate(model, motion, t_end, scheme=args.scheme, output_interval=args.output_interval, **kw)
+    wall = time.perf_counter() - t0
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / f"{args.name}.csv"
+    names = list(res.values)
+    ag = np.array([motion(float(t)) for t in res.t])
+    cols = [res.t, ag] + [np.asarray(res.values[n], dtype=float) for n in names]
+    header = ["time [s]", "ag [m/s2]"] + [f"{n} [{UNITS_OF[n]}]" if n in UNITS_OF else n for n in names]
+    np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.10g")
+
+    rigid = args.model == "rigid"
+    alpha = model.alpha if rigid else None
+    geo = (f"rigid block b = {model.b:g} m, h = {model.h:g} m (alpha = {model.alpha:.4f} rad, "
+           f"p = {model.p:.3f} rad/s, g tan(alpha) = {model.g * math.tan(model.alpha):.3f} m/s2)") if rigid else \
+        f"flexible oscillator b = {model.b:g} m, h = {model.h:g} m, EI = {model.EI:g} N m2"
+    phi = np.abs(res.phi)
+    k = int(np.argmax(phi))
+    over = np.asarray(res.overturned, dtype=bool)
+    print(f"{geo}\n{desc}; scheme {res.scheme}, t_end = {t_end:g} s")
+    ratio = f" ({phi[k] / alpha:.3f} alpha)" if rigid else ""
+    print(f"  max |phi|  = {phi[k]:.5g} rad{ratio} at t = {res.t[k]:.3f} s")
+    print(f"  impacts    = {int(res.impacts[-1])}")
+    print(f"  overturned = " + (f"yes, at t = {res.t[int(np.argmax(over))]:.3f} s" if over[-1] else "no"))
+    if not rigid:
+        print(f"  max |top displacement| = {np.max(np.abs(res.top_displacement)):.4g} m")
+    print(f"  wall time  = {wall:.3f} s ({res.n_steps} steps)")
+    written = [csv_path]
+    if not args.no_plot:
+        from .plotting import plot_response
+        title = f"{geo}\n{desc}, {res.scheme}"
+        written.append(plot_response(res, motion, out / f"{args.name}.png", title=title, alpha=alpha,
+                                     g=model.g))
+    print("wrote " + ", ".join(map(str, written)))
+    return 0
+
+
+def cmd_build_fmu(args) -> int:
+    import importlib.util
+
+    root = _repo_root()
+    spec = importlib.util.spec_from_file_location("_rocking_build_fmu", root / "build_fmu.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    for p in mod.build_all(dest=args.dest, names=args.names or None):
+        print(f"built and validated {p}")
+    return 0
+
+
+def cmd_benchmark(args, extra: list[str]) -> int:
+    root = _repo_root()
+    if args.ensemble:
+        cmd = [sys.executable, str(root / "benchmarks" / "ensemble_bench.py")]
+    else:
+        cmd = [sys.executable, "-m", "benchmarks"]
+    cmd += (["--quick"] if args.quick else []) + extra
+    return subprocess.run(cmd, cwd=root).returncode
+
+
+def cmd_ensemble(args) -> int:
+    from . import ensemble as E
+
+    geometries = [(b, h) for b in (_flat(args.b) or [0.2]) for h in (_flat(args.h) or [1.0])]
+    common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N,
+                  t_end=args.t_end, output_interval=args.output_interval, tolerance=args.tolerance,
+                  dt_max=args.dt_max)
+    if bool(args.record) == bool(args.pulse):
+        raise UsageError("give either --record FILE... (with --scales) or --pulse KIND (with amplitudes and "
+                         "frequencies)")
+    if args.record:
+        cases = E.record_cases(args.record, _flat(args.scales) or [1.0], units=args.units, **common)
+    else:
+        cases = E.pulse_cases(args.pulse, amplitude_ratios=_flat(args.amplitude_ratios),
+                              frequency_ratios=_flat(args.frequency_ratios), amplitudes=_flat(args.amplitudes),
+                              frequencies=_flat(args.frequencies), **common)
+    where = f"Dask cluster at {args.address}" if args.address else \
+        ("serially (no Dask)" if args.workers == 0 else f"a local Dask cluster of {args.workers} worker(s)")
+    print(f"{len(cases)} cases -> {args.out}, on {where}")
+    try:
+        s = E.run_ensemble(cases, args.out, workers=args.workers, address=args.address,
+                           resume=not args.no_resume, progress=not args.no_progress, batch_size=args.batch_size)
+    except KeyboardInterrupt:
+        print(f"interrupted: the finished cases are in {args.out}; run the same command to resume",
+              file=sys.stderr)
+        return 130
+    print(f"ran {s['n_run']} cases ({s['n_skipped']} already in {args.out}): {s['n_overturned']} overturned, "
+          f"{s['n_errors']} errors")
+    if s["n_run"]:
+        print(f"throughput {s['throughput']:.2f} cases/s on {s['workers']} worker(s) "
+              f"({s['wall_time']:.1f} s, plus {s['setup_time']:.1f} s cluster start)")
+    if args.pulse and args.model == "rigid" and args.amplitude_ratios and args.frequency_ratios \
+            and not args.no_plot:
+        from .plotting import plot_overturning_spectrum
+        ids = {c["case_id"] for c in cases}
+        rows = [r for r in E.read_results(args.out) if r["case_id"] in ids]
+        png = Path(args.plot) if args.plot else Path(args.out).with_name(Path(args.out).stem + "_spectrum.png")
+        b, h = geometries[0]
+        title = f"Overturning spectrum, {args.pulse} pulse, rigid block" + \
+            (f" b = {b:g} m, h = {h:g} m" if len(geometries) == 1 else f" ({len(geometries)} geometries)")
+        print(f"wrote {plot_overturning_spectrum(rows, png, title=title)}")
+    return 0 if s["n_errors"] == 0 else 1
+
+
+# --------------------------------------------------------------------------------------------- parser
+def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
+    g = p.add_argument_group("model")
+    g.add_argument("--model", choices=("rigid", "flexible"), default="rigid", help="default: rigid")
+    if lists:
+        g.add_argument("--b", type=_values, nargs="+", metavar="B", help="half-widths [m] (grid; default 0.2)")
+        g.add_argument("--h", type=_values, nargs="+", metavar="H", help="half-heights [m] (grid; default 1.0)")
+        g.add_argument("--e-N", dest="e_N", type=float, default=0.0, help="coefficient of restitution [1]")
+        return
+    g.add_argument("--b", type=float, help="half-width of the block / base [m]")
+    g.add_argument("--h", type=float, help="half-height of the block / column height [m]")
+    g.add_argument("--m", type=float, help="mass of the block / top mass [kg]")
+    g.add_argument("--g", type=float, help="gravity [m/s2]")
+    g.add_argument("--e-N", dest="e_N", type=float, help="Newton's coefficient of restitution [1]")
+    for k, h in (("m_c", "column mass [kg]"), ("m_b", "base mass [kg]"), ("rho", "base radius of gyration [m]"),
+                 ("EI", "flexural rigidity [N m2]"), ("zeta", "damping ratio [1]")):
+        g.add_argument(f"--{k.replace('_', '-')}", dest=k, type=float, help=f"flexible: {h}")
+    g.add_argument("--impact-rule", dest="impact_rule", type=int, choices=(0, 1), help="flexible: 0 LCP, 1 classical")
+    g.add_argument("--phi-0", dest="phi_0", type=float, help="initial rotation [rad]")
+    g.add_argument("--phi-dot-0", dest="phi_dot_0", type=float, help="initial angular velocity [rad/s]")
+    g.add_argument("--u-0", dest="u_0", type=float, help="flexible: initial flexural coordinate [m]")
+    g.add_argument("--u-dot-0", dest="u_dot_0", type=float, help="flexible: initial flexural velocity [m/s]")
+
+
+def _solver_options(p: argparse.ArgumentParser, many: bool = False) -> None:
+    g = p.add_argument_group("solver")
+    if many:
+        g.add_argument("--scheme", nargs="+", choices=("event_driven", "moreau_jean"), default=["event_driven"])
+    else:
+        g.add_argument("--scheme", choices=("event_driven", "moreau_jean"), default="event_driven")
+    g.add_argument("--tolerance", type=float, default=1e-8, help="event-driven tolerance [1] (default 1e-8)")
+    g.add_argument("--dt-max", dest="dt_max", type=float, help="Moreau-Jean step [s] (default 1e-3)")
+    g.add_argument("--t-end", dest="t_end", type=float, help="end time [s] (default: end of the motion + 5 s)")
+    g.add_argument("--output-interval", dest="output_interval", type=float, default=0.01,
+                   help="output interval [s] (default 0.01)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="rocking", description="Nonsmooth rocking dynamics: simulations, FMUs, "
+                                "benchmarks and ensembles (Giouvanidis & Dimitrakopoulos 2017).")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("simulate", help="one simulation: CSV, PNG and a summary",
+                       description="Simulate one model under a record or a pulse; write <out>/<name>.csv and "
+                                   "<out>/<name>.png (phi, ag and contact state over time); print a summary.")
+    _model_options(s)
+    g = s.add_argument_group("ground motion (a record or a pulse; none: free rocking)")
+    g.add_argument("--record", help="PEER .AT2 or two-column .csv file, or synthetic[:seed]")
+    g.add_argument("--units", help="units of a CSV record when its header does not state them (g, m/s2, cm/s2...)")
+    g.add_argument("--pulse", choices=PULSES)
+    g.add_argument("--amplitude", type=float, help="pulse amplitude (peak) in --amplitude-units")
+    g.add_argument("--amplitude-units", default="m/s2", help="g, m/s2 (default), cm/s2, ...")
+    g.add_argument("--frequency", type=float, help="pulse frequency f_p [Hz] (omega_p = 2 pi f_p)")
+    g.add_argument("--duration", type=float, help="rectangular pulse duration [s]")
+    g.add_argument("--t0", type=float, default=0.0, help="pulse start [s] (Ricker: centre; default 1.5/f_p)")
+    g.add_argument("--scale", type=float, default=1.0, help="scale factor on the motion [1]")
+    g.add_argument("--resample", type=float, help="resample the motion every DT [s] (linear)")
+    _solver_options(s)
+    g = s.add_argument_group("output")
+    g.add_argument("--out", default="results", help="output directory (default results/)")
+    g.add_argument("--name", default="rocking", help="file name stem (default rocking)")
+    g.add_argument("--no-plot", action="store_true", help="skip the PNG (no matplotlib needed)")
+
+    b = sub.add_parser("build-fmu", help="build and validate the FMUs (source checkout)")
+    b.add_argument("--dest", default="dist", help="output directory (default dist/)")
+    b.add_argument("names", nargs="*", help="FMU names (default: all in fmu_src/)")
+
+    k = sub.add_parser("benchmark", help="run the benchmark suite (python -m benchmarks; source checkout)",
+                       description="Run python -m benchmarks (or, with --ensemble, benchmarks/ensemble_bench.py); "
+                                   "other arguments are passed through.")
+    k.add_argument("--quick", action="store_true", help="smoke run")
+    k.add_argument("--ensemble", action="store_true", help="ensemble throughput on 1 and 2 Dask workers")
+
+    e = sub.add_parser("ensemble", help="a grid of cases on Dask, written incrementally, resumable",
+                       description="Run records x scales (or pulse amplitudes x frequencies) x geometries x "
+                                   "schemes; one row per case in --out (.csv, or a .parquet directory); a rerun "
+                                   "skips the cases already there. Lists accept numbers and start:stop:num.")
+    _model_options(e, lists=True)
+    g = e.add_argument_group("ground motions")
+    g.add_argument("--record", nargs="+", help="record files (.AT2, .csv) or synthetic:<seed>")
+    g.add_argument("--units", help="units of CSV records without stated units")
+    g.add_argument("--scales", type=_values, nargs="+", help="scale factors on the records (default 1)")
+    g.add_argument("--pulse", choices=PULSES)
+    g.add_argument("--amplitude-ratios", type=_values, nargs="+", metavar="A", help="A / (g tan alpha) [1]")
+    g.add_argument("--frequency-ratios", type=_values, nargs="+", metavar="W", help="omega_p / p [1]")
+    g.add_argument("--amplitudes", type=_values, nargs="+", metavar="A", help="pulse amplitudes [m/s2]")
+    g.add_argument("--frequencies", type=_values, nargs="+", metavar="F", help="pulse frequencies [Hz]")
+    _solver_options(e, many=True)
+    g = e.add_argument_group("execution and output")
+    g.add_argument("--out", default="results/ensemble.csv", help="results file .csv or directory .parquet")
+    g.add_argument("--workers", type=int, default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
+    g.add_argument("--address", help="scheduler address of an existing Dask cluster, e.g. tcp://10.0.0.5:8786")
+    g.add_argument("--batch-size", type=int, default=1, help="cases per Dask task (default 1)")
+    g.add_argument("--no-resume", action="store_true", help="fail if --out exists instead of resuming")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g.add_argument("--plot", help="overturning spectrum PNG (default: <out stem>_spectrum.png)")
+    g.add_argument("--no-plot", action="store_true", help="skip the spectrum PNG")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command != "benchmark":
+        parser.parse_args(argv)                 # reports the unknown arguments, exit status 2
+    prog = f"rocking {args.command}"
+    try:
+        if args.command == "simulate":
+            return cmd_simulate(args)
+        if args.command == "build-fmu":
+            return cmd_build_fmu(args)
+        if args.command == "benchmark":
+            return cmd_benchmark(args, extra)
+        return cmd_ensemble(args)
+    except (UsageError, ValueError) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except (ImportError, OSError) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

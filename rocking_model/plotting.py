@@ -1,0 +1,112 @@
+"""Plots (matplotlib, Agg backend; optional dependency: pip install 'rocking-model[plot]').
+
+- `plot_response`: rotation phi, ground acceleration and contact state over time, for one simulation.
+- `plot_overturning_spectrum`: Makris' overturning spectrum of a pulse grid, A / (g tan(alpha)) against
+  omega_p / p, overturned or not.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+CONTACT_LABELS = ["full", "left corner", "right corner", "flight"]
+
+
+def _pyplot():
+    try:
+        import matplotlib
+    except ImportError:
+        raise ImportError("plots need matplotlib: pip install 'rocking-model[plot]' (or matplotlib)") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def plot_response(result, ground_motion, path, *, title: str = "", alpha: float | None = None,
+                  g: float = 9.81) -> Path:
+    """Write a PNG with three panels sharing the time axis: rotation phi [rad] (with +-alpha and impacts),
+    ground acceleration ag [m/s2] (with +-g tan(alpha), the uplift threshold of the rigid block) and the
+    contact state. ``result`` is a `Result`; ``ground_motion`` a callable ag(t) [m/s2]; ``alpha`` [rad] the
+    slenderness (None: not drawn); g [m/s2]."""
+    plt = _pyplot()
+    t = np.asarray(result.t)
+    phi = np.asarray(result.phi)
+    # ag on a grid finer than the output so that short pulses show their shape
+    tf = np.linspace(t[0], t[-1], max(2000, 4 * t.size))
+    ag = np.array([ground_motion(float(x)) for x in tf])
+    fig, axes = plt.subplots(3, 1, figsize=(8.5, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2, 1.3]})
+    ax = axes[0]
+    ax.plot(t, phi, color="C0", lw=1.2, label=r"$\varphi$")
+    if alpha is not None:
+        for s in (1, -1):
+            ax.axhline(s * alpha, color="grey", ls="--", lw=0.8)
+        ax.text(t[0], 0.95 * alpha, r" $\pm\alpha$", va="top", color="grey")
+    imp = np.asarray(result.impact_times, dtype=float)
+    if imp.size:
+        ax.plot(imp, np.interp(imp, t, phi), "x", color="C3", ms=5, label=f"impacts ({imp.size})")
+    over = np.asarray(result.overturned, dtype=bool)
+    if over.any():
+        t_o = t[int(np.argmax(over))]
+        ax.axvline(t_o, color="C3", lw=1.0)
+        ax.text(t_o, ax.get_ylim()[1], " overturned", color="C3", va="top")
+    ax.set_ylabel(r"rotation $\varphi$ [rad]")
+    ax.legend(loc="upper right", fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    ax = axes[1]
+    ax.plot(tf, ag, color="C1", lw=1.0, label=r"$a_g$")
+    if alpha is not None:
+        for s in (1, -1):
+            ax.axhline(s * g * math.tan(alpha), color="grey", ls=":", lw=0.8)
+        ax.text(t[0], g * math.tan(alpha), r" $g\,\tan\alpha$ (uplift)", va="bottom", color="grey", fontsize=8)
+    ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
+    ax = axes[2]
+    ax.step(t, np.asarray(result.contact), where="post", color="C2")
+    ax.set_yticks(range(4), CONTACT_LABELS)
+    ax.set_ylim(-0.5, 3.5)
+    ax.set_ylabel("contact")
+    ax.set_xlabel("time t [s]")
+    for a in axes:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_overturning_spectrum(rows: Sequence[dict], path, *, title: str = "") -> Path:
+    """Write Makris' overturning spectrum of a pulse grid: each case a marker at (omega_p / p,
+    A / (g tan(alpha))), red if it overturned, else coloured by max|phi|/alpha; the uplift line A = g tan(alpha).
+    ``rows`` are ensemble rows (`rocking_model.ensemble.run_case`) with w_ratio, a_ratio, overturned."""
+    plt = _pyplot()
+    rows = [r for r in rows if not r.get("error") and np.isfinite(r.get("w_ratio", np.nan))]
+    if not rows:
+        raise ValueError("no rows with a frequency ratio omega_p/p: the spectrum needs a rigid-block pulse grid")
+    w = np.array([r["w_ratio"] for r in rows])
+    a = np.array([r["a_ratio"] for r in rows])
+    over = np.array([bool(r["overturned"]) for r in rows])
+    phi = np.array([r["max_phi_over_alpha"] for r in rows])
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    sc = ax.scatter(w[~over], a[~over], c=np.clip(phi[~over], 0, 1), cmap="Blues", vmin=0, vmax=1, s=22,
+                    marker="o", edgecolors="k", linewidths=0.3, label="no overturning")
+    ax.scatter(w[over], a[over], color="C3", s=26, marker="s", label="overturned")
+    ax.axhline(1.0, color="grey", ls="--", lw=0.8)
+    ax.text(w.min(), 1.0, r" uplift: $A = g\tan\alpha$", va="bottom", color="grey", fontsize=8)
+    cb = fig.colorbar(sc, ax=ax)
+    cb.set_label(r"max $|\varphi| / \alpha$ (not overturned)")
+    ax.set_xlabel(r"frequency ratio $\omega_p / p$ [1]")
+    ax.set_ylabel(r"amplitude ratio $A / (g \tan\alpha)$ [1]")
+    ax.set_title(title or "Overturning spectrum", fontsize=10)
+    ax.legend(loc="upper left", fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
