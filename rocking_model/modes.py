@@ -41,3 +41,26 @@ def mode_from_closed(closed) -> Mode:
 def pivot_sign(mode: Mode) -> int:
     """s of the pivot corner at body abscissa s*b: -1 left, +1 right."""
     return -1 if mode == Mode.LEFT else 1
+
+
+class BoundedLog(list):
+    """A list that keeps its last ``maxlen`` entries (None: all), trimmed in chunks so that appending stays
+    O(1) amortized and memory stays bounded over arbitrarily long runs."""
+
+    def __init__(self, maxlen: int | None = None):
+        super().__init__()
+        self.maxlen = maxlen
+
+    def append(self, item) -> None:
+        super().append(item)
+        if self.maxlen is not None and len(self) > 2 * self.maxlen:
+            del self[:len(self) - self.maxlen]
+
+    def __reduce__(self):
+        return (_restore_log, (self.maxlen, list(self)))
+
+
+def _restore_log(maxlen, items):
+    log = BoundedLog(maxlen)
+    log.extend(items)
+    return log

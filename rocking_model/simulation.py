@@ -27,6 +27,10 @@ class Simulator:
     tolerance : [1] relative (and scaled absolute) tolerance of the event-driven scheme.
     theta : [1] Moreau-Jean theta in [0.5, 1].
     zeno_tol : [1] event-driven Zeno rule, v_Zeno = zeno_tol * sqrt(g L).
+    method : event-driven Runge-Kutta scheme, "DOP853" (order 8, default) or "DOPRI5" (order 5, cheaper
+        at tolerances of 1e-6 and looser).
+    impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
+        log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
     t0 : [s] start time.
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
@@ -34,22 +38,28 @@ class Simulator:
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = 1e-6, t0: float = 0.0,
-                 **initial):
+                 method: str = "DOP853", impact_log_size: int | None = 10000, **initial):
         if not isinstance(model, RockingModel):
             raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
         self.model = model
         self.scheme = check_choice("scheme", scheme, SCHEMES)
         t0 = check_real("t0", t0)
         mode, q, v = model.initial_state(**initial)
+        if impact_log_size is not None:
+            impact_log_size = int(check_real("impact_log_size", impact_log_size, lo=0.0))
         if self.scheme == "moreau_jean":
             dt = 1e-3 if dt_max is None else check_real("dt_max", dt_max, lo=0.0, lo_open=True)
             theta = check_real("theta", theta, lo=0.5, hi=1.0)
-            self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta)
+            self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta,
+                                         impact_log_size=impact_log_size)
         else:
             dt = math.inf if dt_max is None else check_real("dt_max", dt_max, lo=0.0, lo_open=True)
             tol = check_real("tolerance", tolerance, lo=1e-14, hi=1e-2)
             zt = check_real("zeno_tol", zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
-            self.integrator = EventDriven(model, mode, q, v, t0, tolerance=tol, dt_max=dt, zeno_tol=zt)
+            method = check_choice("method", method, {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5",
+                                                     0: "DOP853", 1: "DOPRI5"})
+            self.integrator = EventDriven(model, mode, q, v, t0, tolerance=tol, dt_max=dt, zeno_tol=zt,
+                                          method=method, impact_log_size=impact_log_size)
 
     @property
     def t(self) -> float:
@@ -58,7 +68,8 @@ class Simulator:
 
     @property
     def impact_times(self) -> list[float]:
-        return self.integrator.impact_times
+        """Times of the (last ``impact_log_size``) impacts [s]."""
+        return list(self.integrator.impact_times)
 
     def advance(self, t_end: float, ag) -> None:
         """Integrate to exactly ``t_end`` [s] under ground acceleration ``ag``: a number [m/s2] held
@@ -75,8 +86,7 @@ class Simulator:
 
     def outputs(self) -> dict:
         """Model outputs plus contact (int), impacts (int) and overturned (bool)."""
-        q, v = self.integrator.state()
-        out = self.model.outputs(q, v)
+        out = self.integrator.outputs()
         out["contact"] = int(self.integrator.mode)
         out["impacts"] = int(self.integrator.impacts)
         out["overturned"] = bool(self.integrator.overturned)
@@ -120,6 +130,7 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     """
     gm = as_ground_motion(ground_motion)
     hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
+    kwargs.setdefault("impact_log_size", None)
     sim = Simulator(model, scheme, **kwargs)
     t0 = sim.t
     t_end = check_real("t_end", t_end, lo=t0)
@@ -128,10 +139,19 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
     times = np.minimum(t0 + dt * np.arange(n + 1), t_end)
     records = [sim.outputs()]
-    for k in range(n):
-        ag = ConstantMotion(gm(times[k])) if hold == "zoh" else gm
-        sim.advance(times[k + 1], ag)
-        records.append(sim.outputs())
+    if hold == "exact" and sim.scheme == "event_driven":
+        # one pass through the output grid: the steps are not cut at the output times (dense output)
+        for mode, y, n_impacts, overturned in sim.integrator.advance(float(times[-1]), gm, samples=times[1:]):
+            out = sim.model.mode_outputs(mode, y)
+            out["contact"] = int(mode)
+            out["impacts"] = n_impacts
+            out["overturned"] = overturned
+            records.append(out)
+    else:
+        for k in range(n):
+            ag = ConstantMotion(gm(times[k])) if hold == "zoh" else gm
+            sim.advance(times[k + 1], ag)
+            records.append(sim.outputs())
     values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
                   n_steps=sim.integrator.n_steps)

@@ -1,31 +1,40 @@
 """Event-driven scheme: smooth phases in the reduced coordinates of their contact mode, LCPs at events.
 
-- Each smooth phase is integrated with DOP853 (order 8, 7th-order dense output) on the reduced state
-  y = [r, r_dot] of the current mode (full contact: the model's free DOFs only, none for the rigid block;
-  rocking: phi, plus u for the flexible oscillator; flight: all).
+- Each smooth phase is integrated with an adaptive Runge-Kutta scheme (DOP853 by default, or DOPRI5) on
+  the reduced state y = [r, r_dot] of the current mode (full contact: the model's free DOFs only, none for
+  the rigid block; rocking: phi, plus u for the flexible oscillator; flight: all), with the model's
+  float-level right-hand side (`RockingModel.mode_functions`).
 - Event functions are positive inside the mode and fall through zero at an event: the approaching corner's
-  gap (impact), the normal force of a closed corner (release/uplift), pi/2 - |phi| (overturning). Events are
-  located on the dense output by a bracketing root finder to round-off in time; the state is taken on the
-  far side of the root, so the LCP that follows sees the event as happened.
+  opening (impact), the normal force of a closed corner (release/uplift), pi/2 - |phi| (overturning). Events
+  are located on the dense output by a bracketing root finder to round-off in time; the state is taken on
+  the far side of the root, so the LCP that follows sees the event as happened. A function that dips below
+  zero and comes back within one step (the base of a vibrating column) is searched for when a cubic Hermite
+  estimate of its midpoint value lies below both ends.
 - At an impact the velocity-level LCP (Newton's law) gives the post-impact velocities; at every mode entry
   the acceleration-level LCP decides which corners stay closed. An event just handled starts disarmed and is
-  re-armed only once its function is positive again (masking), so a restart never re-triggers it.
+  re-armed once its function is positive again (masking), so a restart never re-triggers it; a disarmed
+  function still fires once it falls below -event_tol (a grazing entry that turns back).
 - Zeno rule (end of impact accumulation): after an impact, a corner at the ground whose post-impact
   separation velocity is below v_Zeno = zeno_tol * sqrt(g L) (L the model's length scale) is closed
   plastically and the impact LCP is solved again with that corner held closed. The kinetic energy this
-  removes is at most of the order of 1/2 m v_Zeno^2.
+  removes is at most of the order of 1/2 m v_Zeno^2. Impacts slower than v_Zeno are not counted.
+- ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
+  there from the dense output, so a fine output grid does not shorten the steps.
 """
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
 from ..contact import closed_candidates, impact, uplift
-from ..modes import CLOSED, Mode, mode_from_closed, pivot_sign
-from .rk import DOP853
+from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
+from .dop853 import DOP853
+from .dopri5 import DOPRI5
 
 _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
+METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 
 
 def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float:
@@ -60,71 +69,83 @@ def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float
 
 
 class EventDriven:
-    """Event-driven integration of ``model`` with relative/absolute tolerance ``tolerance``."""
+    """Event-driven integration of ``model`` with relative/absolute tolerance ``tolerance``.
+
+    method: "DOP853" (order 8) or "DOPRI5" (order 5, cheaper at loose tolerances).
+    impact_log_size: number of impacts kept in ``impact_times`` / ``impact_log`` (None: all); the counter
+    ``impacts`` counts them all. A bound keeps the memory flat over arbitrarily long runs.
+    """
 
     name = "event_driven"
 
     def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
                  tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = 1e-6,
-                 max_events: int = 100000):
+                 max_events: int = 100000, method: str = "DOP853", impact_log_size: int | None = None):
         self.model = model
         self.t = float(t0)
         self.tolerance = tolerance
         self.dt_max = dt_max
+        self.method = method
         L = model.length_scale
         self.gap_tol = 1e-9 * L
         self.v_tol = 1e-10 * math.sqrt(model.g * L)
         self.v_zeno = zeno_tol * math.sqrt(model.g * L)
         #: [1] how far below zero a disarmed (normalised) event function may go before it fires
         self.event_tol = 1e-10
-        q_rest = model.rest_position()
-        self.force_scale = float(np.linalg.norm(model.forces(q_rest, np.zeros_like(q_rest), 0.0)))
         self.max_events = max_events
         self.impacts = 0
-        self.impact_times: list[float] = []
-        #: (t, v_minus, v_plus) of every impact, full velocities
-        self.impact_log: list[tuple] = []
+        self.impact_times: BoundedLog = BoundedLog(impact_log_size)
+        #: (t, v_minus, v_plus) of the impacts, full velocities (the last 1000 with a bounded log)
+        self.impact_log: BoundedLog = BoundedLog(None if impact_log_size is None else min(1000, impact_log_size))
         self.overturned = False
         self.n_steps = 0
         self._h = None
-        self.mode = Mode(mode)
-        q, v = np.asarray(q, float), np.asarray(v, float)
-        self._set_state(self.mode, q, v)
-        self._full = (q, v)
+        self._set_state(Mode(mode), np.asarray(q, float), np.asarray(v, float))
 
     # ------------------------------------------------------------------ state
     def _set_state(self, mode, q, v):
-        self.mode = mode
-        r, rd = self.model.reduce(mode, q, v)
+        self.mode = Mode(mode)
+        r, rd = self.model.reduce(self.mode, q, v)
         self.k = len(r)
-        self.y = np.concatenate([r, rd])
+        self.y = [float(a) for a in r] + [float(a) for a in rd]
         self._full = None
 
     def state(self):
         """Full (q, v) at the current time."""
         if self._full is None:
             k = self.k
-            self._full = self.model.embed(self.mode, self.y[:k], self.y[k:])
+            self._full = self.model.embed(self.mode, np.array(self.y[:k]), np.array(self.y[k:]))
         return self._full
 
-    def _scales(self, mode):
+    def outputs(self) -> dict:
+        """The model's outputs at the current time."""
+        return self.model.mode_outputs(self.mode, self.y)
+
+    def _atol(self, mode):
         dof_scales = getattr(self.model, "dof_scales", None)
         idx = self.model.mode_dofs(mode)
         if dof_scales is None:
             s = [1.0 if i == self.model.phi_index else self.model.length_scale for i in idx]
         else:
             s = [dof_scales[i] for i in idx]
-        s = np.array(s, dtype=float)
-        return np.concatenate([s, s / self.model.time_scale])
+        ts = self.model.time_scale
+        return [self.tolerance * a for a in s] + [self.tolerance * a / ts for a in s]
 
     # ------------------------------------------------------------------ driver
-    def advance(self, t_end: float, ag) -> None:
-        """Integrate to exactly t_end; ``ag`` is a GroundMotion."""
-        if t_end <= self.t:
-            return
-        if self.overturned:
-            self.t = t_end
-            return
+    def advance(self, t_end: float, ag, samples=None):
+        """Integrate to exactly t_end; ``ag`` is a GroundMotion.
+
+        samples: increasing times in (t, t_end] at which to record the motion; returns the list of
+        (mode, y, impacts, overturned) there (None when no samples are asked for)."""
+        out = None if samples is None else []
+        pending = deque(float(s) for s in samples) if samples is not None else None
+        if t_end <= self.t or self.overturned:
+            if t_end > self.t:
+                self.t = t_end
+            while pending:
+                pending.popleft()
+                out.append((self.mode, list(self.y), self.impacts, self.overturned))
+            return out
         n_events = 0
         while not self.overturned:
             span = t_end - self.t
@@ -132,113 +153,74 @@ class EventDriven:
                 break
             t_stop = min(t_end, ag.next_breakpoint(self.t))
             if self.mode != Mode.FLIGHT:
-                self._settle(self.t, ag(self.t))
-            if self._segment(t_stop, ag):
+                self._settle(self.t, ag)
+            if self._segment(t_stop, ag, pending, out):
                 n_events += 1
                 if n_events > self.max_events:
                     raise RuntimeError(f"event-driven scheme: more than {self.max_events} events in one "
                                        f"step at t = {self.t:.17g}; the motion does not settle")
         self.t = t_end
         self._full = None
+        while pending:                     # samples at t_end (or after overturning: frozen state)
+            pending.popleft()
+            out.append((self.mode, list(self.y), self.impacts, self.overturned))
+        return out
 
-    def _settle(self, t, ag_t):
+    def _settle(self, t, ag):
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
+        mode = self.mode
+        closed = CLOSED[mode]
+        _, monitors = self.model.mode_functions(mode, ag)
+        e = monitors(t, self.y)
+        # fast path: closed corners loaded, open corners clearly open (then the active set still holds)
+        if all(e[i] > 0.0 if i in closed else e[i] > 1e-9 for i in (0, 1)):
+            return
         q, v = self.state()
-        closed = CLOSED[self.mode]
         if all(i in closed for i in closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)):
-            lam = self.model.contact_forces(self.mode, q, v, ag_t)
-            if all(lam[i] > 0.0 for i in closed):
-                return      # the current active set solves the uplift LCP
-        mode = self._select_mode(q, v, ag_t)
-        if mode != self.mode:
-            self._set_state(mode, q, v)
+            if all(e[i] > 0.0 for i in closed):
+                return
+        new = self._select_mode(q, v, ag(t))
+        if new != mode:
+            self._set_state(new, q, v)
 
-    def _rhs(self, mode, ag):
-        model, k = self.model, self.k
-        if ag.constant:
-            a = ag.value
-
-            def fun(t, y):
-                return np.concatenate([y[k:], model.reduced_acceleration(mode, y[:k], y[k:], a)])
-        else:
-            def fun(t, y):
-                return np.concatenate([y[k:], model.reduced_acceleration(mode, y[:k], y[k:], ag(t))])
-        return fun
-
-    def _event_functions(self, mode, ag):
-        """(G(t, y) -> array, kinds, contacts) of ``mode``; every G_i > 0 inside the mode."""
-        model, k = self.model, self.k
-        F, L = self.force_scale, model.length_scale
-        ip = model.mode_dofs(mode).index(model.phi_index) if mode != Mode.FULL else None
-        if mode == Mode.FULL:
-            def G(t, y):
-                q, v = model.embed(mode, y[:k], y[k:])
-                return model.contact_forces(mode, q, v, ag(t)) / F
-            return G, (_KIND_RELEASE, _KIND_RELEASE), (0, 1)
-        if mode == Mode.FLIGHT:
-            def G(t, y):
-                q = model.embed(mode, y[:k], y[k:])[0]
-                g = model.gaps(q) / L
-                return np.array([g[0], g[1], 0.5 * math.pi - abs(y[ip])])
-            return G, (_KIND_IMPACT, _KIND_IMPACT, _KIND_OVERTURN), (0, 1, None)
-        s = pivot_sign(mode)
-        pivot = CLOSED[mode][0]
-
-        def G(t, y):
-            q, v = model.embed(mode, y[:k], y[k:])
-            lam = model.contact_forces(mode, q, v, ag(t))[pivot] / F
-            phi = y[ip]
-            return np.array([-s * phi, lam, 0.5 * math.pi - abs(phi)])
-        return G, (_KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN), (1 - pivot, pivot, None)
-
-    def _segment(self, t_stop: float, ag) -> bool:
+    def _segment(self, t_stop: float, ag, pending, out) -> bool:
         """Integrate the current mode towards t_stop; returns True if an event ended the segment."""
         mode, k = self.mode, self.k
+        while pending and pending[0] <= self.t:
+            pending.popleft()
+            out.append((mode, list(self.y), self.impacts, False))
         if k == 0 and ag.constant:
             # nothing moves and the (positive) contact forces cannot change
             self.t = t_stop
+            while pending and pending[0] <= t_stop:
+                pending.popleft()
+                out.append((mode, list(self.y), self.impacts, False))
             self._full = None
             return False
-        G, kinds, contacts = self._event_functions(mode, ag)
-        fun = self._rhs(mode, ag)
-        scales = self._scales(mode)
-        stepper = DOP853(fun, self.t, self.y, self.tolerance, self.tolerance * scales,
-                         max_step=self.dt_max, first_step=self._h)
+        rhs, G = self.model.mode_functions(mode, ag)
+        kinds = [(_KIND_RELEASE if i in CLOSED[mode] else _KIND_IMPACT) for i in (0, 1)]
+        # without state (rigid block in full contact) a step only samples the contact forces under a varying
+        # input: keep it short enough for the dip search to see a force that comes and goes
+        max_step = self.dt_max if k else min(self.dt_max, 0.1 * self.model.time_scale)
+        stepper = METHODS[self.method](rhs, self.t, self.y, self.tolerance, self._atol(mode),
+                                       max_step=max_step, first_step=self._h if k else None)
         g_prev = G(self.t, self.y)
-        armed = g_prev > 0.0
-        # a disarmed event (zero at the segment start: just handled, or a grazing mode entry) still fires
-        # once its function falls clearly below zero, e.g. a block that enters rocking with zero acceleration
-        # at the uplift threshold and then turns back towards the ground
+        g_prev[2] = 0.5 * math.pi - abs(g_prev[2])
         tol = self.event_tol
-        watch = ~armed & (g_prev > -tol)
-        dip_ids = [i for i, kind in enumerate(kinds) if kind != _KIND_OVERTURN]
+        armed = [g > 0.0 for g in g_prev]
+        watch = [not a and g > -tol for a, g in zip(armed, g_prev)]
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
             g_new = G(stepper.t, stepper.y)
-            hits = np.nonzero(armed & (g_new <= 0.0) | watch & (g_new <= -tol))[0]
+            g_new[2] = 0.5 * math.pi - abs(g_new[2])
+            hits = [i for i in range(3) if (armed[i] and g_new[i] <= 0.0) or (watch[i] and g_new[i] <= -tol)]
             dense = None
             t0, t_hit = stepper.t_old, stepper.t
-            if not hits.size and dip_ids:
-                # a gap or a contact force can dip below zero and come back within one step (a short
-                # excursion of the base of a vibrating column): look inside the step when its midpoint dips
-                dense = stepper.dense_output()
-                tm = 0.5 * (t0 + stepper.t)
-                gm = G(tm, dense(tm))
-                dip = [i for i in dip_ids if armed[i] and gm[i] < min(g_prev[i], g_new[i])]
-                if dip:
-                    ts = np.linspace(t0, stepper.t, 17)[1:-1]
-                    for j, tj in enumerate(ts):
-                        gj = G(tj, dense(tj))
-                        neg = [i for i in dip if gj[i] <= 0.0]
-                        if neg:
-                            ta = t0 if j == 0 else ts[j - 1]
-                            ga = g_prev if j == 0 else G(ta, dense(ta))
-                            hits = np.array(neg)
-                            g_prev, g_new = ga, gj
-                            t0, t_hit = ta, tj
-                            break
-            if hits.size:
+            g_a, g_b = g_prev, g_new
+            if not hits:
+                hits, t0, t_hit, g_a, g_b, dense = self._dips(stepper, G, armed, g_prev, g_new)
+            if hits:
                 if dense is None:
                     dense = stepper.dense_output()
                 xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
@@ -247,29 +229,62 @@ class EventDriven:
                     shift = 0.0 if armed[i] else tol
 
                     def gi(t, i=i, shift=shift):
-                        return G(t, dense(t))[i] + shift
-                    te = _locate(gi, t0, g_prev[i] + shift, t_hit, g_new[i] + shift, xtol)
+                        val = G(t, dense(t))[i]
+                        return (0.5 * math.pi - abs(val) if i == 2 else val) + shift
+                    te = _locate(gi, t0, g_a[i] + shift, t_hit, g_b[i] + shift, xtol)
                     if best is None or te < best[0]:
                         best = (te, i)
                 te, i = best
-                if self._h is None or stepper.h_abs > 0:
+                self._record_samples(pending, out, mode, dense, te, inclusive=False)
+                if k and stepper.h_abs > 0:
                     self._h = stepper.h_abs
                 self.t = te
                 self.y = dense(te)
                 self._full = None
-                self._handle(kinds[i], contacts[i], te, ag)
+                self._handle(kinds[i] if i < 2 else _KIND_OVERTURN, te, ag)
                 return True
-            armed |= g_new > 0.0
-            watch &= ~armed
+            if pending and pending[0] <= stepper.t:
+                self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
+            for i in range(3):
+                if g_new[i] > 0.0:
+                    armed[i] = True
+                    watch[i] = False
             g_prev = g_new
         self.t = stepper.t
         self.y = stepper.y
-        self._h = stepper.h_abs
+        if k:
+            self._h = stepper.h_abs
         self._full = None
         return False
 
+    def _record_samples(self, pending, out, mode, dense, t_last, inclusive):
+        while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
+            out.append((mode, dense(pending.popleft()), self.impacts, False))
+
+    def _dips(self, stepper, G, armed, g_prev, g_new):
+        """A contact function that dips below zero and comes back within the step (a short excursion of
+        the base of a vibrating column): look inside the step when the Hermite midpoint dips below both
+        ends. Returns (hits, t_a, t_b, g_a, g_b, dense) of the first sub-interval with a sign change."""
+        t0, t1 = stepper.t_old, stepper.t
+        tm = 0.5 * (t0 + t1)
+        gm = G(tm, stepper.hermite_mid())
+        dip = [i for i in (0, 1) if armed[i] and gm[i] < min(g_prev[i], g_new[i])]
+        if not dip:
+            return [], t0, t1, g_prev, g_new, None
+        dense = stepper.dense_output()
+        ga, ta = g_prev, t0
+        for j in range(1, 16):
+            tj = t0 + (t1 - t0) * j / 16.0
+            gj = G(tj, dense(tj))
+            gj[2] = 0.5 * math.pi - abs(gj[2])
+            neg = [i for i in dip if gj[i] <= 0.0]
+            if neg:
+                return neg, ta, tj, ga, gj, dense
+            ga, ta = gj, tj
+        return [], t0, t1, g_prev, g_new, dense
+
     # ------------------------------------------------------------------ events
-    def _handle(self, kind, contact, t, ag):
+    def _handle(self, kind, t, ag):
         q, v = self.state()
         if kind == _KIND_OVERTURN:
             self.overturned = True

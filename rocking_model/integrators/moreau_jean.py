@@ -22,7 +22,7 @@ import numpy as np
 
 from ..contact import inverse_mass
 from ..lcp import solve_contact_lcp
-from ..modes import CLOSED, Mode, mode_from_closed
+from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
 
 
 class MoreauJean:
@@ -31,7 +31,7 @@ class MoreauJean:
     name = "moreau_jean"
 
     def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
-                 dt_max: float = 1e-3, theta: float = 0.5):
+                 dt_max: float = 1e-3, theta: float = 0.5, impact_log_size: int | None = None):
         self.model = model
         self.q = np.array(q, dtype=float)
         self.v = np.array(v, dtype=float)
@@ -40,7 +40,7 @@ class MoreauJean:
         self.theta = theta
         self.mode = Mode(mode)
         self.impacts = 0
-        self.impact_times: list[float] = []
+        self.impact_times: BoundedLog = BoundedLog(impact_log_size)
         self.overturned = False
         self.n_steps = 0
         # corners that carried impulse in the last step (impacts are counted on newly closing corners)
@@ -143,4 +143,8 @@ class MoreauJean:
     def state(self):
         """Full (q, v)."""
         return self.q, self.v
+
+    def outputs(self) -> dict:
+        """The model's outputs at the current time."""
+        return self.model.outputs(self.q, self.v)
 

@@ -100,6 +100,55 @@ class RockingModel(ABC):
         from ..contact import mode_forces
         return mode_forces(self, mode, q, v, ag)
 
+    # ------------------------------------------------------------------ float-level mode functions
+    @property
+    def force_scale(self) -> float:
+        """Scale of the contact forces [N] (the weight): normalises the force events."""
+        q = self.rest_position()
+        return float(np.linalg.norm(self.forces(q, np.zeros_like(q), 0.0)))
+
+    def mode_functions(self, mode: Mode, ag):
+        """(rhs, monitors) of ``mode`` under the ground motion ``ag`` (a GroundMotion), on lists of floats.
+
+        rhs(t, y) -> [r_dot..., r_ddot...] for the reduced state y = [r..., r_dot...];
+        monitors(t, y) -> [e_0, e_1, phi]: e_i of a closed corner is its normal force / force_scale, of an
+        open corner a measure of its opening, positive while open (gap / length_scale; while rocking, the
+        tilt -s phi [rad] of the lifted corner, exact where the gap loses digits).
+
+        Generic version on top of the numpy interface; models override it with closed forms (the event-driven
+        scheme calls these some twenty times per step)."""
+        k = len(self.mode_dofs(mode))
+        closed = {Mode.FULL: (0, 1), Mode.LEFT: (0,), Mode.RIGHT: (1,), Mode.FLIGHT: ()}[mode]
+        F, L, ip = self.force_scale, self.length_scale, self.phi_index
+        a_of = (lambda t: ag.value) if ag.constant else ag
+
+        def rhs(t, y):
+            if k == 0:
+                return []
+            r, rd = np.array(y[:k]), np.array(y[k:])
+            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t)).tolist()
+
+        def monitors(t, y):
+            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
+            lam = self.contact_forces(mode, q, v, a_of(t)) if closed else None
+            g = self.gaps(q)
+            phi = float(q[ip])
+            out = []
+            for i in (0, 1):
+                if i in closed:
+                    out.append(float(lam[i]) / F)
+                elif mode == Mode.FLIGHT:
+                    out.append(float(g[i]) / L)
+                else:
+                    out.append(-phi if mode == Mode.RIGHT else phi)
+            return out + [phi]
+        return rhs, monitors
+
+    def mode_outputs(self, mode: Mode, y) -> dict[str, float]:
+        """`outputs` of the reduced state y = [r..., r_dot...] of ``mode``."""
+        k = len(y) // 2
+        return self.outputs(*self.embed(mode, np.array(y[:k], dtype=float), np.array(y[k:], dtype=float)))
+
     # ------------------------------------------------------------------ quantities
     @abstractmethod
     def rest_position(self) -> np.ndarray:

@@ -331,11 +331,89 @@ class FlexibleOscillator(RockingModel):
         return self.kinetic_energy(q, v) + self.potential_energy(q)
 
     def outputs(self, q, v):
-        u, x, y, phi = (float(a) for a in q)
+        return self._outputs(*(float(a) for a in q), *(float(a) for a in v))
+
+    def _outputs(self, u, x, y, phi, ud, xd, yd, w) -> dict:
+        sp, cp = math.sin(phi), math.cos(phi)
+        D = self.D
+        Mxp, Myp = self._M_phi_xy(u, sp, cp)
+        # 1/2 v^T M v written out (no 4x4 product per output sample)
+        kin = 0.5 * (self.m_tilde * ud * ud + self.M_t * (xd * xd + yd * yd) + (self.J0 + self.m_tilde * u * u) * w * w) \
+            + D * cp * ud * xd + D * sp * ud * yd - self.C * ud * w + Mxp * xd * w + Myp * yd * w
+        pot = 0.5 * self.k_tilde * u * u + self.g * (self.M_t * y + self.A_h * (cp - 1.0) + D * u * sp)
         return {
-            "u": u, "u_dot": float(v[0]),
-            "phi": phi, "phi_dot": float(v[3]),
-            "x": x, "y": y, "x_dot": float(v[1]), "y_dot": float(v[2]),
-            "top_displacement": x - self.h * math.sin(phi) + u * math.cos(phi),
-            "energy": float(self.energy(q, v)),
+            "u": u, "u_dot": ud,
+            "phi": phi, "phi_dot": w,
+            "x": x, "y": y, "x_dot": xd, "y_dot": yd,
+            "top_displacement": x - self.h * sp + u * cp,
+            "energy": kin + pot,
         }
+
+    # ------------------------------------------------------------------ float-level mode functions
+    @property
+    def force_scale(self) -> float:
+        """The weight M_t g [N]."""
+        return self.M_t * self.g
+
+    def mode_functions(self, mode, ag):
+        """Closed forms of `RockingModel.mode_functions` in full contact and rocking (flight: generic)."""
+        if mode == Mode.FLIGHT:
+            return super().mode_functions(mode, ag)
+        const = ag.constant
+        a0 = ag.value if const else 0.0
+        mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
+        A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
+        W = Mt * g
+        if mode == Mode.FULL:
+            def rhs(t, y):
+                u, ud = y
+                return [ud, (-c * ud - kt * u - D * (a0 if const else ag(t))) / mt]
+
+            def monitors(t, y):
+                u, ud = y
+                a = a0 if const else ag(t)
+                udd = (-c * ud - kt * u - D * a) / mt
+                # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g D u)
+                d = (-C * udd - A_h * a + g * D * u) / b
+                return [0.5 * (W - d) / W, 0.5 * (W + d) / W, 0.0]
+            return rhs, monitors
+        s = pivot_sign(mode)
+        sb = s * b
+        sbM = sb * Mt
+        K0 = J0 + Mt * b * b
+        pivot_first = s < 0
+
+        def accel(u, phi, ud, w, a):
+            sp, cp = math.sin(phi), math.cos(phi)
+            K = K0 + mt * u * u - 2.0 * sb * D * u
+            E = mt * u - sb * D
+            f_u = -c * ud - kt * u - g * D * sp - D * cp * a + E * w * w
+            f_p = -2.0 * E * ud * w - g * (D * u - sbM) * cp + g * A_h * sp + a * (A_h * cp + (D * u - sbM) * sp)
+            det = mt * K - C * C
+            return (K * f_u + C * f_p) / det, (C * f_u + mt * f_p) / det, sp, cp
+
+        def rhs(t, y):
+            u, phi, ud, w = y
+            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else ag(t))
+            return [ud, w, udd, wd]
+
+        def monitors(t, y):
+            u, phi, ud, w = y
+            udd, wd, sp, cp = accel(u, phi, ud, w, a0 if const else ag(t))
+            # pivot force = y row of M v_dot - f (the tangential direction is horizontal)
+            ydd = -sb * cp * wd + sb * sp * w * w
+            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+            lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
+            return [lam / W, -s * phi, phi] if pivot_first else [-s * phi, lam / W, phi]
+        return rhs, monitors
+
+    def mode_outputs(self, mode, y):
+        if mode == Mode.FULL:
+            return self._outputs(y[0], 0.0, 0.0, 0.0, y[1], 0.0, 0.0, 0.0)
+        if mode == Mode.FLIGHT:
+            return self._outputs(*y)
+        s = pivot_sign(mode)
+        u, phi, ud, w = y
+        sp, cp = math.sin(phi), math.cos(phi)
+        b = self.b
+        return self._outputs(u, s * b * (1.0 - cp), -s * b * sp, phi, ud, s * b * sp * w, -s * b * cp * w, w)

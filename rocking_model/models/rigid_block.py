@@ -36,7 +36,12 @@ class RigidBlock(RockingModel):
         for name, lo, hi in (("b", 1e-6, 1e3), ("h", 1e-6, 1e3), ("m", 1e-9, 1e12), ("g", 1e-3, 1e3)):
             object.__setattr__(self, name, check_real(name, getattr(self, name), lo=lo, hi=hi))
         object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
-        M = np.diag([self.m, self.m, self.I_c])
+        # derived parameters, computed once (the integrators read them in their inner loops)
+        R = math.hypot(self.b, self.h)
+        for name, value in (("_R", R), ("_alpha", math.atan2(self.b, self.h)),
+                            ("_I_c", self.m * R ** 2 / 3.0), ("_p", math.sqrt(3.0 * self.g / (4.0 * R)))):
+            object.__setattr__(self, name, value)
+        M = np.diag([self.m, self.m, self._I_c])
         object.__setattr__(self, "_M", M)
         object.__setattr__(self, "_Minv", np.diag(1.0 / np.diag(M)))
 
@@ -44,27 +49,32 @@ class RigidBlock(RockingModel):
     @property
     def R(self) -> float:
         """Half-diagonal sqrt(b^2 + h^2) [m]."""
-        return math.hypot(self.b, self.h)
+        return self._R
 
     @property
     def alpha(self) -> float:
         """Slenderness angle atan(b/h) [rad]."""
-        return math.atan2(self.b, self.h)
+        return self._alpha
 
     @property
     def I_c(self) -> float:
         """Centroidal moment of inertia m R^2 / 3 [kg m2]."""
-        return self.m * self.R ** 2 / 3.0
+        return self._I_c
 
     @property
     def I_O(self) -> float:
         """Moment of inertia about a corner 4/3 m R^2 [kg m2]."""
-        return 4.0 * self.m * self.R ** 2 / 3.0
+        return 4.0 * self._I_c
 
     @property
     def p(self) -> float:
         """Frequency parameter sqrt(3 g / (4 R)) [rad/s]."""
-        return math.sqrt(3.0 * self.g / (4.0 * self.R))
+        return self._p
+
+    @property
+    def force_scale(self) -> float:
+        """The weight m g [N]."""
+        return self.m * self.g
 
     @property
     def housner_r(self) -> float:
@@ -148,8 +158,8 @@ class RigidBlock(RockingModel):
 
     def rocking_acceleration(self, phi: float, ag: float, s: int) -> float:
         """phi_ddot on pivot s (-1 left, +1 right): p^2 [(ag/g) cos(alpha + s phi) + s sin(alpha + s phi)]."""
-        a = self.alpha + s * phi
-        return self.p ** 2 * ((ag / self.g) * math.cos(a) + s * math.sin(a))
+        a = self._alpha + s * phi
+        return self._p ** 2 * ((ag / self.g) * math.cos(a) + s * math.sin(a))
 
     def reduced_acceleration(self, mode, r, r_dot, ag):
         if mode == Mode.FULL:
@@ -175,6 +185,64 @@ class RigidBlock(RockingModel):
         out = np.zeros(2)
         out[0 if s < 0 else 1] = m * (y_dd + g)
         return out
+
+    # ------------------------------------------------------------------ float-level mode functions
+    def mode_functions(self, mode, ag):
+        """Closed forms of `RockingModel.mode_functions` (rocking: Housner's equation and the pivot force)."""
+        m, g, b, h = self.m, self.g, self.b, self.h
+        const = ag.constant
+        a0 = ag.value if const else 0.0
+        if mode == Mode.FULL:
+            def rhs(t, y):
+                return []
+
+            def monitors(t, y):
+                d = 0.5 * (a0 if const else ag(t)) * h / b / g
+                return [0.5 + d, 0.5 - d, 0.0]
+            return rhs, monitors
+        if mode == Mode.FLIGHT:
+            def rhs(t, y):
+                return [y[3], y[4], y[5], -(a0 if const else ag(t)), -g, 0.0]
+
+            def monitors(t, y):
+                yc, phi = y[1], y[2]
+                bs, hc = b * math.sin(phi), h * math.cos(phi)
+                L = self._R
+                return [(yc - bs - hc) / L, (yc + bs - hc) / L, phi]
+            return rhs, monitors
+        s = pivot_sign(mode)
+        p2, al = self._p ** 2, self._alpha
+        pivot_first = s < 0
+
+        def rhs(t, y):
+            phi = y[0]
+            x = al + s * phi
+            return [y[1], p2 * ((a0 if const else ag(t)) / g * math.cos(x) + s * math.sin(x))]
+
+        def monitors(t, y):
+            phi, w = y
+            x = al + s * phi
+            acc = p2 * ((a0 if const else ag(t)) / g * math.cos(x) + s * math.sin(x))
+            sp, cp = math.sin(phi), math.cos(phi)
+            # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + 1
+            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
+            return [lam, -s * phi, phi] if pivot_first else [-s * phi, lam, phi]
+        return rhs, monitors
+
+    def mode_outputs(self, mode, y):
+        if mode == Mode.FULL:
+            return {"phi": 0.0, "phi_dot": 0.0, "x": 0.0, "y": 0.0, "x_dot": 0.0, "y_dot": 0.0, "energy": 0.0}
+        if mode == Mode.FLIGHT:
+            return self.outputs(y[:3], y[3:])
+        s = pivot_sign(mode)
+        phi, w = y
+        sp, cp = math.sin(phi), math.cos(phi)
+        b, h = self.b, self.h
+        yc = -s * b * sp + h * cp - h
+        xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
+        kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
+        return {"phi": phi, "phi_dot": w, "x": s * b * (1.0 - cp) - h * sp, "y": yc, "x_dot": xd, "y_dot": yd,
+                "energy": kin + self.m * self.g * yc}
 
     # ------------------------------------------------------------------ quantities
     def rest_position(self):
