@@ -1,21 +1,37 @@
 """Build every FMU script in fmu_src/ into <dest>/<Name>.fmu and validate it with fmpy.
 
-Usage:  python build_fmu.py [--dest dist] [Name ...]
+Usage:  python build_fmu.py [--dest dist] [--no-cross-check] [Name ...]
 
 Each FMU bundles a clean copy of the `rocking_model` package (no __pycache__, no .pyc) in its resources, so
 it runs in any Python that has numpy and scipy. The modelDescription (units, variability, ModelStructure)
 is produced by `rocking_model.fmi.RockingSlave.to_xml`; nothing is post-processed here. The build fails
 (ValueError, exit code 1) if `fmpy.validation.validate_fmu` reports a problem.
 
-Importable: ``build_all(dest="dist") -> list[Path]``.
+Cross-check folders. The command line build also writes, for every FMU, a folder in the layout of the FMI
+cross-check repository (modelica/fmi-cross-check) next to the FMUs::
+
+    <dest>/cross-check/fmus/2.0/cs/<platform>/rocking_model/<version>/<Name>/
+        <Name>.fmu  <Name>_in.csv (FMUs with inputs)  <Name>_ref.csv  <Name>_ref.opt  ReadMe.md
+
+``_in.csv``: the input signals sampled at every communication point; ``_ref.csv``: the reference result, the
+fmpy run of the FMU (default start values, as the rules require) with that input; ``_ref.opt``: StartTime,
+StopTime, StepSize, RelTol (the keys of the rules, read by ``fmpy.cross_check``). CSV: the first column
+"time", quoted variable names, Booleans as 0/1. The scenarios are ``CROSS_CHECK`` below.
+
+Importable: ``build_all(dest="dist", names=None, cross_check=False) -> list[Path]``,
+``write_cross_check(fmu, root) -> Path``.
 """
 from __future__ import annotations
 
 import argparse
+import math
+import platform
 import shutil
 import sys
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent
 FMU_SRC = ROOT / "fmu_src"
@@ -60,8 +76,120 @@ def build_one(script: Path, dest: Path, package_copy: Path) -> Path:
     return fmu
 
 
-def build_all(dest="dist", names=None) -> list[Path]:
-    """Build (and validate) all FMUs of fmu_src/ into ``dest``; return their paths."""
+def _pulse(A, period=1.0, t_start=0.0):
+    def ag(t):
+        s = t - t_start
+        return A * math.sin(2.0 * math.pi * s / period) if 0.0 <= s <= period else 0.0
+    return ag
+
+
+#: cross-check scenario of each FMU: stop time, step size, tolerance, input signals (functions of t)
+CROSS_CHECK = {
+    "RigidRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.5)}),
+    "FlexibleRockingOscillator": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(3.0)}),
+    "GroundMotionSource": dict(stop=2.0, step=0.01, rel_tol=1e-8, inputs={}),
+    "LinearBuildingStorey": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.0, 0.5, 0.1)}),
+}
+
+CROSS_CHECK_DIR = "cross-check"
+
+
+def _platform() -> str:
+    system = {"Linux": "linux", "Windows": "win", "Darwin": "darwin"}.get(platform.system(), "linux")
+    return f"{system}{64 if sys.maxsize > 2**32 else 32}"
+
+
+def cross_check_dir(root, name: str) -> Path:
+    """The cross-check folder of FMU ``name`` under ``root`` (e.g. dist/cross-check)."""
+    version = "0.0"
+    try:
+        sys.path.insert(0, str(ROOT))
+        from rocking_model import __version__ as version
+    except Exception:  # pragma: no cover
+        pass
+    finally:
+        sys.path.pop(0)
+    return Path(root) / "fmus" / "2.0" / "cs" / _platform() / "rocking_model" / str(version) / name
+
+
+def _csv_literal(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "1" if value else "0"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    return repr(float(value))
+
+
+def write_cross_check_csv(path: Path, result) -> None:
+    """Write a structured array as a cross-check CSV: quoted names, "time" first, Booleans as 0/1."""
+    names = result.dtype.names
+    if names[0] != "time":
+        raise ValueError("the first column must be 'time'")
+    with open(path, "w", newline="\n") as f:
+        f.write(",".join(f'"{n}"' for n in names) + "\n")
+        for row in result:
+            f.write(",".join(_csv_literal(row[n].item() if hasattr(row[n], "item") else row[n])
+                             for n in names) + "\n")
+
+
+def cross_check_input(name: str):
+    """The input table of FMU ``name`` (structured array with 'time' first) or None if it has no input."""
+    spec = CROSS_CHECK[name]
+    if not spec["inputs"]:
+        return None
+    n = int(round(spec["stop"] / spec["step"]))
+    t = np.array([k * spec["step"] for k in range(n + 1)])
+    cols = [("time", np.float64)] + [(k, np.float64) for k in spec["inputs"]]
+    return np.array([(ti, *[f(ti) for f in spec["inputs"].values()]) for ti in t], dtype=cols)
+
+
+def simulate_cross_check(fmu: Path, input_table, opts: dict):
+    """The reference run: fmpy.simulate_fmu with the default start values, the input table and the
+    options of the _ref.opt file; every output recorded."""
+    import fmpy
+    from fmpy import read_model_description
+
+    outputs = [v.name for v in read_model_description(str(fmu)).modelVariables if v.causality == "output"]
+    return fmpy.simulate_fmu(str(fmu), start_time=opts["StartTime"], stop_time=opts["StopTime"],
+                             output_interval=opts["StepSize"], relative_tolerance=opts["RelTol"],
+                             input=input_table, output=outputs)
+
+
+def write_cross_check(fmu: Path, root) -> Path:
+    """Write the cross-check folder of ``fmu`` under ``root``; return the folder."""
+    fmu = Path(fmu)
+    name = fmu.stem
+    if name not in CROSS_CHECK:
+        raise ValueError(f"no cross-check scenario for {name}; add one to CROSS_CHECK in build_fmu.py")
+    spec = CROSS_CHECK[name]
+    folder = cross_check_dir(root, name)
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    shutil.copy2(fmu, folder / fmu.name)
+    opts = {"StartTime": 0.0, "StopTime": spec["stop"], "StepSize": spec["step"], "RelTol": spec["rel_tol"]}
+    (folder / f"{name}_ref.opt").write_text("".join(f"{k}, {v!r}\n" for k, v in opts.items()))
+    table = cross_check_input(name)
+    if table is not None:
+        write_cross_check_csv(folder / f"{name}_in.csv", table)
+    result = simulate_cross_check(fmu, table, opts)
+    t_last = float(result["time"][-1])
+    if not math.isclose(t_last, spec["stop"], rel_tol=1e-9):
+        raise ValueError(f"{name}: the cross-check run ended at t = {t_last:g} s before StopTime")
+    write_cross_check_csv(folder / f"{name}_ref.csv", result)
+    inputs = ", ".join(spec["inputs"]) or "none"
+    (folder / "ReadMe.md").write_text(
+        f"# {name}\n\nExported by rocking_model's build_fmu.py (pythonfmu). Reference: fmpy "
+        f"simulate_fmu with the default start values, communication step {spec['step']} s, inputs ({inputs}) "
+        f"from {name}_in.csv held over each step (the table is sampled at the communication points). "
+        f"The FMU embeds Python: the importer needs libpython loaded and numpy and scipy importable "
+        f"(see the README of rocking_model).\n")
+    return folder
+
+
+def build_all(dest="dist", names=None, cross_check=False) -> list[Path]:
+    """Build (and validate) all FMUs of fmu_src/ into ``dest``; return their paths. With ``cross_check``,
+    also write their cross-check folders under ``dest``/cross-check."""
     dest = Path(dest)
     if not dest.is_absolute():
         dest = Path.cwd() / dest
@@ -75,21 +203,28 @@ def build_all(dest="dist", names=None) -> list[Path]:
         shutil.copytree(PACKAGE, package_copy, ignore=_IGNORE)
         for script in scripts:
             built.append(build_one(script, dest, package_copy))
+    if cross_check:
+        for fmu in built:
+            write_cross_check(fmu, dest / CROSS_CHECK_DIR)
     return built
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dest", default=str(ROOT / "dist"), help="output folder (default: dist/)")
+    parser.add_argument("--no-cross-check", action="store_true",
+                        help="do not write the cross-check folders (dest/cross-check)")
     parser.add_argument("names", nargs="*", help="FMU names to build (default: all scripts in fmu_src/)")
     args = parser.parse_args(argv)
     try:
-        fmus = build_all(args.dest, args.names or None)
+        fmus = build_all(args.dest, args.names or None, cross_check=not args.no_cross_check)
     except Exception as exc:
         print(f"build_fmu: FAILED: {exc}", file=sys.stderr)
         return 1
     for fmu in fmus:
         print(f"built and validated {fmu}")
+    if not args.no_cross_check:
+        print(f"cross-check folders in {Path(args.dest) / CROSS_CHECK_DIR}")
     return 0
 
 
