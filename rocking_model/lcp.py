@@ -49,6 +49,32 @@ def _active_sets(candidates, forced):
             yield tuple(sorted(set(forced) | set(extra)))
 
 
+def _solve_small(A, b):
+    """Solve the small dense system A x = b (lists of floats) by Gaussian elimination with partial
+    pivoting; None if A is singular to round-off."""
+    n = len(b)
+    M = [list(row) + [bi] for row, bi in zip(A, b)]
+    big = max(abs(a) for row in A for a in row) or 1.0
+    for c in range(n):
+        p = max(range(c, n), key=lambda r: abs(M[r][c]))
+        if abs(M[p][c]) <= 1e-13 * big:
+            return None
+        if p != c:
+            M[c], M[p] = M[p], M[c]
+        piv = M[c]
+        for r in range(c + 1, n):
+            f = M[r][c] / piv[c]
+            if f != 0.0:
+                row = M[r]
+                for j in range(c, n + 1):
+                    row[j] -= f * piv[j]
+    x = [0.0] * n
+    for c in range(n - 1, -1, -1):
+        row = M[c]
+        x[c] = (row[n] - sum(row[j] * x[j] for j in range(c + 1, n))) / row[c]
+    return x
+
+
 def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free: np.ndarray,
                       b_N: np.ndarray, b_T: np.ndarray, candidates, forced=(),
                       rtol: float = 1e-9) -> ContactSolution:
@@ -64,52 +90,63 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
     forced : candidates whose normal condition is an equality w_N = 0 whatever the sign of P_N (used by the
         Zeno rule to close a contact).
     rtol : relative violation below which the returned solution is flagged ``exact``.
+
+    The whole problem lives in the 4 x 4 Delassus matrix D = G^T M^-1 G of G = [W_N, W_T]: every active
+    set's system is a sub-block of it, solved on floats (at most 4 unknowns).
     """
     v_free = np.asarray(v_free, dtype=float)
     cand = sorted(set(candidates) | set(forced))
-    w_free = W_N.T @ v_free + b_N
-    scale_v = max(np.max(np.abs(w_free[cand])) if cand else 0.0,
-                  np.max(np.abs(W_T.T @ v_free + b_T)[cand]) if cand else 0.0, 1e-300)
+    G = np.concatenate([W_N, W_T], axis=1)          # columns N0, N1, T0, T1
+    MG = Minv @ G
+    D = (G.T @ MG).tolist()
+    w0 = (G.T @ v_free + np.concatenate([b_N, b_T])).tolist()   # [w_N0, w_N1, w_T0, w_T1] without percussions
+    scale_v = max(max(abs(w0[i]) for i in cand) if cand else 0.0,
+                  max(abs(w0[2 + i]) for i in cand) if cand else 0.0, 1e-300)
+    # parallel tangential directions (the rigid block at phi = 0): the two sticking rows are one condition
+    parallel = abs(D[2][2] * D[3][3] - D[2][3] * D[3][2]) <= 1e-12 * max(D[2][2] * D[3][3], 1e-300)
     best = None
     for S in _active_sets(cand, forced):
+        P = [0.0, 0.0, 0.0, 0.0]
         if S:
-            cols = list(S)
-            G = np.concatenate([W_N[:, cols], W_T[:, cols]], axis=1)
-            MG = Minv @ G
-            D = G.T @ MG
-            rhs = -(G.T @ v_free + np.concatenate([b_N[cols], b_T[cols]]))
-            P, *_ = np.linalg.lstsq(D, rhs, rcond=1e-12)
-            v = v_free + MG @ P
-            k = len(cols)
-            P_N = np.zeros(2)
-            P_T = np.zeros(2)
-            P_N[cols] = P[:k]
-            P_T[cols] = P[k:]
-        else:
-            v = v_free.copy()
-            P_N = np.zeros(2)
-            P_T = np.zeros(2)
-        w_N = W_N.T @ v + b_N
+            rows = list(S) + [2 + i for i in S]
+            merged = len(S) == 2 and parallel
+            if merged:
+                rows = rows[:3]
+            A = [[D[r][c] for c in rows] for r in rows]
+            rhs = [-w0[r] for r in rows]
+            if merged:
+                # one tangential unknown acting through both contacts, split evenly (minimum-norm split)
+                for r in range(3):
+                    A[r][2] = 0.5 * (D[rows[r]][2] + D[rows[r]][3])
+            x = _solve_small(A, rhs)
+            if x is None:
+                sub = np.array(A)
+                x = np.linalg.lstsq(sub, np.array(rhs), rcond=1e-12)[0].tolist()
+            for r, xr in zip(rows, x):
+                P[r] = xr
+            if merged:
+                P[2] = P[3] = 0.5 * x[2]
+        w = [w0[r] + sum(D[r][c] * P[c] for c in range(4) if P[c] != 0.0) for r in range(4)]
         # violations, relative to the problem's scales
-        scale_P = max(np.max(np.abs(P_N)), 1e-300)
+        scale_P = max(abs(P[0]), abs(P[1]), 1e-300)
         viol = 0.0
         for i in cand:
             if i in S:
                 if i not in forced:
-                    viol = max(viol, -P_N[i] / scale_P)
-                viol = max(viol, abs(w_N[i]) / scale_v)
+                    viol = max(viol, -P[i] / scale_P)
+                viol = max(viol, abs(w[i]) / scale_v, abs(w[2 + i]) / scale_v)
             else:
-                viol = max(viol, -w_N[i] / scale_v)
-        if S:
-            w_T = W_T.T @ v + b_T
-            viol = max(viol, np.max(np.abs(w_T[list(S)])) / scale_v)
-        w_out = np.full(2, np.nan)
-        w_out[cand] = w_N[cand]
-        sol = ContactSolution(v=v, P_N=P_N, P_T=P_T, active=S, w_N=w_out, exact=viol <= rtol)
-        if viol == 0.0:
-            return sol
+                viol = max(viol, -w[i] / scale_v)
         if best is None or viol < best[0]:
-            best = (viol, sol)
+            best = (viol, S, P, w)
+            if viol == 0.0:
+                break
+    viol, S, P, w = best
+    v = v_free + MG @ np.array(P)
+    w_out = np.full(2, np.nan)
+    for i in cand:
+        w_out[i] = w[i]
     # the exact solution violates the conditions by round-off only; near-degenerate sets (a force that is
     # zero to 1e-9) are told apart by their violations rather than by a tolerance
-    return best[1]
+    return ContactSolution(v=v, P_N=np.array(P[:2]), P_T=np.array(P[2:]), active=S, w_N=w_out,
+                           exact=viol <= rtol)
