@@ -1,0 +1,94 @@
+"""The rocking command line: simulate (CSV, PNG, summary), ensemble, errors as exit status 2."""
+import csv
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rocking_model import RigidBlock, SinePulse, simulate
+from rocking_model.cli import main
+from rocking_model.records import write_csv
+
+
+def test_simulate_pulse_writes_csv_png_and_summary(tmp_path, capsys):
+    rc = main(["simulate", "--model", "rigid", "--b", "0.2", "--h", "1.0", "--pulse", "sine", "--amplitude", "3",
+               "--frequency", "2", "--t-end", "3", "--out", str(tmp_path), "--name", "run"])
+    assert rc == 0
+    out = capsys.readouterr().out
+    ref = simulate(RigidBlock(0.2, 1.0), SinePulse(3.0, 4 * math.pi), 3.0, scheme="event_driven")
+    assert f"impacts    = {int(ref.impacts[-1])}" in out and "overturned = no" in out
+    assert f"max |phi|  = {np.max(np.abs(ref.phi)):.5g} rad" in out
+    with open(tmp_path / "run.csv") as f:
+        header = next(csv.reader(f))
+    assert header[:3] == ["time [s]", "ag [m/s2]", "phi [rad]"]
+    data = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=1)
+    assert data.shape[0] == 301
+    assert np.allclose(data[:, 2], ref.phi, rtol=1e-9, atol=1e-12)
+    assert np.allclose(data[:, 1], [SinePulse(3.0, 4 * math.pi)(t) for t in ref.t], atol=1e-9)
+    png = (tmp_path / "run.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
+
+
+def test_simulate_record_scaled(tmp_path, capsys):
+    t = np.arange(0, 1.0001, 0.01)
+    rec = write_csv(tmp_path / "rec.csv", t, 0.3 * 9.80665 * np.sin(2 * np.pi * t), units="g")  # 0.3 g
+    rc = main(["simulate", "--record", str(rec), "--scale", "2", "--t-end", "2", "--scheme", "moreau_jean",
+               "--out", str(tmp_path), "--no-plot"])
+    assert rc == 0
+    out = capsys.readouterr().out
+    assert "PGA = 5.88 m/s2" in out                    # 0.6 g
+    data = np.loadtxt(tmp_path / "rocking.csv", delimiter=",", skiprows=1)
+    assert data[25, 1] == pytest.approx(0.6 * 9.80665, rel=1e-9)
+    assert not (tmp_path / "rocking.png").exists()
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["simulate", "--pulse", "sine", "--amplitude", "3"], "--pulse sine needs --frequency"),
+    (["simulate", "--b", "-0.2"], "b = -0.2 is out of range"),
+    (["simulate", "--EI", "1e6"], "--EI is not a parameter of the rigid model"),
+    (["simulate", "--record", "missing.AT2"], "no such file"),
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--record", "x.csv"],
+     "either --record or --pulse"),
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--amplitude-units", "furlong"],
+     "units = 'furlong' is not supported"),
+    (["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "0:1:2"],
+     "frequency ratio = 0 is out of range"),
+    (["ensemble", "--workers", "0"], "give either --record"),
+])
+def test_bad_input_exits_2_without_traceback(argv, msg, capsys, tmp_path):
+    assert main(argv + ["--out", str(tmp_path / "o.csv" if argv[0] == "ensemble" else tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert msg in err and "Traceback" not in err
+
+
+def test_argparse_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", "--scheme", "rk4"])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:
+        main(["ensemble", "--amplitude-ratios", "1:x:3"])
+    assert e.value.code == 2 and "start:stop:num" in capsys.readouterr().err
+
+
+def test_ensemble_serial_resume_and_spectrum(tmp_path, capsys):
+    out = tmp_path / "ens.csv"
+    argv = ["ensemble", "--pulse", "sine", "--amplitude-ratios", "1.5:6:2", "--frequency-ratios", "2", "8",
+            "--workers", "0", "--no-progress", "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "4 cases" in text and "ran 4 cases (0 already" in text and "cases/s" in text
+    assert (tmp_path / "ens_spectrum.png").read_bytes()[:4] == b"\x89PNG"
+    assert main(argv + ["--no-plot"]) == 0
+    assert "ran 0 cases (4 already" in capsys.readouterr().out
+    assert len(out.read_text().splitlines()) == 5
+
+
+def test_console_script_entry_point():
+    """`rocking` is installed as a console script; -m works too."""
+    r = subprocess.run([sys.executable, "-m", "rocking_model.cli", "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "simulate" in r.stdout and "ensemble" in r.stdout
+    r = subprocess.run([sys.executable, "-m", "rocking_model.cli", "simulate", "--h", "x"], capture_output=True,
+                       text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr

@@ -1,0 +1,118 @@
+"""Ensembles: case grids, one case against a direct simulation, incremental output, resume, Dask."""
+import math
+
+import numpy as np
+import pytest
+
+from rocking_model import RigidBlock, SinePulse, simulate
+from rocking_model.ensemble import (FIELDS, CsvWriter, pulse_cases, read_results, record_cases, run_case,
+                                    run_ensemble)
+
+
+def _grid(**kw):
+    return pulse_cases("sine", amplitude_ratios=[1.5, 3.0, 6.0], frequency_ratios=[2.0, 8.0], **kw)
+
+
+def test_pulse_grid_is_dimensionless_and_ids_are_stable():
+    cases = _grid(geometries=[(0.2, 1.0), (0.3, 2.0)])
+    assert len(cases) == 12 and len({c["case_id"] for c in cases}) == 12
+    assert [c["case_id"] for c in cases] == [c["case_id"] for c in _grid(geometries=[(0.2, 1.0), (0.3, 2.0)])]
+    c = cases[0]
+    alpha, p = math.atan(0.2 / 1.0), math.sqrt(3 * 9.81 / (4 * math.hypot(0.2, 1.0)))
+    assert c["A"] == pytest.approx(1.5 * 9.81 * math.tan(alpha)) and c["omega_p"] == pytest.approx(2 * p)
+    assert c["t_end"] == pytest.approx(2 * math.pi / c["omega_p"] + 15 / p)
+    with pytest.raises(ValueError, match="ratios are defined for the rigid block"):
+        pulse_cases("sine", amplitude_ratios=[1], frequency_ratios=[1], model="flexible")
+    with pytest.raises(ValueError, match="pulse = 'square' is not supported"):
+        pulse_cases("square", amplitude_ratios=[1], frequency_ratios=[1])
+    with pytest.raises(ValueError, match="amplitude ratio = -1 is out of range"):
+        pulse_cases("sine", amplitude_ratios=[-1], frequency_ratios=[1])
+
+
+def test_run_case_equals_direct_simulation():
+    c = pulse_cases("sine", amplitude_ratios=[3.0], frequency_ratios=[4.0])[0]
+    row = run_case(c)
+    blk = RigidBlock(0.2, 1.0)
+    res = simulate(blk, SinePulse(c["A"], c["omega_p"]), c["t_end"], scheme="event_driven", tolerance=1e-8)
+    assert row["error"] == ""
+    assert row["max_abs_phi"] == np.max(np.abs(res.phi))
+    assert row["overturned"] == bool(res.overturned[-1]) is True
+    assert row["t_overturn"] == res.t[np.argmax(res.overturned)]
+    assert row["impacts"] == int(res.impacts[-1])
+    assert row["max_phi_over_alpha"] == pytest.approx(row["max_abs_phi"] / blk.alpha)
+    # a bad case is reported in its row, not raised
+    bad = dict(c, b=-1.0)
+    assert "b = -1" in run_case(bad)["error"]
+
+
+def test_resume_skips_done_cases_and_union_equals_straight_run(tmp_path):
+    cases = _grid()
+    straight = tmp_path / "straight.csv"
+    s = run_ensemble(cases, straight, workers=0, progress=False)
+    assert s["n_run"] == 6 and s["n_skipped"] == 0
+    rows = {r["case_id"]: r for r in read_results(straight)}
+    assert set(rows) == {c["case_id"] for c in cases}
+    # overturning is monotone in the amplitude at a fixed frequency here (Makris' spectrum, far from its
+    # boundary): the largest amplitude at omega_p/p = 2 overturns, the smallest does not rock much
+    by = {(round(r["a_ratio"], 6), r["w_ratio"]): r for r in rows.values()}
+    assert by[(6.0, 2.0)]["overturned"] and not by[(1.5, 8.0)]["overturned"]
+
+    # an interrupted run: 2 cases done and a half-written third row
+    part = tmp_path / "part.csv"
+    seen = []
+    run_ensemble(cases[:2], part, workers=0, progress=False, on_row=seen.append)
+    with open(part, "a") as f:
+        f.write(cases[2]["case_id"] + ",rigid,0.2,1.0,0.0,sin")
+    s = run_ensemble(cases, part, workers=0, progress=False, on_row=seen.append)
+    assert s["n_skipped"] == 2 and s["n_run"] == 4
+    assert [r["case_id"] for r in seen].count(cases[0]["case_id"]) == 1
+    again = run_ensemble(cases, part, workers=0, progress=False)
+    assert again["n_run"] == 0 and again["n_skipped"] == 6
+    lines = part.read_text().splitlines()
+    assert lines[0] == ",".join(FIELDS) and len(lines) == 7           # the cut row was dropped
+    resumed = {r["case_id"]: r for r in read_results(part)}
+    keys = ("overturned", "impacts", "max_abs_phi", "t_overturn", "A", "omega_p")
+    for cid, r in rows.items():
+        for k in keys:
+            assert resumed[cid][k] == r[k] or (math.isnan(r[k]) and math.isnan(resumed[cid][k])), (cid, k)
+    with pytest.raises(ValueError, match="exists"):
+        run_ensemble(cases, part, workers=0, progress=False, resume=False)
+
+
+def test_csv_writer_refuses_foreign_file(tmp_path):
+    p = tmp_path / "other.csv"
+    p.write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="not those of an ensemble output"):
+        CsvWriter(p)
+
+
+def test_dask_local_cluster_and_parquet(tmp_path):
+    pytest.importorskip("dask.distributed")
+    pytest.importorskip("pyarrow")
+    cases = _grid()
+    ref = {r["case_id"]: r for r in (run_case(c) for c in cases)}
+    out = tmp_path / "res.parquet"
+    s = run_ensemble(cases[:3], out, workers=2, processes=False, progress=False, batch_size=2)
+    assert s["n_run"] == 3
+    s = run_ensemble(cases, out, workers=1, processes=False, progress=False)
+    assert s["n_run"] == 3 and s["n_skipped"] == 3 and s["throughput"] > 0
+    got = {r["case_id"]: r for r in read_results(out)}
+    assert set(got) == set(ref)
+    for cid, r in ref.items():
+        assert got[cid]["max_abs_phi"] == r["max_abs_phi"] and got[cid]["impacts"] == r["impacts"]
+        assert got[cid]["overturned"] == r["overturned"]
+
+
+def test_record_cases(tmp_path):
+    from rocking_model.records import synthetic_record, write_at2
+    t, a = synthetic_record(duration=4.0, seed=11)
+    p = write_at2(tmp_path / "s.AT2", t, a)
+    cases = record_cases([str(p), "synthetic:5"], scales=[0.4, 2.0], geometries=[(0.2, 1.0)], t_end=3.0)
+    assert len(cases) == 4 and {c["scale"] for c in cases} == {0.4, 2.0}
+    rows = [run_case(c) for c in cases[:2]]
+    assert all(r["error"] == "" for r in rows)
+    assert rows[1]["A"] == pytest.approx(2.0 * np.max(np.abs(a)), rel=1e-14)
+    # scale 0.4 of a 0.4 g record (0.16 g) stays below uplift (g tan(alpha) = 0.2 g): no rocking at all
+    assert rows[0]["max_abs_phi"] == 0.0 and rows[0]["impacts"] == 0
+    with pytest.raises(ValueError, match="no such file"):
+        record_cases([str(tmp_path / "missing.AT2")])
