@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import math
-from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -48,8 +47,9 @@ class Instance:
         cb.logger = fmi2CallbackLoggerTYPE(self._log)
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        from fmpy.logging import addLoggerProxy
-        addLoggerProxy(byref(cb))
+        # no fmpy.logging.addLoggerProxy: its proxy forwards to one process-wide Python logger (the last one
+        # registered), so the messages of several instances would end up in one list. pythonfmu passes the
+        # message itself as the format string, so the plain callback gets the text.
         self._cb = cb  # keep the callbacks alive
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
