@@ -324,7 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", default="results/ensemble.csv", help="results file .csv or directory .parquet")
     g.add_argument("--workers", type=int, default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
     g.add_argument("--address", help="scheduler address of an existing Dask cluster, e.g. tcp://10.0.0.5:8786")
-    g.add_argument("--batch-size", type=int, default=1, help="cases per Dask task (default 1)")
+    g.add_argument("--batch-size", type=int, help="cases per Dask task (default: ~20 tasks per worker, <= 20 cases)")
     g.add_argument("--no-resume", action="store_true", help="fail if --out exists instead of resuming")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.add_argument("--plot", help="overturning spectrum PNG (default: <out stem>_spectrum.png)")
