@@ -10,6 +10,7 @@ from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion
 from .integrators.event_driven import EventDriven
 from .integrators.moreau_jean import MoreauJean
 from .models.base import RockingModel
+from .modes import Mode
 from .validation import check_choice, check_real
 
 SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
@@ -138,20 +139,28 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
     times = np.minimum(t0 + dt * np.arange(n + 1), t_end)
-    records = [sim.outputs()]
     if hold == "exact" and sim.scheme == "event_driven":
-        # one pass through the output grid: the steps are not cut at the output times (dense output)
-        for mode, y, n_impacts, overturned in sim.integrator.advance(float(times[-1]), gm, samples=times[1:]):
-            out = sim.model.mode_outputs(mode, y)
-            out["contact"] = int(mode)
-            out["impacts"] = n_impacts
-            out["overturned"] = overturned
-            records.append(out)
+        # one pass through the output grid: the steps are not cut at the output times (dense output), and
+        # the outputs are evaluated per contact mode on arrays
+        integ = sim.integrator
+        samples = [(integ.mode, list(integ.y), integ.impacts, integ.overturned)]
+        samples += integ.advance(float(times[-1]), gm, samples=times[1:])
+        modes = np.array([int(smp[0]) for smp in samples])
+        values = {}
+        for mode in np.unique(modes):
+            idx = np.nonzero(modes == mode)[0]
+            out = sim.model.mode_outputs_array(Mode(int(mode)), np.array([samples[i][1] for i in idx]))
+            for name, arr in out.items():
+                values.setdefault(name, np.empty(len(samples)))[idx] = arr
+        values["contact"] = modes
+        values["impacts"] = np.array([smp[2] for smp in samples])
+        values["overturned"] = np.array([smp[3] for smp in samples], dtype=bool)
     else:
+        records = [sim.outputs()]
         for k in range(n):
             ag = ConstantMotion(gm(times[k])) if hold == "zoh" else gm
             sim.advance(times[k + 1], ag)
             records.append(sim.outputs())
-    values = {name: np.array([r[name] for r in records]) for name in records[0]}
+        values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
                   n_steps=sim.integrator.n_steps)

@@ -224,17 +224,34 @@ class EventDriven:
                 if dense is None:
                     dense = stepper.dense_output()
                 xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
-                best = None
-                for i in hits:
-                    shift = 0.0 if armed[i] else tol
 
-                    def gi(t, i=i, shift=shift):
-                        val = G(t, dense(t))[i]
-                        return (0.5 * math.pi - abs(val) if i == 2 else val) + shift
-                    te = _locate(gi, t0, g_a[i] + shift, t_hit, g_b[i] + shift, xtol)
-                    if best is None or te < best[0]:
-                        best = (te, i)
-                te, i = best
+                def earliest(ids, ta, ga, tb, gb):
+                    best = None
+                    for i in ids:
+                        shift = 0.0 if armed[i] else tol
+
+                        def gi(t, i=i, shift=shift):
+                            val = G(t, dense(t))[i]
+                            return (0.5 * math.pi - abs(val) if i == 2 else val) + shift
+                        te = _locate(gi, ta, ga[i] + shift, tb, gb[i] + shift, xtol)
+                        if best is None or te < best[0]:
+                            best = (te, i)
+                    return best
+                te, i = earliest(hits, t0, g_a, t_hit, g_b)
+                # another contact function may dip below zero and come back before that event (e.g. the
+                # pivot force of a block that lifts off just before it overturns)
+                others = [j for j in (0, 1) if armed[j] and j not in hits]
+                if others and te > t0:
+                    ta, ga = t0, g_a
+                    for n in range(1, 16):
+                        tn = t0 + (te - t0) * n / 16.0
+                        gn = G(tn, dense(tn))
+                        gn[2] = 0.5 * math.pi - abs(gn[2])
+                        neg = [j for j in others if gn[j] <= 0.0]
+                        if neg:
+                            te, i = earliest(neg, ta, ga, tn, gn)
+                            break
+                        ta, ga = tn, gn
                 self._record_samples(pending, out, mode, dense, te, inclusive=False)
                 if k and stepper.h_abs > 0:
                     self._h = stepper.h_abs
@@ -261,14 +278,29 @@ class EventDriven:
         while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
             out.append((mode, dense(pending.popleft()), self.impacts, False))
 
+    @staticmethod
+    def _may_dip(g0: float, gm: float, g1: float) -> bool:
+        """Whether a function positive at both ends of a step may reach zero inside: its midpoint lies
+        below both ends, or the parabola through (0, g0), (1/2, gm), (1, g1) has its vertex inside the step
+        and comes down to less than half the smaller end value."""
+        lo = min(g0, g1)
+        if gm < lo:
+            return True
+        c = 2.0 * (g0 + g1) - 4.0 * gm
+        if c <= 0.0:
+            return False
+        b = g1 - g0 - c
+        x = -b / (2.0 * c)
+        return 0.0 < x < 1.0 and g0 + 0.5 * b * x < 0.5 * lo
+
     def _dips(self, stepper, G, armed, g_prev, g_new):
         """A contact function that dips below zero and comes back within the step (a short excursion of
-        the base of a vibrating column): look inside the step when the Hermite midpoint dips below both
-        ends. Returns (hits, t_a, t_b, g_a, g_b, dense) of the first sub-interval with a sign change."""
+        the base of a vibrating column, the pivot force of a block about to lift off): look inside the
+        step when a cubic Hermite estimate of the midpoint value says it may (`_may_dip`). Returns (hits, t_a, t_b, g_a, g_b, dense) of the first sub-interval with a sign change."""
         t0, t1 = stepper.t_old, stepper.t
         tm = 0.5 * (t0 + t1)
         gm = G(tm, stepper.hermite_mid())
-        dip = [i for i in (0, 1) if armed[i] and gm[i] < min(g_prev[i], g_new[i])]
+        dip = [i for i in (0, 1) if armed[i] and self._may_dip(g_prev[i], gm[i], g_new[i])]
         if not dip:
             return [], t0, t1, g_prev, g_new, None
         dense = stepper.dense_output()

@@ -149,6 +149,11 @@ class RockingModel(ABC):
         k = len(y) // 2
         return self.outputs(*self.embed(mode, np.array(y[:k], dtype=float), np.array(y[k:], dtype=float)))
 
+    def mode_outputs_array(self, mode: Mode, Y: np.ndarray) -> dict[str, np.ndarray]:
+        """`mode_outputs` of many reduced states at once: Y has shape (N, 2k); arrays of length N."""
+        rows = [self.mode_outputs(mode, list(y)) for y in Y]
+        return {name: np.array([r[name] for r in rows], dtype=float) for name in rows[0]} if rows else {}
+
     # ------------------------------------------------------------------ quantities
     @abstractmethod
     def rest_position(self) -> np.ndarray:

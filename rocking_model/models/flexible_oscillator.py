@@ -333,8 +333,8 @@ class FlexibleOscillator(RockingModel):
     def outputs(self, q, v):
         return self._outputs(*(float(a) for a in q), *(float(a) for a in v))
 
-    def _outputs(self, u, x, y, phi, ud, xd, yd, w) -> dict:
-        sp, cp = math.sin(phi), math.cos(phi)
+    def _outputs(self, u, x, y, phi, ud, xd, yd, w, sin=math.sin, cos=math.cos) -> dict:
+        sp, cp = sin(phi), cos(phi)
         D = self.D
         Mxp, Myp = self._M_phi_xy(u, sp, cp)
         # 1/2 v^T M v written out (no 4x4 product per output sample)
@@ -406,6 +406,21 @@ class FlexibleOscillator(RockingModel):
             lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
             return [lam / W, -s * phi, phi] if pivot_first else [-s * phi, lam / W, phi]
         return rhs, monitors
+
+    def mode_outputs_array(self, mode, Y):
+        Y = np.asarray(Y, dtype=float)
+        z = np.zeros(Y.shape[0])
+        if mode == Mode.FULL:
+            args = (Y[:, 0], z, z, z, Y[:, 1], z, z, z)
+        elif mode == Mode.FLIGHT:
+            args = tuple(Y.T)
+        else:
+            s = pivot_sign(mode)
+            u, phi, ud, w = Y.T
+            sp, cp = np.sin(phi), np.cos(phi)
+            b = self.b
+            args = (u, s * b * (1.0 - cp), -s * b * sp, phi, ud, s * b * sp * w, -s * b * cp * w, w)
+        return self._outputs(*args, sin=np.sin, cos=np.cos)
 
     def mode_outputs(self, mode, y):
         if mode == Mode.FULL:

@@ -229,6 +229,26 @@ class RigidBlock(RockingModel):
             return [lam, -s * phi, phi] if pivot_first else [-s * phi, lam, phi]
         return rhs, monitors
 
+    def mode_outputs_array(self, mode, Y):
+        Y = np.asarray(Y, dtype=float)
+        n = Y.shape[0]
+        if mode == Mode.FULL:
+            z = np.zeros(n)
+            return {name: z.copy() for name in ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy")}
+        if mode == Mode.FLIGHT:
+            x, yc, phi, xd, yd, w = Y.T
+            yc = yc - self.h
+        else:
+            s = pivot_sign(mode)
+            phi, w = Y[:, 0], Y[:, 1]
+            sp, cp = np.sin(phi), np.cos(phi)
+            b, h = self.b, self.h
+            x, yc = s * b * (1.0 - cp) - h * sp, -s * b * sp + h * cp - h
+            xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
+        kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
+        return {"phi": phi, "phi_dot": w, "x": x, "y": yc, "x_dot": xd, "y_dot": yd,
+                "energy": kin + self.m * self.g * yc}
+
     def mode_outputs(self, mode, y):
         if mode == Mode.FULL:
             return {"phi": 0.0, "phi_dot": 0.0, "x": 0.0, "y": 0.0, "x_dot": 0.0, "y_dot": 0.0, "energy": 0.0}
