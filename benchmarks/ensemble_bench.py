@@ -79,6 +79,7 @@ def main(argv=None) -> int:
             print(f"  {s['throughput']:.1f} cases/s ({s['wall_time']:.2f} s + {s['setup_time']:.2f} s start); "
                   f"same results as serial: {same}", flush=True)
     base = results[0][1]["throughput"]
+    load_end = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = [
         "### Ensembles: throughput on Dask",
         "",
@@ -97,7 +98,9 @@ def main(argv=None) -> int:
                      f"{s['wall_time']:.2f} | {s['setup_time']:.2f} | {cpu:.2f} | {'yes' if same else 'NO'} |")
     lines += [
         "",
-        f"Machine: {info}.",
+        f"Machine: {info}; load average {load_end:.2f} at the end. The column 'sum of case times' is the "
+        "serial cost measured inside the workers: when it grows above the serial row the cores were shared "
+        "(with the scheduler, the client or other jobs).",
         "",
         "The cases are independent, so the speed-up is bounded by the number of cores; a Dask task costs about "
         "few ms of scheduling and round trip per task against ~20 ms per case here, hence the default batching "

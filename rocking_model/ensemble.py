@@ -17,6 +17,7 @@ import functools
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
 import time
@@ -414,8 +415,9 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
             else:
                 if workers < 1:
                     raise ValueError(f"workers = {workers} is out of range; allowed range [0, inf)")
+                # silence_logs: shutdown chatter (a worker's last heartbeat to a closed scheduler) is noise
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
-                                       dashboard_address=":0")
+                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
                 client = Client(cluster)
                 client.wait_for_workers(workers)
             # import the package and run one short case on every worker before the clock starts
