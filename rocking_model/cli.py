@@ -191,7 +191,8 @@ def cmd_benchmark(args, extra: list[str]) -> int:
 def cmd_ensemble(args) -> int:
     from . import ensemble as E
 
-    geometries = [(b, h) for b in (_flat(args.b) or [0.2]) for h in (_flat(args.h) or [1.0])]
+    b0, h0 = (0.2, 1.0) if args.model == "rigid" else (0.25, 1.5)      # the models' defaults
+    geometries = [(b, h) for b in (_flat(args.b) or [b0]) for h in (_flat(args.h) or [h0])]
     common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N,
                   t_end=args.t_end, output_interval=args.output_interval, tolerance=args.tolerance,
                   dt_max=args.dt_max)
@@ -204,9 +205,9 @@ def cmd_ensemble(args) -> int:
         cases = E.pulse_cases(args.pulse, amplitude_ratios=_flat(args.amplitude_ratios),
                               frequency_ratios=_flat(args.frequency_ratios), amplitudes=_flat(args.amplitudes),
                               frequencies=_flat(args.frequencies), **common)
-    where = f"Dask cluster at {args.address}" if args.address else \
-        ("serially (no Dask)" if args.workers == 0 else f"a local Dask cluster of {args.workers} worker(s)")
-    print(f"{len(cases)} cases -> {args.out}, on {where}")
+    where = f"on the Dask cluster at {args.address}" if args.address else \
+        ("serially (no Dask)" if args.workers == 0 else f"on a local Dask cluster of {args.workers} worker(s)")
+    print(f"{len(cases)} cases -> {args.out}, {where}")
     try:
         s = E.run_ensemble(cases, args.out, workers=args.workers, address=args.address,
                            resume=not args.no_resume, progress=not args.no_progress, batch_size=args.batch_size)
@@ -217,7 +218,8 @@ def cmd_ensemble(args) -> int:
     print(f"ran {s['n_run']} cases ({s['n_skipped']} already in {args.out}): {s['n_overturned']} overturned, "
           f"{s['n_errors']} errors")
     if s["n_run"]:
-        print(f"throughput {s['throughput']:.2f} cases/s on {s['workers']} worker(s) "
+        on = f"on {s['workers']} worker(s)" if s["workers"] else "serially"
+        print(f"throughput {s['throughput']:.2f} cases/s {on} "
               f"({s['wall_time']:.1f} s, plus {s['setup_time']:.1f} s cluster start)")
     if args.pulse and args.model == "rigid" and args.amplitude_ratios and args.frequency_ratios \
             and not args.no_plot:
@@ -237,8 +239,10 @@ def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
     g = p.add_argument_group("model")
     g.add_argument("--model", choices=("rigid", "flexible"), default="rigid", help="default: rigid")
     if lists:
-        g.add_argument("--b", type=_values, nargs="+", metavar="B", help="half-widths [m] (grid; default 0.2)")
-        g.add_argument("--h", type=_values, nargs="+", metavar="H", help="half-heights [m] (grid; default 1.0)")
+        g.add_argument("--b", type=_values, nargs="+", metavar="B",
+                       help="half-widths [m] (grid; default: the model's, 0.2 rigid, 0.25 flexible)")
+        g.add_argument("--h", type=_values, nargs="+", metavar="H",
+                       help="half-heights / column heights [m] (grid; default 1.0 rigid, 1.5 flexible)")
         g.add_argument("--e-N", dest="e_N", type=float, default=0.0, help="coefficient of restitution [1]")
         return
     g.add_argument("--b", type=float, help="half-width of the block / base [m]")
