@@ -121,7 +121,29 @@ class EventDriven:
         """The model's outputs at the current time."""
         return self.model.mode_outputs(self.mode, self.y)
 
+    def _functions(self, mode, ag):
+        """model.mode_functions(mode, ag), reused while the mode and a constant input stay the same (each
+        co-simulation step would otherwise build them twice)."""
+        key = (mode, ag.value) if ag.constant else (mode, id(ag))
+        cached = self.__dict__.get("_fn_cache")
+        if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
+            return cached[2]
+        fns = self.model.mode_functions(mode, ag)
+        self._fn_cache = (key, ag, fns)
+        return fns
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_fn_cache", None)      # closures: rebuilt on demand
+        return state
+
     def _atol(self, mode):
+        cached = self.__dict__.setdefault("_atol_cache", {})
+        if mode not in cached:
+            cached[mode] = self._atol_of(mode)
+        return cached[mode]
+
+    def _atol_of(self, mode):
         dof_scales = getattr(self.model, "dof_scales", None)
         idx = self.model.mode_dofs(mode)
         if dof_scales is None:
@@ -170,7 +192,7 @@ class EventDriven:
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
         mode = self.mode
         closed = CLOSED[mode]
-        _, monitors = self.model.mode_functions(mode, ag)
+        _, monitors = self._functions(mode, ag)
         e = monitors(t, self.y)
         # fast path: closed corners loaded, open corners clearly open (then the active set still holds)
         if all(e[i] > 0.0 if i in closed else e[i] > 1e-9 for i in (0, 1)):
@@ -197,7 +219,7 @@ class EventDriven:
                 out.append((mode, list(self.y), self.impacts, False))
             self._full = None
             return False
-        rhs, G = self.model.mode_functions(mode, ag)
+        rhs, G = self._functions(mode, ag)
         kinds = [(_KIND_RELEASE if i in CLOSED[mode] else _KIND_IMPACT) for i in (0, 1)]
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes

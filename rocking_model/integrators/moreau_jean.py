@@ -105,7 +105,8 @@ class MoreauJean:
         active = [i for i in (0, 1) if g_half[i] <= margin or g_free[i] <= 0.0]
         if active:
             b_N = model.e_N * np.minimum(U, 0.0)
-            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(2), active)
+            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(2), active,
+                                    hint=[i for i in self._closed if i in active])
             v_new = sol.v
             closed = set(sol.active)
         else:
@@ -137,7 +138,15 @@ class MoreauJean:
         W_N = model.contact_jacobians(q)[0][:, closed]
         Minv = inverse_mass(model, q)
         MW = Minv @ W_N
-        mu, *_ = np.linalg.lstsq(W_N.T @ MW, -g, rcond=1e-12)
+        A = W_N.T @ MW
+        if len(closed) == 1:
+            mu = -g / A[0, 0]
+        else:
+            det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+            if abs(det) > 1e-12 * abs(A[0, 0] * A[1, 1]):
+                mu = np.array([A[1, 1] * -g[0] - A[0, 1] * -g[1], A[0, 0] * -g[1] - A[1, 0] * -g[0]]) / det
+            else:
+                mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
         return q + MW @ mu
 
     def state(self):
