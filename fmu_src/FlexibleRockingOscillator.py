@@ -35,15 +35,17 @@ class FlexibleRockingOscillator(RockingSlave):
         Var("phi_0", "parameter", 0.0, unit="rad",
             description="Initial base rotation (positive: pivoting on the left corner), |phi_0| < pi/2"),
         Var("phi_dot_0", "parameter", 0.0, unit="rad/s", description="Initial angular velocity of the base"),
-        Var("scheme", "parameter", 0, type="Integer", min=0, max=1,
-            description="Integration scheme: 0 Moreau-Jean time-stepping, 1 event-driven"),
+        Var("scheme", "parameter", 1, type="Integer", min=0, max=1,
+            description="Integration scheme: 0 Moreau-Jean time-stepping, 1 event-driven (default: the "
+                        "faster at equal error, see docs/performance.md)"),
         Var("impact_rule", "parameter", 0, type="Integer", min=0, max=1,
             description="Impact rule: 0 LCP with Newton's law, 1 classical angular-momentum rule "
                         "(flexural velocity continuous)"),
-        Var("dt_max", "parameter", 1e-3, unit="s",
+        Var("dt_max", "parameter", 0.0, unit="s", min=0.0,
             description="Moreau-Jean time step (largest; each communication step is split evenly) or "
-                        "largest event-driven step"),
-        Var("tolerance", "parameter", 1e-8, unit="1",
+                        "largest event-driven step; 0: the scheme's default (Moreau-Jean 1e-3 s, "
+                        "event-driven uncapped)"),
+        Var("tolerance", "parameter", 1e-6, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
         Var("ag", "input", 0.0, unit="m/s2",
             description="Horizontal ground acceleration (held constant over each communication step)"),

@@ -29,12 +29,14 @@ class RigidRockingBlock(RockingSlave):
         Var("phi_0", "parameter", 0.0, unit="rad",
             description="Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2"),
         Var("phi_dot_0", "parameter", 0.0, unit="rad/s", description="Initial angular velocity"),
-        Var("scheme", "parameter", 0, type="Integer", min=0, max=1,
-            description="Integration scheme: 0 Moreau-Jean time-stepping, 1 event-driven"),
-        Var("dt_max", "parameter", 1e-3, unit="s",
+        Var("scheme", "parameter", 1, type="Integer", min=0, max=1,
+            description="Integration scheme: 0 Moreau-Jean time-stepping, 1 event-driven (default: the "
+                        "faster at equal error, see docs/performance.md)"),
+        Var("dt_max", "parameter", 0.0, unit="s", min=0.0,
             description="Moreau-Jean time step (largest; each communication step is split evenly) or "
-                        "largest event-driven step"),
-        Var("tolerance", "parameter", 1e-8, unit="1",
+                        "largest event-driven step; 0: the scheme's default (Moreau-Jean 1e-3 s, "
+                        "event-driven uncapped)"),
+        Var("tolerance", "parameter", 1e-6, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
         # input
         Var("ag", "input", 0.0, unit="m/s2",

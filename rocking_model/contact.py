@@ -43,6 +43,25 @@ def uplift(model: RockingModel, q: np.ndarray, v: np.ndarray, ag: float, candida
     return solve_contact_lcp(Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced)
 
 
+def project_to_ground(model: RockingModel, q: np.ndarray, corners) -> np.ndarray:
+    """q moved onto g_N = 0 at ``corners`` (one Newton step of min |dq|_M subject to g_N(q + dq) = 0, as
+    Siconos' MoreauJeanDirectProjectionOSI): undoes the drift of a closed corner off (or into) the ground."""
+    corners = sorted(corners)
+    g = model.gaps(q)[corners]
+    W_N = model.contact_jacobians(q)[0][:, corners]
+    MW = inverse_mass(model, q) @ W_N
+    A = W_N.T @ MW
+    if len(corners) == 1:
+        mu = -g / A[0, 0]
+    else:
+        det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+        if abs(det) > 1e-12 * abs(A[0, 0] * A[1, 1]):
+            mu = np.array([A[1, 1] * -g[0] - A[0, 1] * -g[1], A[0, 0] * -g[1] - A[1, 0] * -g[0]]) / det
+        else:
+            mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
+    return q + MW @ mu
+
+
 def closed_candidates(model: RockingModel, q: np.ndarray, v: np.ndarray, gap_tol: float,
                       v_tol: float) -> list[int]:
     """Corners at the ground (|g_N| <= gap_tol) with zero normal velocity (|U_N| <= v_tol)."""

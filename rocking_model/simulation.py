@@ -23,9 +23,10 @@ class Simulator:
     ----------
     model : RigidBlock or FlexibleOscillator.
     scheme : "moreau_jean" (0) or "event_driven" (1).
-    dt_max : [s] Moreau-Jean step (the largest; each `advance` is split in equal steps), or the largest
-        step of the event-driven scheme (default: none).
-    tolerance : [1] relative (and scaled absolute) tolerance of the event-driven scheme.
+    dt_max : [s] Moreau-Jean step (the largest; each `advance` is split in equal steps; default 1e-3 s,
+        and at most 0.25/omega for the flexible oscillator), or the largest step of the event-driven scheme
+        (default: none). None or 0 selects the scheme's default (0 is how the FMUs spell it).
+    tolerance : [1] relative (and scaled absolute) tolerance of the event-driven scheme, in [1e-14, 1e-2].
     theta : [1] Moreau-Jean theta in [0.5, 1].
     zeno_tol : [1] event-driven Zeno rule, v_Zeno = zeno_tol * sqrt(g L).
     method : event-driven Runge-Kutta scheme, "DOP853" (order 8, default) or "DOPRI5" (order 5, cheaper
@@ -49,12 +50,14 @@ class Simulator:
         if impact_log_size is not None:
             impact_log_size = int(check_real("impact_log_size", impact_log_size, lo=0.0))
         if self.scheme == "moreau_jean":
-            dt = 1e-3 if dt_max is None else check_real("dt_max", dt_max, lo=0.0, lo_open=True)
+            dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0
+            dt = dt or 1e-3                                     # 0: the scheme's default
             theta = check_real("theta", theta, lo=0.5, hi=1.0)
             self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta,
                                          impact_log_size=impact_log_size)
         else:
-            dt = math.inf if dt_max is None else check_real("dt_max", dt_max, lo=0.0, lo_open=True)
+            dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0
+            dt = dt or math.inf                                 # 0: uncapped
             tol = check_real("tolerance", tolerance, lo=1e-14, hi=1e-2)
             zt = check_real("zeno_tol", zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
             method = check_choice("method", method, {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5",

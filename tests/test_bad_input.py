@@ -139,11 +139,10 @@ BAD_PARAMETERS = [
     (RIGID, {"phi_0": -2.0}, "phi_0", "(-1.5708, 1.5708)"),
     (RIGID, {"phi_dot_0": NAN}, "phi_dot_0", "[-10000, 10000]"),
     (RIGID, {"phi_dot_0": 1e5}, "phi_dot_0", "[-10000, 10000]"),
-    (RIGID, {"dt_max": 0.0}, "dt_max", "(0, inf)"),
-    (RIGID, {"dt_max": -1e-3}, "dt_max", "(0, inf)"),
+    (RIGID, {"dt_max": -1e-3}, "dt_max", "[0, inf)"),
     (RIGID, {"scheme": 1, "tolerance": 0.0}, "tolerance", "[1e-14, 0.01]"),
     (RIGID, {"scheme": 1, "tolerance": 0.5}, "tolerance", "[1e-14, 0.01]"),
-    (RIGID, {"scheme": 1, "dt_max": INF}, "dt_max", "(0, inf)"),
+    (RIGID, {"scheme": 1, "dt_max": INF}, "dt_max", "[0, inf)"),
     (RIGID, {"scheme": 2}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
     (RIGID, {"scheme": -1}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
     (FLEX, {"EI": 0.0}, "EI", "(0, 1e+15]"),
@@ -167,7 +166,7 @@ BAD_PARAMETERS = [
     (FLEX, {"u_dot_0": -INF}, "u_dot_0", "[-10000, 10000]"),
     (FLEX, {"impact_rule": 3}, "impact_rule", "allowed values: 0, 1, 'lcp', 'classical'"),
     (FLEX, {"scheme": 7}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
-    (FLEX, {"dt_max": NAN}, "dt_max", "(0, inf)"),
+    (FLEX, {"dt_max": NAN}, "dt_max", "[0, inf)"),
 ]
 IDS = [f"{k[:5]}-{'-'.join(f'{n}={v}' for n, v in p.items())}" for k, p, _, _ in BAD_PARAMETERS]
 
@@ -210,6 +209,14 @@ def test_parameters_inside_the_ranges_are_accepted():
             sim = Simulator(model, scheme, dt_max=1e-3, phi_0=0.3, phi_dot_0=1e4 if model.b < 1 else -1.0)
             sim.advance(0.01, 0.3 * model.g)
             assert all(math.isfinite(float(v)) for v in sim.outputs().values())
+
+
+def test_dt_max_zero_selects_the_scheme_default():
+    # the FMUs' start value dt_max = 0: Moreau-Jean 1e-3 s, the event-driven scheme uncapped
+    assert Simulator(RigidBlock(), 0, dt_max=0.0).integrator.dt_max == 1e-3
+    assert Simulator(RigidBlock(), 1, dt_max=0.0).integrator.dt_max == math.inf
+    assert Simulator(RigidBlock(), 1).integrator.dt_max == math.inf
+    assert Simulator(RigidBlock(), 1, dt_max=2e-3).integrator.dt_max == 2e-3
 
 
 # ---------------------------------------------------------------------------------------------- steps
@@ -280,7 +287,7 @@ def test_non_finite_ag(fmus, kind, ag):
 
 
 # ---------------------------------------------------------------------------------------------- late changes
-@pytest.mark.parametrize("kind, name, value", [(RIGID, "b", 0.3), (RIGID, "e_N", 0.5), (RIGID, "scheme", 1),
+@pytest.mark.parametrize("kind, name, value", [(RIGID, "b", 0.3), (RIGID, "e_N", 0.5), (RIGID, "scheme", 0),
                                                (FLEX, "EI", 1e5), (FLEX, "impact_rule", 1)])
 def test_fixed_parameter_changed_after_initialization(fmus, kind, name, value):
     inst = Instance(fmus[kind])

@@ -46,7 +46,8 @@ def test_fmu_matches_python_simulator(fmus, scheme, impact_rule):
     start, stop, h = 0.0, 2.0, 0.01
     res = fmpy.simulate_fmu(str(fmus["FlexibleRockingOscillator"]), start_time=start, stop_time=stop,
                             output_interval=h, input=table,
-                            start_values={"scheme": scheme, "impact_rule": impact_rule})
+                            start_values={"scheme": scheme, "impact_rule": impact_rule,
+                                          "dt_max": 1e-3, "tolerance": 1e-8})
     sim = Simulator(FlexibleOscillator(impact_rule=impact_rule), scheme=scheme, dt_max=1e-3, tolerance=1e-8,
                     t0=start)
     values = table["ag"].reshape(1, -1)

@@ -320,7 +320,7 @@ def test_reset_returns_to_the_initial_state(fmus):
         inst.init(scheme=1, phi_0=0.01)
         first = drive(inst, kind, 0, 80, 3.0)
         inst.fmu.reset()
-        assert inst.get("scheme", "phi_0") == [0, 0.0]  # start values
+        assert inst.get("scheme", "phi_0") == [1, 0.0]  # start values
         inst.init(scheme=1, phi_0=0.01)
         assert drive(inst, kind, 0, 80, 3.0) == first
         inst.free()

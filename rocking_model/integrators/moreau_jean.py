@@ -12,7 +12,8 @@ corner never free-falls for one step); on active corners Newton's law
 0 <= U_N+ + e_N U_N ⊥ P_N >= 0 with sticking where P_N > 0 (the impact LCP of `rocking_model.lcp`).
 theta = 1/2 keeps the stiff column free of numerical damping; theta = 1 damps it.
 After the step, the positions of the corners that carried impulse are projected back onto the ground
-(`_project`). Global order 1 when impacts occur.
+(`_project`); a state with both corners stuck and no normal velocity is put exactly on the full-contact
+manifold, so that phi is exactly 0 at rest. Global order 1 when impacts occur.
 """
 from __future__ import annotations
 
@@ -20,13 +21,14 @@ import math
 
 import numpy as np
 
-from ..contact import inverse_mass
+from ..contact import inverse_mass, project_to_ground
 from ..lcp import solve_contact_lcp
 from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
 
 
 class MoreauJean:
-    """LCP time-stepper on the full coordinates of ``model``; steps of at most ``dt_max`` [s]."""
+    """LCP time-stepper on the full coordinates of ``model``; steps of at most ``dt_max`` [s] and at most
+    ``model.step_limit`` (0.25/omega for the flexible oscillator)."""
 
     name = "moreau_jean"
 
@@ -36,7 +38,7 @@ class MoreauJean:
         self.q = np.array(q, dtype=float)
         self.v = np.array(v, dtype=float)
         self.t = float(t0)
-        self.dt_max = dt_max
+        self.dt_max = min(dt_max, model.step_limit)  # sub-step where the model needs it (stiff columns)
         self.theta = theta
         self.mode = Mode(mode)
         self.impacts = 0
@@ -121,6 +123,10 @@ class MoreauJean:
         q_new = q + dt * ((1.0 - theta) * v + theta * v_new)
         if closed:
             q_new = self._project(q_new, sorted(closed))
+        if len(closed) == 2 and np.all(np.abs(W_N.T @ v_new) <= v_scale):
+            # both corners stuck and at rest in the normal direction: the state is on the full-contact
+            # manifold up to round-off; put it there exactly so that phi stays 0 at rest (no drift)
+            q_new, v_new = model.embed(Mode.FULL, *model.reduce(Mode.FULL, q_new, v_new))
         self.q = q_new
         self.v = v_new
         self.mode = mode_from_closed(closed)
@@ -129,25 +135,10 @@ class MoreauJean:
             self.overturned = True
 
     def _project(self, q, closed):
-        """Put the corners that carried impulse back on the ground: one Newton step of
-        min |dq|_M subject to g_N(q + dq) = 0 (as Siconos' MoreauJeanDirectProjectionOSI). Without it the
+        """Put the corners that carried impulse back on the ground (`project_to_ground`). Without it the
         pivot of a rocking body drifts off the ground by O(dt^2) per step (the constraint is nonlinear) and
         re-impacts spuriously."""
-        model = self.model
-        g = model.gaps(q)[closed]
-        W_N = model.contact_jacobians(q)[0][:, closed]
-        Minv = inverse_mass(model, q)
-        MW = Minv @ W_N
-        A = W_N.T @ MW
-        if len(closed) == 1:
-            mu = -g / A[0, 0]
-        else:
-            det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-            if abs(det) > 1e-12 * abs(A[0, 0] * A[1, 1]):
-                mu = np.array([A[1, 1] * -g[0] - A[0, 1] * -g[1], A[0, 0] * -g[1] - A[1, 0] * -g[0]]) / det
-            else:
-                mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
-        return q + MW @ mu
+        return project_to_ground(self.model, q, closed)
 
     def state(self):
         """Full (q, v)."""

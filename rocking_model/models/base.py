@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 
+import math
+
 import numpy as np
 
 from ..modes import Mode
@@ -99,6 +101,11 @@ class RockingModel(ABC):
         with a closed form."""
         from ..contact import mode_forces
         return mode_forces(self, mode, q, v, ag)
+
+    @property
+    def step_limit(self) -> float:
+        """Largest Moreau-Jean step [s] the model tolerates (inf: no limit); the time-stepper sub-steps to it."""
+        return math.inf
 
     # ------------------------------------------------------------------ float-level mode functions
     @property
