@@ -73,7 +73,10 @@ class Simulator:
     @property
     def impact_times(self) -> list[float]:
         """Times of the (last ``impact_log_size``) impacts [s]."""
-        return list(self.integrator.impact_times)
+        log = self.integrator.impact_times
+        n = getattr(log, "maxlen", None)
+        # the log trims in chunks (up to 2 n entries kept): report exactly the last n
+        return list(log) if n is None else list(log[len(log) - n:]) if len(log) > n else list(log)
 
     def advance(self, t_end: float, ag) -> None:
         """Integrate to exactly ``t_end`` [s] under ground acceleration ``ag``: a number [m/s2] held
