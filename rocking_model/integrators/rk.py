@@ -125,6 +125,20 @@ class ExplicitRK:
         self.n_rejected = 0
         self._err_exp = -1.0 / (self.tableau.error_order + 1.0)
 
+    def restart(self, fun: Callable, t0: float, y0, first_step: float | None) -> None:
+        """Start again at (t0, y0) under a new right-hand side (same size, tolerances and step limit): what
+        a new stepper would do, without re-building it."""
+        self.fun = fun
+        self.t = t0
+        self.y = y0
+        self.f = list(fun(t0, y0)) if self.n else []
+        self._K = None
+        if first_step is not None:
+            self.h_abs = min(first_step, self.max_step)
+        elif self.n:
+            self.h_abs = min(self._initial_step(), self.max_step)
+        self.t_old, self.y_old, self.f_old = self.t, self.y, self.f
+
     def _initial_step(self) -> float:
         # Hairer's heuristic (scipy.integrate._ivp.common.select_initial_step)
         if self.n == 0:
