@@ -38,33 +38,48 @@ METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 
 
 def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float:
-    """Illinois regula falsi on a bracket with ga > 0 >= gb; returns a time t with fun(t) <= 0 and
-    t - t_root <= xtol."""
+    """Regula falsi with the Anderson-Bjorck modification on a bracket with ga > 0 >= gb; returns a time t
+    with fun(t) <= 0 and t - t_root <= xtol.
+
+    Each trial point keeps at least xtol/2 from the ends of the bracket, so that once the estimate has
+    converged the next evaluation on the far side of the root closes the bracket: some 6 to 10 evaluations
+    from a step-sized bracket to round-off (about 12 to 20 on average in the scenes, against 20 to 25 when
+    every iteration also bisects). A bisection follows a trial point that had to be held off an end without
+    closing the bracket (a function that starts tangent to zero) and two iterations that did not halve it."""
     side = 0
+    half = 0.5 * xtol
+    width = b - a
+    n_slow = 0
+    bisect = False
     while b - a > xtol:
-        t = (a * gb - b * ga) / (gb - ga) if ga != gb else 0.5 * (a + b)
-        if not (a < t < b):
+        clamped = False
+        if bisect:
             t = 0.5 * (a + b)
+        else:
+            t = a + (b - a) * (ga / (ga - gb))
+            if t < a + half:
+                t, clamped = a + half, True
+            elif t > b - half:
+                t, clamped = b - half, True
         gt = fun(t)
         if gt > 0.0:
+            if side == 1:                     # a moved twice in a row: scale down the far value
+                m = 1.0 - gt / ga
+                gb *= m if m > 0.0 else 0.5
             a, ga = t, gt
-            if side == 1:
-                gb *= 0.5
             side = 1
         else:
-            b, gb = t, gt
             if side == -1:
-                ga *= 0.5
+                m = 1.0 - gt / gb if gb != 0.0 else 0.5
+                ga *= m if m > 0.0 else 0.5
+            b, gb = t, gt
             side = -1
-        if b - a <= xtol:
-            break
-        # guard against slow one-sided convergence: bisect every so often
-        mid = 0.5 * (a + b)
-        gm = fun(mid)
-        if gm > 0.0:
-            a, ga = mid, gm
+        if bisect or b - a <= 0.5 * width:
+            width = b - a
+            n_slow = 0
         else:
-            b, gb = mid, gm
+            n_slow += 1
+        bisect = clamped or n_slow >= 2
     return b
 
 
