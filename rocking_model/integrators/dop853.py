@@ -54,15 +54,13 @@ class _DOP853Tableau(Tableau):
     def error_sources(self, names, j):
         return [_lincomb(self.E5, names, j), _lincomb(self.E3, names, j)]
 
-    def error_norm(self, errs, scale, h):
-        e5 = e3 = 0.0
-        for j, s in enumerate(scale):
-            a, b = errs[2 * j] / s, errs[2 * j + 1] / s
-            e5 += a * a
-            e3 += b * b
-        if e5 == 0.0 and e3 == 0.0:
-            return 0.0
-        return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * len(scale))
+    def error_norm_source(self, n):
+        # Hairer's norm: |h| e5 / sqrt((e5 + 0.01 e3) n), e5 and e3 the sums of the squared scaled estimates
+        lines = [f"p{j}, q{j} = er{2 * j} / s{j}, er{2 * j + 1} / s{j}" for j in range(n)]
+        lines.append("e5 = " + " + ".join(f"p{j}*p{j}" for j in range(n)))
+        lines.append("e3 = " + " + ".join(f"q{j}*q{j}" for j in range(n)))
+        lines.append(f"err = 0.0 if e5 == 0.0 and e3 == 0.0 else abs(h) * e5 / sqrt((e5 + 0.01 * e3) * {n})")
+        return lines
 
     def dense_sources(self, j):
         names = [f"k{s}" for s in range(len(self.A))]

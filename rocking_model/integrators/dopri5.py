@@ -45,12 +45,10 @@ class _DOPRI5Tableau(Tableau):
     def error_sources(self, names, j):
         return [_lincomb(self.E, names, j)]
 
-    def error_norm(self, errs, scale, h):
-        acc = 0.0
-        for e, s in zip(errs, scale):
-            a = e / s
-            acc += a * a
-        return abs(h) * math.sqrt(acc / len(scale))
+    def error_norm_source(self, n):
+        lines = [f"p{j} = er{j} / s{j}" for j in range(n)]
+        lines.append("err = abs(h) * sqrt((" + " + ".join(f"p{j}*p{j}" for j in range(n)) + f") / {n})")
+        return lines
 
     def dense_sources(self, j):
         names = [f"k{s}" for s in range(7)]

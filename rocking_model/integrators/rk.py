@@ -40,7 +40,9 @@ class Tableau:
         """Source of the error-estimate combinations of component j (one or two expressions)."""
         raise NotImplementedError
 
-    def error_norm(self, errs, scale, h) -> float:
+    def error_norm_source(self, n: int) -> list[str]:
+        """Source lines that set ``err`` (the scaled error norm of the step) from the error estimates
+        ``er0, er1, ...`` (as listed by `error_sources`), the scales ``s0, s1, ...`` and the step h."""
         raise NotImplementedError
 
     def dense_sources(self, j) -> list[str]:
@@ -57,22 +59,29 @@ class _Compiled:
         ns = tab.n_stages
         names = [f"k{s}" for s in range(len(tab.A))]
         ys = [f"y{j}" for j in range(n)]
-        lines = ["def rk_step(fun, t, y, f, h):"]
+        lines = ["def rk_step(fun, t, y, f, h, atol, rtol):"]
         lines.append(f"    {', '.join(ys)}, = y")
         lines.append(f"    {', '.join(f'k0_{j}' for j in range(n))}, = f")
         for s in range(1, ns - 1):
             args = ", ".join(f"y{j} + h*{_lincomb(tab.A[s][:s], names, j)}" for j in range(n))
             lines.append(f"    {', '.join(f'k{s}_{j}' for j in range(n))}, = fun(t + {float(tab.C[s])!r}*h, [{args}])")
-        ynew = ", ".join(f"y{j} + h*{_lincomb(tab.B, names, j)}" for j in range(n))
-        lines.append(f"    y_new = [{ynew}]")
+        for j in range(n):
+            lines.append(f"    yn{j} = y{j} + h*{_lincomb(tab.B, names, j)}")
+        lines.append(f"    y_new = [{', '.join(f'yn{j}' for j in range(n))}]")
         last = ns - 1
         lines.append(f"    {', '.join(f'k{last}_{j}' for j in range(n))}, = f_new = fun(t + h, y_new)")
         errs = []
         for j in range(n):
             errs.extend(tab.error_sources(names, j))
-        lines.append(f"    errs = [{', '.join(errs)}]")
+        for m, src in enumerate(errs):
+            lines.append(f"    er{m} = {src}")
+        # mixed error scale atol_j + rtol max(|y_j|, |y_new_j|), then the tableau's norm
+        lines.append(f"    {', '.join(f'a{j}' for j in range(n))}, = atol")
+        for j in range(n):
+            lines.append(f"    s{j} = a{j} + max(abs(y{j}), abs(yn{j})) * rtol")
+        lines.extend("    " + line for line in tab.error_norm_source(n))
         allk = ", ".join(f"k{s}_{j}" for s in range(ns) for j in range(n))
-        lines.append(f"    return y_new, list(f_new), errs, ({allk},)")
+        lines.append(f"    return y_new, list(f_new), err, ({allk},)")
         # dense output: the extra stages (if any) and the coefficients
         d = ["def dense(fun, t, y, h, K):"]
         d.append(f"    {', '.join(ys)}, = y")
@@ -83,7 +92,7 @@ class _Compiled:
         rows = [tab.dense_sources(j) for j in range(n)]
         d.append("    return [" + ", ".join("[" + ", ".join(r) + "]" for r in rows) + "]")
         src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n"
-        scope: dict = {}
+        scope: dict = {"sqrt": math.sqrt}
         exec(compile(src, f"<{tab.name} n={n}>", "exec"), scope)
         self.rk_step = scope["rk_step"]
         self.dense = scope["dense"]
@@ -167,7 +176,7 @@ class ExplicitRK:
             return
         min_step = 10.0 * abs(math.nextafter(t, math.inf) - t)
         h_abs = min(self.h_abs, self.max_step)
-        rk_step, tab, rtol, atol = self._code.rk_step, self.tableau, self.rtol, self.atol
+        rk_step, rtol, atol = self._code.rk_step, self.rtol, self.atol
         rejected = False
         while True:
             if h_abs < min_step:
@@ -178,9 +187,7 @@ class ExplicitRK:
                 t_new = t_bound
                 h = t_new - t
                 h_abs = abs(h)
-            y_new, f_new, errs, K = rk_step(self.fun, t, y, self.f, h)
-            scale = [a + max(abs(u), abs(v)) * rtol for a, u, v in zip(atol, y, y_new)]
-            err = tab.error_norm(errs, scale, h)
+            y_new, f_new, err, K = rk_step(self.fun, t, y, self.f, h, atol, rtol)
             if err < 1.0 or h_abs <= min_step:
                 factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err ** self._err_exp)
                 if rejected:
