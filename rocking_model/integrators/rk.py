@@ -211,29 +211,39 @@ class ExplicitRK:
                 for a, b, fa, fb in zip(self.y_old, self.y, self.f_old, self.f)]
 
     def dense_output(self) -> "DenseOutput":
-        """Interpolant of the last step."""
-        h = self.t - self.t_old
+        """Interpolant of the last step. Built on its first use inside the step (DOP853's needs three more
+        function evaluations): read at the end of the step only, e.g. an output time that the step was
+        clipped to, it costs nothing."""
         if self.n == 0:
-            return DenseOutput(self.tableau, self.t_old, self.t, self.y_old, [])
-        Q = self._code.dense(self.fun, self.t_old, self.y_old, h, self._K)
-        return DenseOutput(self.tableau, self.t_old, self.t, self.y_old, Q, self.y, self.f_old, self.f)
+            return DenseOutput(self.t_old, self.t, self.y_old, self.y_old, None)
+        code, tab, fun, t_old, y_old, h, K = self._code, self.tableau, self.fun, self.t_old, self.y_old, \
+            self.t - self.t_old, self._K
+        y_new, f_old, f_new = self.y, self.f_old, self.f
+
+        def make():
+            Q = code.dense(fun, t_old, y_old, h, K)
+            return tab.make_interpolant(h, y_old, Q, y_new, f_old, f_new)
+        return DenseOutput(t_old, self.t, y_old, y_new, make)
 
 
 class DenseOutput:
-    """Interpolant of one step on [t_old, t]: a callable t -> list of floats."""
+    """Interpolant of one step on [t_old, t]: a callable t -> list of floats (exact end values at t)."""
 
-    __slots__ = ("eval", "t_old", "t", "h", "y_old", "Q", "y_new")
+    __slots__ = ("t_old", "t", "h", "y_old", "y_new", "_eval", "_make")
 
-    def __init__(self, tab, t_old, t, y_old, Q, y_new=None, f_old=None, f_new=None):
+    def __init__(self, t_old, t, y_old, y_new, make):
         self.t_old, self.t, self.h = t_old, t, t - t_old
-        self.y_old, self.Q = y_old, Q
-        self.y_new = y_new if y_new is not None else y_old
-        self.eval = tab.make_interpolant(self.h, y_old, Q, y_new, f_old, f_new) if Q else None
+        self.y_old, self.y_new = y_old, y_new
+        self._eval, self._make = None, make
 
     def __call__(self, t: float) -> list[float]:
-        if self.eval is None:
-            return list(self.y_old)
         if t == self.t:
             return list(self.y_new)
+        ev = self._eval
+        if ev is None:
+            if self._make is None:               # no state (nothing moves)
+                return list(self.y_old)
+            ev = self._eval = self._make()
+            self._make = None
         x = (t - self.t_old) / self.h if self.h != 0.0 else 0.0
-        return self.eval(x)
+        return ev(x)
