@@ -66,18 +66,18 @@ class _DOP853Tableau(Tableau):
         names = [f"k{s}" for s in range(len(self.A))]
         return [f"h*{_lincomb(row, names, j)}" for row in self.D]
 
-    @staticmethod
-    def make_interpolant(h, y_old, Q, y_new, f_old, f_new):
-        F = []
-        for j, y0 in enumerate(y_old):
-            dy = y_new[j] - y0
-            F.append((y0, dy, h * f_old[j] - dy, 2.0 * dy - h * (f_new[j] + f_old[j]), *Q[j]))
-
-        def ev(x):
-            xm = 1.0 - x
-            return [y0 + (((((((F6 * x + F5) * xm + F4) * x + F3) * xm + F2) * x + F1) * xm + F0) * x)
-                    for y0, F0, F1, F2, F3, F4, F5, F6 in F]
-        return ev
+    def interpolant_source(self, n):
+        # Hairer's contd8: y0 + x (F0 + xm (F1 + x (F2 + xm (F3 + ...)))) with xm = 1 - x, F0 = dy,
+        # F1 = h f_old - dy, F2 = 2 dy - h (f_new + f_old), F3..F6 the dense-output coefficients
+        lines = ["def make_interpolant(h, y_old, Q, y_new, f_old, f_new):"]
+        for j in range(n):
+            lines += [f"    y0_{j} = y_old[{j}]", f"    F0_{j} = y_new[{j}] - y0_{j}",
+                      f"    F1_{j} = h * f_old[{j}] - F0_{j}", f"    F2_{j} = 2.0 * F0_{j} - h * (f_new[{j}] + f_old[{j}])",
+                      f"    F3_{j}, F4_{j}, F5_{j}, F6_{j} = Q[{j}]"]
+        terms = ", ".join(f"y0_{j} + (((((((F6_{j} * x + F5_{j}) * xm + F4_{j}) * x + F3_{j}) * xm + F2_{j}) * x + "
+                          f"F1_{j}) * xm + F0_{j}) * x)" for j in range(n))
+        lines += ["    def ev(x):", "        xm = 1.0 - x", f"        return [{terms}]", "    return ev"]
+        return "\n".join(lines)
 
 
 class DOP853(ExplicitRK):

@@ -54,13 +54,14 @@ class _DOPRI5Tableau(Tableau):
         names = [f"k{s}" for s in range(7)]
         return [f"h*{_lincomb(row, names, j)}" for row in self.P]
 
-    @staticmethod
-    def make_interpolant(h, y_old, Q, y_new, f_old, f_new):
-        rows = list(zip(y_old, Q))
-
-        def ev(x):
-            return [y0 + x * (q0 + x * (q1 + x * (q2 + x * q3))) for y0, (q0, q1, q2, q3) in rows]
-        return ev
+    def interpolant_source(self, n):
+        # y0 + x (q0 + x (q1 + x (q2 + x q3))) per component, q the dense-output coefficients
+        lines = ["def make_interpolant(h, y_old, Q, y_new, f_old, f_new):"]
+        for j in range(n):
+            lines += [f"    y0_{j} = y_old[{j}]", f"    q0_{j}, q1_{j}, q2_{j}, q3_{j} = Q[{j}]"]
+        terms = ", ".join(f"y0_{j} + x * (q0_{j} + x * (q1_{j} + x * (q2_{j} + x * q3_{j})))" for j in range(n))
+        lines += ["    def ev(x):", f"        return [{terms}]", "    return ev"]
+        return "\n".join(lines)
 
 
 class DOPRI5(ExplicitRK):

@@ -49,6 +49,11 @@ class Tableau:
         """Source of the dense-output coefficients of component j (given the names of the stages)."""
         raise NotImplementedError
 
+    def interpolant_source(self, n: int) -> str:
+        """Source of ``make_interpolant(h, y_old, Q, y_new, f_old, f_new)``, which returns the interpolant
+        x -> y (x in [0, 1] across the step) of a state of size n from the coefficients Q of `dense`."""
+        raise NotImplementedError
+
 
 class _Compiled:
     """Straight-line float code of one tableau for one state size n."""
@@ -91,11 +96,12 @@ class _Compiled:
             d.append(f"    {', '.join(f'k{s}_{j}' for j in range(n))}, = fun(t + {float(tab.C[s])!r}*h, [{args}])")
         rows = [tab.dense_sources(j) for j in range(n)]
         d.append("    return [" + ", ".join("[" + ", ".join(r) + "]" for r in rows) + "]")
-        src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n"
+        src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n\n" + tab.interpolant_source(n) + "\n"
         scope: dict = {"sqrt": math.sqrt}
         exec(compile(src, f"<{tab.name} n={n}>", "exec"), scope)
         self.rk_step = scope["rk_step"]
         self.dense = scope["dense"]
+        self.make_interpolant = scope["make_interpolant"]
         self.source = src
 
     @classmethod
@@ -216,13 +222,11 @@ class ExplicitRK:
         clipped to, it costs nothing."""
         if self.n == 0:
             return DenseOutput(self.t_old, self.t, self.y_old, self.y_old, None)
-        code, tab, fun, t_old, y_old, h, K = self._code, self.tableau, self.fun, self.t_old, self.y_old, \
-            self.t - self.t_old, self._K
+        code, fun, t_old, y_old, h, K = self._code, self.fun, self.t_old, self.y_old, self.t - self.t_old, self._K
         y_new, f_old, f_new = self.y, self.f_old, self.f
 
         def make():
-            Q = code.dense(fun, t_old, y_old, h, K)
-            return tab.make_interpolant(h, y_old, Q, y_new, f_old, f_new)
+            return code.make_interpolant(h, y_old, code.dense(fun, t_old, y_old, h, K), y_new, f_old, f_new)
         return DenseOutput(t_old, self.t, y_old, y_new, make)
 
 
