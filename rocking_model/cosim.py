@@ -94,6 +94,9 @@ class _Scaled(GroundMotion):
     def next_breakpoint(self, t):
         return self.motion.next_breakpoint(t)
 
+    def continuous_at(self, tb):
+        return self.motion.continuous_at(tb)
+
 
 class MotionSource:
     """A ground motion as a stepwise component (``t``, ``advance(t_end)``, ``outputs()``): the output

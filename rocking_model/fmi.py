@@ -290,6 +290,9 @@ class RockingSlave(Fmi2Slave):
             self._specs[spec.name] = spec
             self._values[spec.name] = spec.default
             self.register_variable(self._make_variable(spec), nested=False)
+        # what every do_step reads, resolved once
+        self._inputs = [(s.name, s.min, s.max) for s in self.variables if s.causality == "input"]
+        self._outputs = [(s.name, _PY_TYPES[s.type]) for s in self.variables if s.causality == "output"]
 
     def _clear_state(self) -> None:
         # everything listed in _STATE_FIELDS is the FMU state (fmi2GetFMUstate / fmi2SetFMUstate)
@@ -462,11 +465,12 @@ class RockingSlave(Fmi2Slave):
             return self._fail(f"current_time = {t!r} does not match the FMU time {self._t!r}; allowed value "
                               f"{self._t!r}: each step starts where the last one ended (to go back, restore "
                               f"a state saved with fmi2GetFMUstate)")
-        inputs = self.input_values
-        for name, value in inputs.items():
-            spec = self._specs[name]
+        values = self._values
+        inputs = {}
+        for name, lo, hi in self._inputs:
+            value = inputs[name] = values[name]
             try:  # the same check and message as the Python API (rocking_model.validation)
-                check_real(name, value, lo=spec.min, hi=spec.max)
+                check_real(name, value, lo=lo, hi=hi)
             except ValueError as exc:
                 return self._fail(f"input {name} = {value!r} at t = {t!r} is invalid: {exc}")
         t_end = t + dt
@@ -482,11 +486,11 @@ class RockingSlave(Fmi2Slave):
 
     def _update_outputs(self) -> None:
         out = self._sim.outputs()
-        for name, spec in self._specs.items():
-            if spec.causality == "output":
-                if name not in out:
-                    raise KeyError(f"Simulator.outputs() has no entry {name!r}")
-                self._values[name] = _PY_TYPES[spec.type](out[name])
+        values = self._values
+        for name, py in self._outputs:
+            if name not in out:
+                raise KeyError(f"Simulator.outputs() has no entry {name!r}")
+            values[name] = py(out[name])
         if self.freeze_output is not None and out.get(self.freeze_output):
             self._frozen = True
             self.log(f"{self.freeze_output} at t = {self._sim.t:.6g} s: the outputs are frozen from now on",

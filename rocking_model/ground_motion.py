@@ -7,6 +7,7 @@ constant (`constant`).
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from typing import Callable
 
 import numpy as np
@@ -26,6 +27,12 @@ class GroundMotion:
     def next_breakpoint(self, t: float) -> float:
         """First time > t at which ag is not smooth (math.inf if none)."""
         return math.inf
+
+    def continuous_at(self, tb: float) -> bool:
+        """Whether ag is continuous at the breakpoint tb (only its derivative kinks there): the event-driven
+        scheme then carries its step on across tb (clipped to it) instead of restarting. Default False (a
+        jump: stop, re-decide the contact mode, restart)."""
+        return False
 
     #: (t_start, t_end) [s] outside which ag is zero, or None when unbounded or unknown
     support: tuple[float, float] | None = None
@@ -99,21 +106,31 @@ class SampledMotion(GroundMotion):
             raise ValueError("ground motion: t must be strictly increasing")
         self.t, self.ag = t, ag
         self._tl, self._al = t.tolist(), ag.tolist()
+        self._i = 0                      # interval of the last evaluation
 
     def __call__(self, t):
         tl = self._tl
-        if t < tl[0] or t > tl[-1]:
-            return 0.0
-        i = int(np.searchsorted(self.t, t, side="right")) - 1
-        if i >= len(tl) - 1:
-            return self._al[-1]
+        # the interval of the last call first (an integrator asks for nearby times), then a bisection
+        i = self._i
+        if not (tl[i] <= t < tl[i + 1]):
+            if t < tl[0] or t > tl[-1]:
+                return 0.0
+            i = bisect_right(tl, t) - 1
+            if i >= len(tl) - 1:
+                return self._al[-1]
+            self._i = i
         t0, t1 = tl[i], tl[i + 1]
         a0, a1 = self._al[i], self._al[i + 1]
         return a0 + (a1 - a0) * (t - t0) / (t1 - t0)
 
     def next_breakpoint(self, t):
-        i = int(np.searchsorted(self.t, t, side="right"))
-        return float(self.t[i]) if i < self.t.size else math.inf
+        i = bisect_right(self._tl, t)
+        return self._tl[i] if i < len(self._tl) else math.inf
+
+    def continuous_at(self, tb):
+        # linear between the samples: a kink at an inner sample; ag jumps from and to zero at the ends
+        tl = self._tl
+        return tl[0] < tb < tl[-1]
 
     @property
     def support(self):
@@ -148,6 +165,9 @@ class ScaledMotion(GroundMotion):
 
     def next_breakpoint(self, t):
         return self.motion.next_breakpoint(t)
+
+    def continuous_at(self, tb):
+        return self.motion.continuous_at(tb)
 
     def scaled(self, factor):
         return ScaledMotion(self.motion, self.factor * check_real("factor", factor))

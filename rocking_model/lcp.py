@@ -41,23 +41,41 @@ class ContactSolution:
     exact: bool = True       #: False when no active set met every condition (least-violating returned)
 
 
-def _active_sets(candidates, forced):
-    cand = sorted(set(candidates) | set(forced))
-    free = [i for i in cand if i not in forced]
-    for k in range(len(free) + 1):
-        for extra in combinations(free, k):
-            yield tuple(sorted(set(forced) | set(extra)))
+_SETS_CACHE: dict = {}
+
+
+def _active_sets(candidates, forced) -> list:
+    """The active sets to try: ``forced`` plus every subset of the other candidates, smallest first."""
+    key = (tuple(candidates), tuple(forced))
+    sets = _SETS_CACHE.get(key)
+    if sets is None:
+        cand = sorted(set(candidates) | set(forced))
+        free = [i for i in cand if i not in forced]
+        sets = []
+        for k in range(len(free) + 1):
+            for extra in combinations(free, k):
+                sets.append(tuple(sorted(set(forced) | set(extra))))
+        _SETS_CACHE[key] = sets
+    return sets
 
 
 def _solve_small(A, b):
     """Solve the small dense system A x = b (lists of floats) by Gaussian elimination with partial
-    pivoting; None if A is singular to round-off."""
+    pivoting; None if A is singular to round-off. (Plain loops: called a few times per LCP.)"""
     n = len(b)
     M = [list(row) + [bi] for row, bi in zip(A, b)]
-    big = max(abs(a) for row in A for a in row) or 1.0
+    big = 0.0
+    for row in A:
+        for a in row:
+            if abs(a) > big:
+                big = abs(a)
+    big = big or 1.0
     for c in range(n):
-        p = max(range(c, n), key=lambda r: abs(M[r][c]))
-        if abs(M[p][c]) <= 1e-13 * big:
+        p, best = c, abs(M[c][c])
+        for r in range(c + 1, n):
+            if abs(M[r][c]) > best:
+                p, best = r, abs(M[r][c])
+        if best <= 1e-13 * big:
             return None
         if p != c:
             M[c], M[p] = M[p], M[c]
@@ -71,7 +89,10 @@ def _solve_small(A, b):
     x = [0.0] * n
     for c in range(n - 1, -1, -1):
         row = M[c]
-        x[c] = (row[n] - sum(row[j] * x[j] for j in range(c + 1, n))) / row[c]
+        acc = 0
+        for j in range(c + 1, n):
+            acc += row[j] * x[j]
+        x[c] = (row[n] - acc) / row[c]
     return x
 
 
@@ -100,19 +121,20 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
     cand = sorted(set(candidates) | set(forced))
     G = np.concatenate([W_N, W_T], axis=1)          # columns N0, N1, T0, T1
     MG = Minv @ G
-    D = (G.T @ MG).tolist()
-    w0 = (G.T @ v_free + np.concatenate([b_N, b_T])).tolist()   # [w_N0, w_N1, w_T0, w_T1] without percussions
-    scale_v = max(max(abs(w0[i]) for i in cand) if cand else 0.0,
-                  max(abs(w0[2 + i]) for i in cand) if cand else 0.0, 1e-300)
+    GT = G.T
+    D = (GT @ MG).tolist()
+    w0 = (GT @ v_free + np.concatenate([b_N, b_T])).tolist()   # [w_N0, w_N1, w_T0, w_T1] without percussions
+    scale_v = 1e-300
+    for i in cand:
+        scale_v = max(scale_v, abs(w0[i]), abs(w0[2 + i]))
     # parallel tangential directions (the rigid block at phi = 0): the two sticking rows are one condition
     parallel = abs(D[2][2] * D[3][3] - D[2][3] * D[3][2]) <= 1e-12 * max(D[2][2] * D[3][3], 1e-300)
     best = None
-    sets = list(_active_sets(cand, forced))
+    sets = _active_sets(cand, forced)
     if hint is not None:
         hint = tuple(sorted(hint))
         if hint in sets:
-            sets.remove(hint)
-            sets.insert(0, hint)
+            sets = [hint] + [S for S in sets if S != hint]
     for n_tried, S in enumerate(sets):
         P = [0.0, 0.0, 0.0, 0.0]
         if S:
@@ -134,7 +156,13 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
                 P[r] = xr
             if merged:
                 P[2] = P[3] = 0.5 * x[2]
-        w = [w0[r] + sum(D[r][c] * P[c] for c in range(4) if P[c] != 0.0) for r in range(4)]
+        nz = [c for c in range(4) if P[c] != 0.0]
+        w = []
+        for r in range(4):
+            Dr, acc = D[r], 0
+            for c in nz:
+                acc += Dr[c] * P[c]
+            w.append(w0[r] + acc)
         # violations, relative to the problem's scales
         scale_P = max(abs(P[0]), abs(P[1]), 1e-300)
         viol = 0.0

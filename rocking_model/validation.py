@@ -11,6 +11,9 @@ def check_real(name: str, value, *, lo: float | None = None, hi: float | None = 
         x = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if math.isfinite(x) and (lo is None or x > lo or (not lo_open and x == lo)) and \
+            (hi is None or x < hi or (not hi_open and x == hi)):
+        return x                      # the common case, without building the message
     lo_s = "-inf" if lo is None else f"{lo:g}"
     hi_s = "inf" if hi is None else f"{hi:g}"
     rng = f"{'(' if lo_open or lo is None else '['}{lo_s}, {hi_s}{')' if hi_open or hi is None else ']'}"

@@ -38,33 +38,48 @@ METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 
 
 def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float:
-    """Illinois regula falsi on a bracket with ga > 0 >= gb; returns a time t with fun(t) <= 0 and
-    t - t_root <= xtol."""
+    """Regula falsi with the Anderson-Bjorck modification on a bracket with ga > 0 >= gb; returns a time t
+    with fun(t) <= 0 and t - t_root <= xtol.
+
+    Each trial point keeps at least xtol/2 from the ends of the bracket, so that once the estimate has
+    converged the next evaluation on the far side of the root closes the bracket: some 6 to 10 evaluations
+    from a step-sized bracket to round-off (about 12 to 20 on average in the scenes, against 20 to 25 when
+    every iteration also bisects). A bisection follows a trial point that had to be held off an end without
+    closing the bracket (a function that starts tangent to zero) and two iterations that did not halve it."""
     side = 0
+    half = 0.5 * xtol
+    width = b - a
+    n_slow = 0
+    bisect = False
     while b - a > xtol:
-        t = (a * gb - b * ga) / (gb - ga) if ga != gb else 0.5 * (a + b)
-        if not (a < t < b):
+        clamped = False
+        if bisect:
             t = 0.5 * (a + b)
+        else:
+            t = a + (b - a) * (ga / (ga - gb))
+            if t < a + half:
+                t, clamped = a + half, True
+            elif t > b - half:
+                t, clamped = b - half, True
         gt = fun(t)
         if gt > 0.0:
+            if side == 1:                     # a moved twice in a row: scale down the far value
+                m = 1.0 - gt / ga
+                gb *= m if m > 0.0 else 0.5
             a, ga = t, gt
-            if side == 1:
-                gb *= 0.5
             side = 1
         else:
-            b, gb = t, gt
             if side == -1:
-                ga *= 0.5
+                m = 1.0 - gt / gb if gb != 0.0 else 0.5
+                ga *= m if m > 0.0 else 0.5
+            b, gb = t, gt
             side = -1
-        if b - a <= xtol:
-            break
-        # guard against slow one-sided convergence: bisect every so often
-        mid = 0.5 * (a + b)
-        gm = fun(mid)
-        if gm > 0.0:
-            a, ga = mid, gm
+        if bisect or b - a <= 0.5 * width:
+            width = b - a
+            n_slow = 0
         else:
-            b, gb = mid, gm
+            n_slow += 1
+        bisect = clamped or n_slow >= 2
     return b
 
 
@@ -77,6 +92,7 @@ class EventDriven:
     """
 
     name = "event_driven"
+    _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
 
     def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
                  tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = 1e-6,
@@ -135,6 +151,7 @@ class EventDriven:
     def __getstate__(self):
         state = dict(self.__dict__)
         state.pop("_fn_cache", None)      # closures: rebuilt on demand
+        state.pop("_live", None)          # the stepper holds them too; a restart is bit-identical
         return state
 
     def _atol(self, mode):
@@ -169,18 +186,28 @@ class EventDriven:
                 out.append((self.mode, list(self.y), self.impacts, self.overturned))
             return out
         n_events = 0
+        kink = False              # the last segment ended at a breakpoint where ag is continuous
+        end_tol = 4.0 * math.ulp(max(abs(t_end), 1.0))
         while not self.overturned:
-            span = t_end - self.t
-            if span <= 4.0 * math.ulp(max(abs(t_end), 1.0)):
+            if t_end - self.t <= end_tol:
                 break
-            t_stop = min(t_end, ag.next_breakpoint(self.t))
-            if self.mode != Mode.FLIGHT:
+            tb = ag.next_breakpoint(self.t)
+            t_stop = t_end if t_end < tb else tb
+            if self.mode != Mode.FLIGHT and not kink:
                 self._settle(self.t, ag)
             if self._segment(t_stop, ag, pending, out):
+                self._live = None
+                kink = False
                 n_events += 1
                 if n_events > self.max_events:
                     raise RuntimeError(f"event-driven scheme: more than {self.max_events} events in one "
                                        f"step at t = {self.t:.17g}; the motion does not settle")
+            elif t_stop == tb:
+                # a kink of ag (a sample of a record): the contact forces stay continuous, so the mode holds
+                # and the step goes on across it; a jump: re-decide the mode and restart
+                kink = ag.continuous_at(tb)
+                if not kink:
+                    self._live = None
         self.t = t_end
         self._full = None
         while pending:                     # samples at t_end (or after overturning: frozen state)
@@ -224,8 +251,7 @@ class EventDriven:
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, 0.1 * self.model.time_scale)
-        stepper = METHODS[self.method](rhs, self.t, self.y, self.tolerance, self._atol(mode),
-                                       max_step=max_step, first_step=self._h if k else None)
+        stepper = self._stepper(mode, rhs, max_step)
         g_prev = G(self.t, self.y)
         g_prev[2] = 0.5 * math.pi - abs(g_prev[2])
         tol = self.event_tol
@@ -294,7 +320,21 @@ class EventDriven:
         if k:
             self._h = stepper.h_abs
         self._full = None
+        self._live = stepper
         return False
+
+    def _stepper(self, mode, rhs, max_step):
+        """The Runge-Kutta stepper of a segment starting at the current state: the last segment's, carried
+        on when it ended without an event at the current state under the same right-hand side (a co-simulation
+        step with an unchanged input, a kink of ag; its FSAL derivative is still valid), else restarted
+        with the last accepted step size."""
+        st = self._live
+        if st is not None and st.t == self.t and st.y is self.y and st.max_step == max_step:
+            if st.fun is not rhs:
+                st.restart(rhs, self.t, self.y, self._h)
+            return st
+        return METHODS[self.method](rhs, self.t, self.y, self.tolerance, self._atol(mode),
+                                    max_step=max_step, first_step=self._h if self.k else None)
 
     def _record_samples(self, pending, out, mode, dense, t_last, inclusive):
         while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):

@@ -40,11 +40,18 @@ class Tableau:
         """Source of the error-estimate combinations of component j (one or two expressions)."""
         raise NotImplementedError
 
-    def error_norm(self, errs, scale, h) -> float:
+    def error_norm_source(self, n: int) -> list[str]:
+        """Source lines that set ``err`` (the scaled error norm of the step) from the error estimates
+        ``er0, er1, ...`` (as listed by `error_sources`), the scales ``s0, s1, ...`` and the step h."""
         raise NotImplementedError
 
     def dense_sources(self, j) -> list[str]:
         """Source of the dense-output coefficients of component j (given the names of the stages)."""
+        raise NotImplementedError
+
+    def interpolant_source(self, n: int) -> str:
+        """Source of ``make_interpolant(h, y_old, Q, y_new, f_old, f_new)``, which returns the interpolant
+        x -> y (x in [0, 1] across the step) of a state of size n from the coefficients Q of `dense`."""
         raise NotImplementedError
 
 
@@ -57,22 +64,29 @@ class _Compiled:
         ns = tab.n_stages
         names = [f"k{s}" for s in range(len(tab.A))]
         ys = [f"y{j}" for j in range(n)]
-        lines = ["def rk_step(fun, t, y, f, h):"]
+        lines = ["def rk_step(fun, t, y, f, h, atol, rtol):"]
         lines.append(f"    {', '.join(ys)}, = y")
         lines.append(f"    {', '.join(f'k0_{j}' for j in range(n))}, = f")
         for s in range(1, ns - 1):
             args = ", ".join(f"y{j} + h*{_lincomb(tab.A[s][:s], names, j)}" for j in range(n))
             lines.append(f"    {', '.join(f'k{s}_{j}' for j in range(n))}, = fun(t + {float(tab.C[s])!r}*h, [{args}])")
-        ynew = ", ".join(f"y{j} + h*{_lincomb(tab.B, names, j)}" for j in range(n))
-        lines.append(f"    y_new = [{ynew}]")
+        for j in range(n):
+            lines.append(f"    yn{j} = y{j} + h*{_lincomb(tab.B, names, j)}")
+        lines.append(f"    y_new = [{', '.join(f'yn{j}' for j in range(n))}]")
         last = ns - 1
         lines.append(f"    {', '.join(f'k{last}_{j}' for j in range(n))}, = f_new = fun(t + h, y_new)")
         errs = []
         for j in range(n):
             errs.extend(tab.error_sources(names, j))
-        lines.append(f"    errs = [{', '.join(errs)}]")
+        for m, src in enumerate(errs):
+            lines.append(f"    er{m} = {src}")
+        # mixed error scale atol_j + rtol max(|y_j|, |y_new_j|), then the tableau's norm
+        lines.append(f"    {', '.join(f'a{j}' for j in range(n))}, = atol")
+        for j in range(n):
+            lines.append(f"    s{j} = a{j} + max(abs(y{j}), abs(yn{j})) * rtol")
+        lines.extend("    " + line for line in tab.error_norm_source(n))
         allk = ", ".join(f"k{s}_{j}" for s in range(ns) for j in range(n))
-        lines.append(f"    return y_new, list(f_new), errs, ({allk},)")
+        lines.append(f"    return y_new, list(f_new), err, ({allk},)")
         # dense output: the extra stages (if any) and the coefficients
         d = ["def dense(fun, t, y, h, K):"]
         d.append(f"    {', '.join(ys)}, = y")
@@ -82,11 +96,12 @@ class _Compiled:
             d.append(f"    {', '.join(f'k{s}_{j}' for j in range(n))}, = fun(t + {float(tab.C[s])!r}*h, [{args}])")
         rows = [tab.dense_sources(j) for j in range(n)]
         d.append("    return [" + ", ".join("[" + ", ".join(r) + "]" for r in rows) + "]")
-        src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n"
-        scope: dict = {}
+        src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n\n" + tab.interpolant_source(n) + "\n"
+        scope: dict = {"sqrt": math.sqrt}
         exec(compile(src, f"<{tab.name} n={n}>", "exec"), scope)
         self.rk_step = scope["rk_step"]
         self.dense = scope["dense"]
+        self.make_interpolant = scope["make_interpolant"]
         self.source = src
 
     @classmethod
@@ -125,6 +140,20 @@ class ExplicitRK:
         self.n_rejected = 0
         self._err_exp = -1.0 / (self.tableau.error_order + 1.0)
 
+    def restart(self, fun: Callable, t0: float, y0, first_step: float | None) -> None:
+        """Start again at (t0, y0) under a new right-hand side (same size, tolerances and step limit): what
+        a new stepper would do, without re-building it."""
+        self.fun = fun
+        self.t = t0
+        self.y = y0
+        self.f = list(fun(t0, y0)) if self.n else []
+        self._K = None
+        if first_step is not None:
+            self.h_abs = min(first_step, self.max_step)
+        elif self.n:
+            self.h_abs = min(self._initial_step(), self.max_step)
+        self.t_old, self.y_old, self.f_old = self.t, self.y, self.f
+
     def _initial_step(self) -> float:
         # Hairer's heuristic (scipy.integrate._ivp.common.select_initial_step)
         if self.n == 0:
@@ -153,7 +182,7 @@ class ExplicitRK:
             return
         min_step = 10.0 * abs(math.nextafter(t, math.inf) - t)
         h_abs = min(self.h_abs, self.max_step)
-        rk_step, tab, rtol, atol = self._code.rk_step, self.tableau, self.rtol, self.atol
+        rk_step, rtol, atol = self._code.rk_step, self.rtol, self.atol
         rejected = False
         while True:
             if h_abs < min_step:
@@ -164,9 +193,7 @@ class ExplicitRK:
                 t_new = t_bound
                 h = t_new - t
                 h_abs = abs(h)
-            y_new, f_new, errs, K = rk_step(self.fun, t, y, self.f, h)
-            scale = [a + max(abs(u), abs(v)) * rtol for a, u, v in zip(atol, y, y_new)]
-            err = tab.error_norm(errs, scale, h)
+            y_new, f_new, err, K = rk_step(self.fun, t, y, self.f, h, atol, rtol)
             if err < 1.0 or h_abs <= min_step:
                 factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err ** self._err_exp)
                 if rejected:
@@ -190,29 +217,37 @@ class ExplicitRK:
                 for a, b, fa, fb in zip(self.y_old, self.y, self.f_old, self.f)]
 
     def dense_output(self) -> "DenseOutput":
-        """Interpolant of the last step."""
-        h = self.t - self.t_old
+        """Interpolant of the last step. Built on its first use inside the step (DOP853's needs three more
+        function evaluations): read at the end of the step only, e.g. an output time that the step was
+        clipped to, it costs nothing."""
         if self.n == 0:
-            return DenseOutput(self.tableau, self.t_old, self.t, self.y_old, [])
-        Q = self._code.dense(self.fun, self.t_old, self.y_old, h, self._K)
-        return DenseOutput(self.tableau, self.t_old, self.t, self.y_old, Q, self.y, self.f_old, self.f)
+            return DenseOutput(self.t_old, self.t, self.y_old, self.y_old, None)
+        code, fun, t_old, y_old, h, K = self._code, self.fun, self.t_old, self.y_old, self.t - self.t_old, self._K
+        y_new, f_old, f_new = self.y, self.f_old, self.f
+
+        def make():
+            return code.make_interpolant(h, y_old, code.dense(fun, t_old, y_old, h, K), y_new, f_old, f_new)
+        return DenseOutput(t_old, self.t, y_old, y_new, make)
 
 
 class DenseOutput:
-    """Interpolant of one step on [t_old, t]: a callable t -> list of floats."""
+    """Interpolant of one step on [t_old, t]: a callable t -> list of floats (exact end values at t)."""
 
-    __slots__ = ("eval", "t_old", "t", "h", "y_old", "Q", "y_new")
+    __slots__ = ("t_old", "t", "h", "y_old", "y_new", "_eval", "_make")
 
-    def __init__(self, tab, t_old, t, y_old, Q, y_new=None, f_old=None, f_new=None):
+    def __init__(self, t_old, t, y_old, y_new, make):
         self.t_old, self.t, self.h = t_old, t, t - t_old
-        self.y_old, self.Q = y_old, Q
-        self.y_new = y_new if y_new is not None else y_old
-        self.eval = tab.make_interpolant(self.h, y_old, Q, y_new, f_old, f_new) if Q else None
+        self.y_old, self.y_new = y_old, y_new
+        self._eval, self._make = None, make
 
     def __call__(self, t: float) -> list[float]:
-        if self.eval is None:
-            return list(self.y_old)
         if t == self.t:
             return list(self.y_new)
+        ev = self._eval
+        if ev is None:
+            if self._make is None:               # no state (nothing moves)
+                return list(self.y_old)
+            ev = self._eval = self._make()
+            self._make = None
         x = (t - self.t_old) / self.h if self.h != 0.0 else 0.0
-        return self.eval(x)
+        return ev(x)

@@ -29,7 +29,6 @@ import math
 from typing import Dict, Tuple
 
 import numpy as np
-from scipy.linalg import expm
 
 from ..validation import check_real
 
@@ -67,6 +66,8 @@ class LinearStorey:
         M = np.zeros((3, 3))
         M[:2, :2] = self.state_matrix()
         M[1, 2] = -1.0  # B = [0, -1]
+        from scipy.linalg import expm      # lazily: keeps scipy out of the FMUs' cold start
+
         E = expm(M * dt)
         return E[:2, :2], E[:2, 2]
 

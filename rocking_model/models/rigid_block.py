@@ -107,11 +107,16 @@ class RigidBlock(RockingModel):
         return np.array([y + s * self.b * sp - self.h * cp for s in _S])
 
     def contact_jacobians(self, q):
-        phi = q[2]
+        phi = float(q[2])
+        last = self.__dict__.get("_jac_last")
+        if last is not None and last[0] == phi:
+            return last[1]                 # an event asks for them several times at the same state
         sp, cp = math.sin(phi), math.cos(phi)
         b, h = self.b, self.h
         W_N = np.array([[0.0, 0.0], [1.0, 1.0], [-b * cp + h * sp, b * cp + h * sp]])
         W_T = np.array([[1.0, 1.0], [0.0, 0.0], [b * sp + h * cp, -b * sp + h * cp]])
+        W_N.flags.writeable = W_T.flags.writeable = False      # shared by the callers
+        object.__setattr__(self, "_jac_last", (phi, (W_N, W_T)))
         return W_N, W_T
 
     def contact_drift(self, q, v):
