@@ -201,7 +201,7 @@ def write_report(res, docs: Path) -> Path:
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
     w("")
-    w("How to run: `/tmp/venv/bin/python -m benchmarks` (full, regenerates this page and `docs/performance/*.png`) "
+    w("How to run: `python -m benchmarks` (full, regenerates this page and `docs/performance/*.png`) "
       "or `python -m benchmarks --quick` (smoke run < 1 min, written to `benchmarks/results/quick/`). Options: "
       "`--skip-siconos --skip-fmu --skip-memory --repeats N --scenes free record ...`.")
     w("")
