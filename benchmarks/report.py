@@ -570,12 +570,6 @@ def _observations(res):
     fmu = res.get("fmu", {})
     rig = fmu.get("rigid", {})
     rows = {r["label"]: r for r in rig.get("rows", [])}
-    a = rows.get("event-driven tol 1e-6, dt_max uncapped")
-    b = rows.get("event-driven tol 1e-6, dt_max 1e-3 (FMU default)")
-    if a and b:
-        notes.append(f"FMU: with scheme = 1 the FMU's default dt_max = 1e-3 s (meant for Moreau-Jean) also caps the "
-                     f"event-driven step: {ft(b['time'])} vs {ft(a['time'])} with the cap lifted "
-                     f"({b['time'] / a['time']:.1f}×).")
     for key in ("rigid", "flexible"):
         rows = fmu.get(key, {}).get("rows", [])
         good = [r for r in rows if r["phi_max_err"] <= 1e-4]

@@ -327,8 +327,8 @@ def bench_fmu(args) -> dict:
         ("event-driven tol 1e-4, dt_max uncapped", {"scheme": 1, "tolerance": 1e-4, "dt_max": big}),
         ("event-driven tol 1e-6, dt_max uncapped", {"scheme": 1, "tolerance": 1e-6, "dt_max": big}),
         ("event-driven tol 1e-8, dt_max uncapped", {"scheme": 1, "tolerance": 1e-8, "dt_max": big}),
-        ("event-driven tol 1e-6, dt_max 1e-3 (FMU default)", {"scheme": 1, "tolerance": 1e-6}),
-        ("Moreau-Jean dt_max 1e-3 (FMU defaults)", {"scheme": 0}),
+        ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
+        ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
     ], rigid_kw, 2.0)
     if "FlexibleRockingOscillator" in fmus:
         from fmpy import read_model_description
@@ -345,8 +345,8 @@ def bench_fmu(args) -> dict:
             ("event-driven tol 1e-6, dt_max uncapped", {"scheme": 1, "tolerance": 1e-6, "dt_max": big}),
             ("event-driven tol 1e-8, dt_max uncapped", {"scheme": 1, "tolerance": 1e-8, "dt_max": big}),
             ("event-driven tol 1e-10, dt_max uncapped", {"scheme": 1, "tolerance": 1e-10, "dt_max": big}),
-            ("event-driven tol 1e-6, dt_max 1e-3 (FMU default)", {"scheme": 1, "tolerance": 1e-6}),
-            ("Moreau-Jean dt_max 1e-3 (FMU defaults)", {"scheme": 0}),
+            ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
+            ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
         ], flex_kw, 4.0, scale=0.75)
         res["flexible"]["model"] = flex_kw
     else:

@@ -45,7 +45,7 @@ class FlexibleRockingOscillator(RockingSlave):
             description="Moreau-Jean time step (largest; each communication step is split evenly) or "
                         "largest event-driven step; 0: the scheme's default (Moreau-Jean 1e-3 s, "
                         "event-driven uncapped)"),
-        Var("tolerance", "parameter", 1e-6, unit="1",
+        Var("tolerance", "parameter", 1e-8, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
         Var("ag", "input", 0.0, unit="m/s2",
             description="Horizontal ground acceleration (held constant over each communication step)"),
