@@ -28,7 +28,7 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, project_to_ground, uplift
+from ..contact import closed_candidates, impact, inverse_mass, project_to_ground, uplift
 from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
@@ -397,29 +397,34 @@ class EventDriven:
                 self._record_impact(t, v, v_plus)
                 self._enter(q, v_plus, ag_t)
                 return
-        v_plus = self._impact_velocity(q, v, cand, grazing)
+        v_plus = self._impact_velocity(q, v, cand, grazing, ag_t)
         mode = self._select_mode(q, v_plus, ag_t)
         if any(i not in CLOSED[mode] for i in grazing):
             # held closed, the corner is still sent into flight: the sticking LCP has no solution (the corner
             # should slide, README: limitations); not held (that would be a chatter of grazing landings)
             q = q_found
-            v_plus = self._impact_velocity(q, v, cand, ())
+            v_plus = self._impact_velocity(q, v, cand, (), ag_t)
             mode = self._select_mode(q, v_plus, ag_t)
         U_minus = model.contact_jacobians(q)[0].T @ v
         if any(U_minus[i] < -self.v_zeno for i in cand):
             self._record_impact(t, v, v_plus)
         self._set_state(mode, q, v_plus)
 
-    def _impact_velocity(self, q, v, cand, closed):
-        """Post-impact velocity by the impact LCP; corners of ``closed`` and corners that would leave slower
-        than v_Zeno are closed plastically (the Zeno rule)."""
+    def _impact_velocity(self, q, v, cand, closed, ag_t):
+        """Post-impact velocity by the impact LCP; corners of ``closed``, corners that would leave slower
+        than v_Zeno and corners whose free-flight bounce would stay within gap_tol of the ground are closed
+        plastically (the Zeno rule)."""
         model = self.model
         sol = impact(model, q, v, cand)
         W_N, _ = model.contact_jacobians(q)
         U_plus = W_N.T @ sol.v
-        zeno = tuple(i for i in cand if U_plus[i] < self.v_zeno or i in closed)
+        zeno = [i for i in cand if U_plus[i] < self.v_zeno or i in closed]
+        if len(zeno) < len(cand):
+            # apex of the bounce U+^2 / (2 |a_N|), a_N the corner's normal acceleration in free flight
+            a_N = W_N.T @ (inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)) + model.contact_drift(q, sol.v)[0]
+            zeno += [i for i in cand if i not in zeno and U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol]
         if zeno:
-            sol = impact(model, q, v, cand, forced=zeno)
+            sol = impact(model, q, v, cand, forced=tuple(zeno))
         return sol.v
 
     def _record_impact(self, t, v_minus, v_plus):
