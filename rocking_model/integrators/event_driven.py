@@ -425,8 +425,10 @@ class EventDriven:
         sol = impact(model, q, v, cand)
         W_N, _ = model.contact_jacobians(q)
         U_plus = W_N.T @ sol.v
-        zeno = [i for i in cand if U_plus[i] < self.v_zeno or i in closed]
-        if cand and not zeno:
+        slow = [i for i in cand if U_plus[i] < self.v_zeno]
+        # (a corner that takes impulse and stays at rest needs no second solve)
+        zeno = [i for i in cand if i in closed or (i in slow and (i not in sol.active or U_plus[i] > self.v_tol))]
+        if cand and not slow and not zeno:
             # all leave (flight): apex of a bounce U+^2 / (2 |a_N|), a_N the corner's normal acceleration
             acc = inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)
             a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
