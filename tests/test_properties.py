@@ -86,11 +86,6 @@ def test_no_penetration_beyond_tolerance(case, scheme, amplitude):
     assert max(pens) <= PEN_TOL, max(pens)
 
 
-BUG_10 = pytest.mark.xfail(strict=True, reason="bug 10: ED corner restarting flight a round-off below the ground "
-                                               "after an impact is never armed and sinks")
-
-
-@BUG_10
 def test_penetration_reproducer_rigid_event_driven_bouncing():
     model = RigidBlock(b=0.23441271273593012, h=0.49238782395624286, e_N=0.6659575282786826)
     sim = Simulator(model, "event_driven", dt_max=1e-3, phi_0=-0.14497559626374124,
@@ -102,7 +97,6 @@ def test_penetration_reproducer_rigid_event_driven_bouncing():
     assert worst <= PEN_TOL, worst
 
 
-@BUG_10
 def test_penetration_reproducer_flexible_event_driven_start():
     model = FlexibleOscillator(b=0.28535311819837417, EI=1780742.3217688156, zeta=0.00254458609934608,
                                e_N=0.030589983033553536)

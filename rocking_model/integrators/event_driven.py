@@ -13,11 +13,18 @@
 - At an impact the velocity-level LCP (Newton's law) gives the post-impact velocities; at every mode entry
   the acceleration-level LCP decides which corners stay closed. An event just handled starts disarmed and is
   re-armed once its function is positive again (masking), so a restart never re-triggers it; a disarmed
-  function still fires once it falls below -event_tol (a grazing entry that turns back).
+  function still fires once it falls below -event_tol (a grazing entry that turns back). An open corner
+  that starts a segment at the ground and is back at or below it after the first step is searched for a
+  short bounce (above 1e-3 event_tol, sampled towards the start) and then lands at zero; a corner found
+  below the ground beyond round-off (a grazing landing) is put back onto it (`project_to_ground`) and
+  closed plastically, unless the sticking LCP then has no solution (the corner should slide: bug 7, not
+  held then, as a chatter of grazing landings would cost thousands of events).
 - Zeno rule (end of impact accumulation): after an impact, a corner at the ground whose post-impact
-  separation velocity is below v_Zeno = zeno_tol * sqrt(g L) (L the model's length scale) is closed
+  separation velocity is below v_Zeno = zeno_tol * sqrt(g L) (L the model's length scale), or (all corners
+  leaving) whose free-flight bounce U_N^2 / (2 |a_N|) would stay within gap_tol of the ground, is closed
   plastically and the impact LCP is solved again with that corner held closed. The kinetic energy this
-  removes is at most of the order of 1/2 m v_Zeno^2. Impacts slower than v_Zeno are not counted.
+  removes is at most of the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not
+  counted.
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
 """
@@ -28,7 +35,7 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, uplift
+from ..contact import closed_candidates, impact, inverse_mass, project_to_ground, uplift
 from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
@@ -257,14 +264,29 @@ class EventDriven:
         tol = self.event_tol
         armed = [g > 0.0 for g in g_prev]
         watch = [not a and g > -tol for a, g in zip(armed, g_prev)]
+        first = True
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
             g_new = G(stepper.t, stepper.y)
             g_new[2] = 0.5 * math.pi - abs(g_new[2])
-            hits = [i for i in range(3) if (armed[i] and g_new[i] <= 0.0) or (watch[i] and g_new[i] <= -tol)]
             dense = None
             t0, t_hit = stepper.t_old, stepper.t
+            rose = {}
+            if first:
+                first = False
+                for i in (0, 1):
+                    if watch[i] and kinds[i] == _KIND_IMPACT and g_new[i] <= 0.0:
+                        # an open corner that starts at the ground and is back at or below it after the first
+                        # step: a short bounce (it left slowly) rose above zero just after the start; if so it
+                        # is armed and lands at zero, not event_tol below
+                        if dense is None:
+                            dense = stepper.dense_output()
+                        found = self._rise(dense, G, i, t0, t_hit, 1e-3 * tol)
+                        if found is not None:
+                            armed[i], watch[i] = True, False
+                            rose[i] = found
+            hits = [i for i in range(3) if (armed[i] and g_new[i] <= 0.0) or (watch[i] and g_new[i] <= -tol)]
             g_a, g_b = g_prev, g_new
             if not hits:
                 hits, t0, t_hit, g_a, g_b, dense = self._dips(stepper, G, armed, g_prev, g_new)
@@ -281,7 +303,8 @@ class EventDriven:
                         def gi(t, i=i, shift=shift):
                             val = G(t, dense(t))[i]
                             return (0.5 * math.pi - abs(val) if i == 2 else val) + shift
-                        te = _locate(gi, ta, ga[i] + shift, tb, gb[i] + shift, xtol)
+                        ta_i, ga_i = rose[i] if i in rose and rose[i][0] > ta else (ta, ga)
+                        te = _locate(gi, ta_i, ga_i[i] + shift, tb, gb[i] + shift, xtol)
                         if best is None or te < best[0]:
                             best = (te, i)
                     return best
@@ -341,6 +364,21 @@ class EventDriven:
             out.append((mode, dense(pending.popleft()), self.impacts, False))
 
     @staticmethod
+    def _rise(dense, G, i, t0, t1, level):
+        """(t, G(t)) of a time in (t0, t1) where function i is above ``level`` (> 0, above round-off), sampled
+        at t0 + (t1 - t0) 4^-n down to round-off in time (it starts at zero with a positive slope), or None."""
+        d = t1 - t0
+        xtol = 4.0 * math.ulp(max(abs(t1), 1.0))
+        while d > xtol:
+            d *= 0.25
+            t = t0 + d
+            gt = G(t, dense(t))
+            if gt[i] > level:
+                gt[2] = 0.5 * math.pi - abs(gt[2])
+                return t, gt
+        return None
+
+    @staticmethod
     def _may_dip(g0: float, gm: float, g1: float) -> bool:
         """Whether a function positive at both ends of a step may reach zero inside: its midpoint lies
         below both ends, or the parabola through (0, g0), (1/2, gm), (1, g1) has its vertex inside the step
@@ -392,6 +430,13 @@ class EventDriven:
         model = self.model
         g = model.gaps(q)
         cand = [i for i in (0, 1) if g[i] <= self.gap_tol]
+        # a corner found below the ground beyond round-off fired event_tol below it: a grazing landing (it
+        # never rose measurably: the tail of an impact accumulation). It is put back onto the ground (the next
+        # segment starts there, its watch margin unused) and closed plastically (the Zeno rule)
+        grazing = tuple(i for i in cand if g[i] < -1e-3 * self.gap_tol)
+        q_found = q
+        if grazing:
+            q = project_to_ground(model, q, set(cand) | set(CLOSED[self.mode]))
         classical = getattr(model, "classical_impact_velocity", None)
         if classical is not None and self.mode in (Mode.LEFT, Mode.RIGHT) and len(cand) == 2:
             v_plus = classical(q, v, self.mode)
@@ -399,16 +444,38 @@ class EventDriven:
                 self._record_impact(t, v, v_plus)
                 self._enter(q, v_plus, ag_t)
                 return
+        v_plus = self._impact_velocity(q, v, cand, grazing, ag_t)
+        mode = self._select_mode(q, v_plus, ag_t)
+        if any(i not in CLOSED[mode] for i in grazing):
+            # held closed, the corner is still sent into flight: the sticking LCP has no solution (the corner
+            # should slide, bug 7); not held (that would be a chatter of grazing landings)
+            q = q_found
+            v_plus = self._impact_velocity(q, v, cand, (), ag_t)
+            mode = self._select_mode(q, v_plus, ag_t)
+        U_minus = model.contact_jacobians(q)[0].T @ v
+        if any(U_minus[i] < -self.v_zeno for i in cand):
+            self._record_impact(t, v, v_plus)
+        self._set_state(mode, q, v_plus)
+
+    def _impact_velocity(self, q, v, cand, closed, ag_t):
+        """Post-impact velocity by the impact LCP; corners of ``closed``, corners that would leave slower
+        than v_Zeno and (when all leave) corners whose free-flight bounce would stay within gap_tol of the
+        ground are closed plastically (the Zeno rule)."""
+        model = self.model
         sol = impact(model, q, v, cand)
         W_N, _ = model.contact_jacobians(q)
         U_plus = W_N.T @ sol.v
-        zeno = tuple(i for i in cand if i not in sol.active and U_plus[i] < self.v_zeno)
+        slow = [i for i in cand if U_plus[i] < self.v_zeno]
+        # (a corner that takes impulse and stays at rest needs no second solve)
+        zeno = [i for i in cand if i in closed or (i in slow and (i not in sol.active or U_plus[i] > self.v_tol))]
+        if cand and not slow and not zeno:
+            # all leave (flight): apex of a bounce U+^2 / (2 |a_N|), a_N the corner's normal acceleration
+            acc = inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)
+            a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
+            zeno += [i for i in cand if i not in zeno and U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol]
         if zeno:
-            sol = impact(model, q, v, cand, forced=zeno)
-        U_minus = W_N.T @ v
-        if any(U_minus[i] < -self.v_zeno for i in cand):
-            self._record_impact(t, v, sol.v)
-        self._enter(q, sol.v, ag_t)
+            sol = impact(model, q, v, cand, forced=tuple(zeno))
+        return sol.v
 
     def _record_impact(self, t, v_minus, v_plus):
         self.impacts += 1
