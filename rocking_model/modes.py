@@ -56,6 +56,10 @@ class BoundedLog(list):
         if self.maxlen is not None and len(self) > 2 * self.maxlen:
             del self[:len(self) - self.maxlen]
 
+    def tail(self) -> list:
+        """The last ``maxlen`` entries (all when maxlen is None): the chunked trimming keeps up to 2 maxlen."""
+        return list(self) if self.maxlen is None else list(self[-self.maxlen:]) if self.maxlen else []
+
     def __reduce__(self):
         return (_restore_log, (self.maxlen, list(self)))
 

@@ -49,15 +49,14 @@ class Simulator:
         mode, q, v = model.initial_state(**initial)
         if impact_log_size is not None:
             impact_log_size = int(check_real("impact_log_size", impact_log_size, lo=0.0))
+        dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0   # 0: the scheme's default
         if self.scheme == "moreau_jean":
-            dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0
-            dt = dt or 1e-3                                     # 0: the scheme's default
+            dt = dt or 1e-3
             theta = check_real("theta", theta, lo=0.5, hi=1.0)
             self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta,
                                          impact_log_size=impact_log_size)
         else:
-            dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0
-            dt = dt or math.inf                                 # 0: uncapped
+            dt = dt or math.inf                                 # uncapped
             tol = check_real("tolerance", tolerance, lo=1e-14, hi=1e-2)
             zt = check_real("zeno_tol", zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
             method = check_choice("method", method, {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5",
@@ -73,10 +72,7 @@ class Simulator:
     @property
     def impact_times(self) -> list[float]:
         """Times of the (last ``impact_log_size``) impacts [s]."""
-        log = self.integrator.impact_times
-        n = getattr(log, "maxlen", None)
-        # the log trims in chunks (up to 2 n entries kept): report exactly the last n
-        return list(log) if n is None else list(log[len(log) - n:]) if len(log) > n else list(log)
+        return self.integrator.impact_times.tail()
 
     def advance(self, t_end: float, ag) -> None:
         """Integrate to exactly ``t_end`` [s] under ground acceleration ``ag``: a number [m/s2] held
