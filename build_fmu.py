@@ -2,8 +2,10 @@
 
 Usage:  python build_fmu.py [--dest dist] [--no-cross-check] [Name ...]
 
-Each FMU bundles a clean copy of the `rocking_model` package (no __pycache__, no .pyc) in its resources, so
-it runs in any Python that has numpy and scipy. The modelDescription (units, variability, ModelStructure)
+Each FMU bundles a clean copy of the `rocking_model` package (no __pycache__, no .pyc) in its resources,
+under the import name ``rocking_model_<digest>`` (the SHA-256 of its sources, `package_digest`), so it runs
+in any Python that has numpy, and each FMU runs the code it was built with even when FMUs of other versions
+(or an installed rocking_model) are loaded into the same process (see `bundled_script`). The modelDescription (units, variability, ModelStructure)
 is produced by `rocking_model.fmi.RockingSlave.to_xml`; nothing is post-processed here. The build fails
 (ValueError, exit code 1) if `fmpy.validation.validate_fmu` reports a problem.
 
@@ -24,8 +26,10 @@ Importable: ``build_all(dest="dist", names=None, cross_check=False) -> list[Path
 from __future__ import annotations
 
 import argparse
+import hashlib
 import math
 import platform
+import re
 import shutil
 import sys
 import tempfile
@@ -60,12 +64,47 @@ def validate(fmu: Path) -> None:
         raise ValueError(f"{fmu} failed fmpy validation:\n  " + "\n  ".join(problems))
 
 
+def package_digest(package: Path = PACKAGE) -> str:
+    """Short SHA-256 of the package's source files (names and contents): the bundled copy's import name."""
+    h = hashlib.sha256()
+    for path in sorted(p for p in package.rglob("*.py") if "__pycache__" not in p.parts):
+        h.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
+_IMPORT = re.compile(r"^(\s*)(from|import)(\s+)rocking_model\b", re.MULTILINE)
+
+
+def bundled_script(script: Path, alias: str, folder: Path) -> Path:
+    """The FMU's copy of ``script``: its imports of rocking_model point at the bundled copy ``alias``, and
+    the class is published as a module attribute when the wrapper re-executes the file.
+
+    Why: every FMU loaded into one process shares sys.modules. Under its own name the bundled package of one
+    FMU would serve all of them (the first one imported wins, whatever version the others bundle); under the
+    digest of its sources each FMU imports exactly the code it was built with. The pythonfmu 0.7 wrapper
+    imports the slave module by name (a second FMU with the same name gets the cached module), re-executes
+    the file's text in that module's namespace and then takes the class from the module: the last line makes
+    that the class of this file, so each FMU runs its own version."""
+    text = script.read_text()
+    text, n = _IMPORT.subn(lambda m: f"{m.group(1)}{m.group(2)}{m.group(3)}{alias}", text)
+    if n == 0:
+        raise ValueError(f"{script.name}: no import of rocking_model found")
+    text += (f"\n\n# added by build_fmu.py (see rocking_model.fmi.adopt_slave_class): when the FMU wrapper\n"
+             f"# re-executes this file, its class becomes the module's class\n"
+             f"if locals() is not globals():\n"
+             f"    from {alias}.fmi import adopt_slave_class\n"
+             f"    adopt_slave_class(globals(), {script.stem})\n")
+    out = folder / script.name
+    out.write_text(text)
+    return out
+
+
 def build_one(script: Path, dest: Path, package_copy: Path) -> Path:
     from pythonfmu.builder import FmuBuilder
 
-    # Options are left at pythonfmu's defaults: canInterpolateInputs=false (fmi2SetRealInputDerivatives is
-    # not implemented), canGetAndSetFMUstate/canSerializeFMUstate=false (the integrator state is not in the
-    # registered variables).
+    # the builder imports the script by module name: a module of that name from an earlier build in this
+    # process must not answer for this one
+    sys.modules.pop(script.stem, None)
     fmu = FmuBuilder.build_FMU(script, dest=dest, project_files=[package_copy])
     fmu = Path(fmu)
     expected = dest / f"{script.stem}.fmu"
@@ -198,11 +237,21 @@ def build_all(dest="dist", names=None, cross_check=False) -> list[Path]:
     if not scripts:
         raise ValueError(f"no FMU scripts found in {FMU_SRC}")
     built = []
+    alias = f"{PACKAGE.name}_{package_digest()}"
     with tempfile.TemporaryDirectory(prefix="rocking_fmu_") as tmp:
-        package_copy = Path(tmp) / PACKAGE.name
+        package_copy = Path(tmp) / alias
         shutil.copytree(PACKAGE, package_copy, ignore=_IGNORE)
-        for script in scripts:
-            built.append(build_one(script, dest, package_copy))
+        (Path(tmp) / "scripts").mkdir()
+        sys.path.insert(0, tmp)   # the builder imports the script, which imports the bundled copy
+        try:
+            for script in scripts:
+                built.append(build_one(bundled_script(script, alias, Path(tmp) / "scripts"), dest, package_copy))
+        finally:
+            sys.path.remove(tmp)
+            for name in [m for m in sys.modules if m == alias or m.startswith(alias + ".")]:
+                del sys.modules[name]
+            for script in scripts:
+                sys.modules.pop(script.stem, None)
     if cross_check:
         for fmu in built:
             write_cross_check(fmu, dest / CROSS_CHECK_DIR)

@@ -79,4 +79,5 @@ class FlexibleRockingOscillator(RockingSlave):
                                    EI=p["EI"], zeta=p["zeta"], e_N=p["e_N"], g=p["g"],
                                    impact_rule=p["impact_rule"])
         return Simulator(model, scheme=p["scheme"], dt_max=p["dt_max"], tolerance=p["tolerance"], t0=t0,
+                         impact_log_size=0,
                          phi_0=p["phi_0"], phi_dot_0=p["phi_dot_0"], u_0=p["u_0"], u_dot_0=p["u_dot_0"])

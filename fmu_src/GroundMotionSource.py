@@ -5,10 +5,6 @@ parameters by `rocking_model.cosim.ground_motion_from_parameters`; the FMI plumb
 At every communication point t the output is ag(t); an importer that holds it over the next step (any
 fixed-step master) drives a connected rocking FMU exactly like a standalone run with the table ag(t_n).
 """
-from pythonfmu import Fmi2Causality, Fmi2Variability
-from pythonfmu.enums import Fmi2Initial
-from pythonfmu.variables import String
-
 from rocking_model.fmi import DefaultExperiment, RockingSlave, Var
 
 
@@ -30,22 +26,16 @@ class GroundMotionSource(RockingSlave):
             description="Pulse circular frequency (> 0); the pulse lasts 2 pi / omega_p"),
         Var("t_start", "parameter", 0.0, unit="s", description="Start time of the pulse"),
         Var("scale", "parameter", 1.0, unit="1", description="Scale factor applied to the motion"),
+        Var("record", "parameter", "", type="String",
+            description="Record file for motion = 1: absolute path (or relative to the importer's working "
+                        "directory) of a text/CSV file with columns time [s], ag [m/s2]"),
         Var("ag", "output", unit="m/s2", description="Horizontal ground acceleration, positive in +x"),
     )
-
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        self.record = ""
-        self.register_variable(String(
-            "record", causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
-            initial=Fmi2Initial.exact,
-            description="Record file for motion = 1: absolute path (or relative to the importer's working "
-                        "directory) of a text/CSV file with columns time [s], ag [m/s2]"))
 
     def create_simulator(self, p, t0):
         from rocking_model.cosim import MotionSource, ground_motion_from_parameters
 
-        return MotionSource(ground_motion_from_parameters({**p, "record": self.record}), t0=t0)
+        return MotionSource(ground_motion_from_parameters(p), t0=t0)
 
     def advance(self, sim, t_end, inputs):
         sim.advance(t_end)

@@ -66,4 +66,5 @@ class RigidRockingBlock(RockingSlave):
 
         model = RigidBlock(b=p["b"], h=p["h"], m=p["m"], g=p["g"], e_N=p["e_N"])
         return Simulator(model, scheme=p["scheme"], dt_max=p["dt_max"], tolerance=p["tolerance"], t0=t0,
+                         impact_log_size=0,
                          phi_0=p["phi_0"], phi_dot_0=p["phi_dot_0"])

@@ -72,11 +72,10 @@ Log messages reach the importer only when it instantiates the FMU with ``logging
 """
 from __future__ import annotations
 
-import copy
 import hashlib
-import io
 import math
-import pickle
+import os
+import sys
 from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, Iterable, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
@@ -84,11 +83,19 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
-from pythonfmu.variables import Boolean, Integer, Real
+from pythonfmu.variables import Boolean, Integer, Real, String
 
+from .fmi_state import decode_state, encode_state
 from .validation import check_real
 
-__all__ = ["UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu"]
+try:
+    from .simulation import WorkLimitError
+except ImportError:  # pragma: no cover - until the work budget lands
+    class WorkLimitError(RuntimeError):
+        pass
+
+__all__ = ["UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
+           "adopt_slave_class"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
 UNITS: Dict[str, Dict[str, int]] = {
@@ -118,7 +125,7 @@ _CAUSALITIES = {"parameter": Fmi2Causality.parameter, "input": Fmi2Causality.inp
                 "output": Fmi2Causality.output}
 _VARIABILITIES = {"fixed": Fmi2Variability.fixed, "tunable": Fmi2Variability.tunable,
                   "discrete": Fmi2Variability.discrete, "continuous": Fmi2Variability.continuous}
-_PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool}
+_PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
 @dataclass(frozen=True)
@@ -128,7 +135,7 @@ class Var:
     name: FMI name (also the key in the parameter dict and in ``Simulator.outputs()``).
     causality: "parameter", "input" or "output".
     start: start value (parameters, inputs); outputs report it until initialization is done.
-    type: "Real", "Integer" or "Boolean".
+    type: "Real", "Integer", "Boolean" or "String" (String: parameters only, e.g. a file name).
     unit: unit name, a key of ``UNITS`` (or of the FMU's ``extra_units``); required for Real.
     description: text for the modelDescription.
     variability: default "fixed" for parameters, "continuous" for Real inputs/outputs, "discrete"
@@ -162,6 +169,8 @@ class Var:
             raise ValueError(f"Var {self.name!r}: variability must be one of {sorted(_VARIABILITIES)}")
         if self.causality == "parameter" and self.resolved_variability not in ("fixed", "tunable"):
             raise ValueError(f"Var {self.name!r}: a parameter is 'fixed' or 'tunable'")
+        if self.type == "String" and self.causality != "parameter":
+            raise ValueError(f"Var {self.name!r}: String variables are parameters here")
         if self.type != "Real" and self.resolved_variability == "continuous":
             raise ValueError(f"Var {self.name!r}: only Real variables can be 'continuous'")
 
@@ -238,7 +247,7 @@ class RangedInteger(_ExtraAttrs, Integer):
 # ----------------------------------------------------------------------------------------------------
 def _package_version() -> Optional[str]:
     try:
-        from rocking_model import __version__
+        from . import __version__
         return str(__version__)
     except Exception:  # pragma: no cover - only outside the package
         return None
@@ -264,9 +273,6 @@ class RockingSlave(Fmi2Slave):
     freeze_output: ClassVar[Optional[str]] = "overturned"
     #: relative tolerance on current_time versus the FMU's own communication time
     time_tolerance: ClassVar[float] = 1e-9
-    #: names of further instance attributes that belong to the FMU state (e.g. a String parameter kept outside
-    #: the Var table); the base class captures the simulator, the variable values, time and status flags
-    extra_state_attributes: ClassVar[Sequence[str]] = ()
 
     log_categories = {
         "logStatusWarning": "Log messages with fmi2Warning status.",
@@ -276,6 +282,12 @@ class RockingSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        # the pythonfmu 0.7 C wrapper passes its logger's address; then an exception raised here becomes
+        # fmi2Fatal and the wrapper drops its references (see _raise_fatal)
+        self._under_c_wrapper = "logger" in kwargs
+        if self._under_c_wrapper:
+            _forget_resources_path(kwargs.get("resources"))
+            _rebase_package(kwargs.get("resources"))
         self._specs: Dict[str, Var] = {}
         self._values: Dict[str, Any] = {}
         self._clear_state()
@@ -290,14 +302,17 @@ class RockingSlave(Fmi2Slave):
             self._specs[spec.name] = spec
             self._values[spec.name] = spec.default
             self.register_variable(self._make_variable(spec), nested=False)
+        self._vr_of = {var.name: vr for vr, var in self.vars.items()}
         # what every do_step reads, resolved once
         self._inputs = [(s.name, s.min, s.max) for s in self.variables if s.causality == "input"]
         self._outputs = [(s.name, _PY_TYPES[s.type]) for s in self.variables if s.causality == "output"]
 
     def _clear_state(self) -> None:
-        # everything listed in _STATE_FIELDS is the FMU state (fmi2GetFMUstate / fmi2SetFMUstate)
+        # the FMU state (fmi2GetFMUstate / fmi2SetFMUstate): these flags, the variable values and the simulator
         self._sim = None
         self._initialized = False
+        self._terminated = False
+        self._setup_error: Optional[str] = None  # invalid fmi2SetupExperiment arguments, refused at init
         self._error: Optional[str] = None        # permanent failure (bad parameters, integrator crash)
         self._pending: Optional[str] = None      # one-shot failure of the next do_step
         self._frozen = False
@@ -327,6 +342,8 @@ class RockingSlave(Fmi2Slave):
             kwargs["initial"] = Fmi2Initial.exact
         if spec.type == "Real":
             return UnitReal(spec.name, unit=spec.unit, min=spec.min, max=spec.max, **kwargs)
+        if spec.type == "String":
+            return String(spec.name, **kwargs)
         if spec.type == "Integer":
             return RangedInteger(spec.name, min=spec.min, max=spec.max, **kwargs)
         return Boolean(spec.name, **kwargs)
@@ -335,27 +352,11 @@ class RockingSlave(Fmi2Slave):
         return lambda: self._values[name]
 
     def _setter(self, spec: Var):
-        py = _PY_TYPES[spec.type]
-
+        # pythonfmu's own path to a variable (the importer's calls go through _set, which reports problems)
         def setter(value):
-            try:
-                value = py(value)
-            except Exception:
-                self.log(f"{spec.name}: cannot convert {value!r} to {spec.type}; value ignored",
-                         Fmi2Status.error)
-                return
-            if spec.causality == "output":
-                self.log(f"{spec.name} is an output and cannot be set; value ignored", Fmi2Status.error)
-                return
-            if (spec.causality == "parameter" and self._initialized
-                    and spec.resolved_variability == "fixed" and not _same(value, self._values[spec.name])):
-                msg = (f"parameter {spec.name} is 'fixed' and cannot be changed after initialization "
-                       f"(requested {value!r}, keeping {self._values[spec.name]!r}); re-instantiate or reset "
-                       f"the FMU to change it")
-                self.log(msg, Fmi2Status.error)
-                self._pending = msg
-                return
-            self._values[spec.name] = value
+            problem = self._assign(self.vars[self._vr_of[spec.name]], value)
+            if problem is not None:
+                self._refuse(problem)
 
         return setter
 
@@ -424,16 +425,37 @@ class RockingSlave(Fmi2Slave):
     def setup_experiment(self, start_time: float, stop_time: Optional[float] = None,
                          tolerance: Optional[float] = None):
         try:
-            if start_time is not None and math.isfinite(float(start_time)):
-                self._t0 = float(start_time)
+            if self._initialized:
+                self._refuse("fmi2SetupExperiment called after initialization; ignored (call fmi2Reset first "
+                             "to start a new experiment)")
+                return
+            try:
+                t0 = float(start_time)
+            except (TypeError, ValueError):
+                t0 = math.nan
+            if not math.isfinite(t0):
+                self._setup_error = (f"fmi2SetupExperiment: startTime = {start_time!r} is invalid; allowed "
+                                     f"range: finite values")
+                self.log(self._setup_error, Fmi2Status.error)
+                return
+            self._setup_error = None
+            self._t0 = t0
         except Exception as exc:  # never raise into the C wrapper
-            self.log(f"setup_experiment: {exc}", Fmi2Status.error)
+            self.log(f"fmi2SetupExperiment failed: {_describe(exc)}", Fmi2Status.error)
 
     def enter_initialization_mode(self):
-        pass
+        if self._initialized:
+            self._refuse("fmi2EnterInitializationMode called after initialization; ignored, the instance keeps "
+                         "its state (call fmi2Reset first to initialize again)")
 
     def exit_initialization_mode(self):
+        if self._initialized:
+            self._refuse("fmi2ExitInitializationMode called after initialization; ignored, the instance keeps "
+                         "its state (call fmi2Reset first to initialize again)")
+            return
         try:
+            if self._setup_error is not None:
+                raise ValueError(self._setup_error)
             self._initialized = True
             self._t = self._t0
             self._sim = self.create_simulator(self.parameter_values, self._t0)
@@ -441,7 +463,10 @@ class RockingSlave(Fmi2Slave):
         except Exception as exc:
             self._sim = None
             self._error = f"invalid parameters: {_describe(exc)}"
-            self.log(self._error, Fmi2Status.error)
+            self._raise_fatal(self._error)
+
+    def terminate(self):
+        self._terminated = True
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         try:
@@ -452,19 +477,25 @@ class RockingSlave(Fmi2Slave):
             return False
 
     def _do_step(self, t: float, dt: float) -> bool:
+        if self._terminated:
+            return self._fail("fmi2DoStep called after fmi2Terminate; refused (call fmi2Reset to start again)")
         if not self._initialized:
-            return self._fail("do_step called before initialization (exit_initialization_mode)")
+            return self._fail("fmi2DoStep called before initialization (fmi2ExitInitializationMode); refused")
         if self._error is not None:
             return self._fail(self._error)
         if self._pending is not None:
             msg, self._pending = self._pending, None
-            return self._fail(msg)
+            return self._fail(f"step refused because of an earlier error: {msg}")
         if not math.isfinite(dt) or dt <= 0.0:
-            return self._fail(f"step_size = {dt!r} is invalid; allowed range (0, inf)")
+            return self._fail(f"fmi2DoStep: communicationStepSize = {dt!r} is invalid; allowed range (0, inf)")
         if not math.isfinite(t) or abs(t - self._t) > self.time_tolerance * max(1.0, abs(self._t)):
-            return self._fail(f"current_time = {t!r} does not match the FMU time {self._t!r}; allowed value "
-                              f"{self._t!r}: each step starts where the last one ended (to go back, restore "
-                              f"a state saved with fmi2GetFMUstate)")
+            return self._fail(f"fmi2DoStep: currentCommunicationPoint = {t!r} does not match the FMU time "
+                              f"{self._t!r}; allowed value {self._t!r}: each step starts where the last one "
+                              f"ended (to go back, restore a state saved with fmi2GetFMUstate)")
+        t_end = t + dt
+        if not math.isfinite(t_end):
+            return self._fail(f"fmi2DoStep: currentCommunicationPoint + communicationStepSize = {t_end!r} is "
+                              f"not finite; allowed: a finite end time")
         values = self._values
         inputs = {}
         for name, lo, hi in self._inputs:
@@ -473,14 +504,18 @@ class RockingSlave(Fmi2Slave):
                 check_real(name, value, lo=lo, hi=hi)
             except ValueError as exc:
                 return self._fail(f"input {name} = {value!r} at t = {t!r} is invalid: {exc}")
-        t_end = t + dt
         if not self._frozen:
             try:
                 self.advance(self._sim, max(t_end, self._sim.t), inputs)
-                self._update_outputs()
+            except WorkLimitError as exc:
+                # the simulator is back where the step started: the master may retry with shorter steps
+                return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
+            except ValueError as exc:
+                return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
             except Exception as exc:
                 self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(exc)}"
                 return self._fail(self._error)
+            self._update_outputs()
         self._t = t_end
         return True
 
@@ -491,7 +526,7 @@ class RockingSlave(Fmi2Slave):
             if name not in out:
                 raise KeyError(f"Simulator.outputs() has no entry {name!r}")
             values[name] = py(out[name])
-        if self.freeze_output is not None and out.get(self.freeze_output):
+        if self.freeze_output is not None and out.get(self.freeze_output) and not self._frozen:
             self._frozen = True
             self.log(f"{self.freeze_output} at t = {self._sim.t:.6g} s: the outputs are frozen from now on",
                      Fmi2Status.warning)
@@ -500,111 +535,239 @@ class RockingSlave(Fmi2Slave):
         self.log(msg, Fmi2Status.error)
         return False
 
+    def _refuse(self, msg: str) -> None:
+        """A call that pythonfmu 0.7 can only answer with fmi2OK was refused: log it and discard the next
+        fmi2DoStep, so that the mistake is not silent."""
+        self.log(msg, Fmi2Status.error)
+        if self._pending is None:
+            self._pending = msg
+
+    def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category: Optional[str] = None, debug=None):
+        """Queue a message for the importer's logger. The FMI 2.0 logger takes the message as a printf format
+        string, so every '%' is doubled: a message (a file name, a value) is always printed as it is."""
+        super().log(str(msg).replace("%", "%%"), status, category)
+
+    def _raise_fatal(self, msg: str) -> None:
+        """Make fmi2ExitInitializationMode fail loudly: pythonfmu 0.7 turns a Python exception into fmi2Fatal
+        (fmpy raises FMICallException), the only non-OK status it can return there.
+
+        The C wrapper then drops one reference to this object, to its log queue and to its class, while it
+        keeps the pointers and calls them again (fmi2Terminate, fmi2FreeInstance, fmi2Reset): one extra
+        reference to each is taken first, so that every later call still finds live objects and the
+        reference counts balance when the wrapper releases the instance. The message also goes to stderr,
+        because the wrapper forwards log messages only when the importer turned logging on."""
+        if not self._under_c_wrapper:
+            self.log(msg, Fmi2Status.error)
+        else:
+            # The wrapper flushes the log queue while the exception is pending, calling the importer's logger
+            # (Python code, in fmpy) with an exception set, which corrupts the interpreter: the queue is
+            # emptied here and its messages travel in the exception, which the wrapper logs as fmi2Fatal.
+            earlier = [str(m.msg) for m in self.log_queue]
+            self.log_queue.clear()
+            msg = "\n".join(earlier + [msg])
+            try:
+                import ctypes
+                for obj in (self, self.log_queue, type(self)):
+                    ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
+            except Exception:  # no way to keep the instance alive: stay on fmi2OK + discarded steps
+                return
+            try:
+                sys.stderr.write(f"{type(self).__name__} {self.instance_name!r}: {msg}\n")
+                sys.stderr.flush()
+            except Exception:
+                pass
+        raise FMUInitializationError(msg.replace("%", "%%"))
+
     # ------------------------------------------------------------------ FMU state
     # pythonfmu 0.7 calls _get_fmu_state / _set_fmu_state on the instance and _fmu_state_to_bytes /
     # _fmu_state_from_bytes on the class; the C wrapper keeps the returned object as the fmi2FMUstate and
-    # releases it in fmi2FreeFMUstate. None of them may raise (an exception there is fmi2Fatal).
-    def _get_fmu_state(self) -> Dict[str, Any]:
+    # releases it in fmi2FreeFMUstate. None of them may raise (an exception there is fmi2Fatal). The state
+    # object is the serialized byte string itself (rocking_model.fmi_state): immutable, small, data only, and
+    # checked field by field when it is set.
+    def _get_fmu_state(self) -> bytes:
         try:
-            fields = copy.deepcopy({name: getattr(self, name) for name in self._state_fields()})
-            return {"format": _STATE_FORMAT, "fmu": type(self).__name__, "variables": self._state_signature(),
-                    "fields": fields}
+            return encode_state(self._state_document())
         except Exception as exc:
             msg = f"fmi2GetFMUstate failed: {_describe(exc)}"
             self.log(msg, Fmi2Status.error)
-            return {"format": _STATE_FORMAT, "invalid": msg}
+            return b""
 
-    def _set_fmu_state(self, state: Dict[str, Any]) -> None:
+    def _set_fmu_state(self, state) -> None:
         try:
-            problem = self._state_problem(state)
-            if problem is None:
-                fields = copy.deepcopy(state["fields"])  # the saved state may be restored again later
-                for name in self._state_fields():
-                    setattr(self, name, fields[name])
-                return
+            self._restore(decode_state(state))
+            return
         except Exception as exc:
             problem = _describe(exc)
         msg = f"fmi2SetFMUstate: state rejected, the instance keeps its current state: {problem}"
         self.log(msg, Fmi2Status.error)
         self._pending = msg
 
-    def _state_fields(self) -> tuple:
-        return tuple(_STATE_FIELDS) + tuple(self.extra_state_attributes)
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        return state if isinstance(state, bytes) else b""
 
-    def _state_signature(self) -> List[tuple]:
-        return [(s.name, s.causality, s.type) for s in self.variables]
+    @staticmethod
+    def _fmu_state_from_bytes(data) -> bytes:
+        try:
+            return bytes(data)  # checked when it is set (a static method cannot log)
+        except Exception:
+            return b""
 
-    def _state_problem(self, state) -> Optional[str]:
-        if not isinstance(state, dict) or state.get("format") != _STATE_FORMAT:
-            return f"not an FMU state of this package (format {_STATE_FORMAT})"
-        if "invalid" in state:
-            return str(state["invalid"])
-        if state.get("fmu") != type(self).__name__ or state.get("variables") != self._state_signature():
-            return f"the state belongs to FMU {state.get('fmu')!r}, not to {type(self).__name__!r}"
-        fields = state.get("fields")
-        if not isinstance(fields, dict) or set(fields) != set(self._state_fields()):
-            return "incomplete state"
+    def _state_signature(self) -> str:
+        table = [(s.name, s.causality, s.type) for s in self.variables]
+        return hashlib.sha256(repr(table).encode()).hexdigest()
+
+    def _state_document(self) -> Dict[str, Any]:
+        values = dict(self._values)
+        return {"fmu": type(self).__name__, "signature": self._state_signature(),
+                "slave": {"initialized": self._initialized, "terminated": self._terminated,
+                          "frozen": self._frozen, "t": self._t, "t0": self._t0, "error": self._error,
+                          "pending": self._pending, "values": values},
+                "simulator": None if self._sim is None else self._sim.get_state()}
+
+    def _restore(self, doc: Dict[str, Any]) -> None:
+        """Check every field of a decoded state document, rebuild the simulator from its parameter values
+        and set its state; nothing of the instance changes unless all of it is valid."""
+        _check_keys("state", doc, {"fmu", "signature", "slave", "simulator"})
+        if doc["fmu"] != type(self).__name__ or doc["signature"] != self._state_signature():
+            raise ValueError(f"the state belongs to FMU {str(doc['fmu'])[:64]!r} (or to another version of its "
+                             f"variables), not to {type(self).__name__!r}")
+        slave = doc["slave"]
+        _check_keys("slave", slave, {"initialized", "terminated", "frozen", "t", "t0", "error", "pending",
+                                     "values"})
+        for key in ("initialized", "terminated", "frozen"):
+            if not isinstance(slave[key], bool):
+                raise ValueError(f"state field slave.{key} = {slave[key]!r} is not a Boolean")
+        for key in ("t", "t0"):
+            if isinstance(slave[key], bool) or not isinstance(slave[key], (int, float)) \
+                    or not math.isfinite(slave[key]):
+                raise ValueError(f"state field slave.{key} = {slave[key]!r} is invalid; allowed: a finite time")
+        for key in ("error", "pending"):
+            if slave[key] is not None and (not isinstance(slave[key], str) or len(slave[key]) > _MAX_TEXT):
+                raise ValueError(f"state field slave.{key} is not null or a text of at most {_MAX_TEXT} "
+                                 f"characters")
+        values = slave["values"]
+        _check_keys("slave.values", values, set(self._specs))
+        for name, spec in self._specs.items():
+            values[name] = _check_value(name, spec.type, values[name])
+        sim = None
+        if doc["simulator"] is not None:
+            if not isinstance(doc["simulator"], dict):
+                raise ValueError("state field simulator is not an object")
+            params = {n: values[n] for n, s in self._specs.items() if s.causality == "parameter"}
+            sim = self.create_simulator(params, float(slave["t0"]))
+            sim.set_state(doc["simulator"])
+        elif slave["initialized"] and slave["error"] is None:
+            raise ValueError("state field simulator is null in an initialized state without an error")
+        # all checked: commit
+        for name in self._specs:
+            self._values[name] = values[name]
+        self._sim = sim
+        self._initialized, self._terminated, self._frozen = (slave["initialized"], slave["terminated"],
+                                                             slave["frozen"])
+        self._t, self._t0 = float(slave["t"]), float(slave["t0"])
+        self._error, self._pending = slave["error"], slave["pending"]
+        self._setup_error = None
+
+    # ------------------------------------------------------------------ value references
+    # Every reference of a call is served on its own: a bad one (unknown, of another type, an output set, a
+    # fixed parameter changed after initialization) is logged with its number and name, gets a neutral value
+    # (getters), and the next fmi2DoStep is discarded once, so the mistake is not silent even with logging
+    # off. pythonfmu 0.7 answers fmi2OK to the call itself.
+    def _lookup(self, vr, type_name: str):
+        """(variable, problem): the variable of reference ``vr`` if it has type ``type_name``."""
+        try:
+            var = self.vars.get(int(vr))
+        except (TypeError, ValueError):
+            var = None
+        if var is None:
+            return None, f"value reference {vr!r} is unknown to {type(self).__name__}"
+        actual = _var_type(var)
+        if actual != type_name:
+            return None, f"value reference {vr} is {var.name!r}, a {actual} variable, not {type_name}"
+        return var, None
+
+    def _get(self, vrs, type_name: str, fallback):
+        out, problems = [], []
+        for vr in vrs:
+            var, problem = self._lookup(vr, type_name)
+            if var is None:
+                problems.append(problem)
+                out.append(fallback)
+                continue
+            try:
+                out.append(var.getter())
+            except Exception as exc:
+                problems.append(f"{var.name}: {_describe(exc)}")
+                out.append(fallback)
+        if problems:
+            self._refuse(f"fmi2Get{type_name}: " + "; ".join(problems))
+        return out
+
+    def _set(self, vrs, values, type_name: str) -> None:
+        problems = []
+        try:
+            pairs = list(zip(vrs, values))
+        except Exception as exc:
+            pairs, problems = [], [_describe(exc)]
+        for vr, value in pairs:
+            var, problem = self._lookup(vr, type_name)
+            if var is None:
+                problems.append(problem)
+                continue
+            try:
+                problem = self._assign(var, value)
+            except Exception as exc:
+                problem = f"{var.name}: {_describe(exc)}"
+            if problem is not None:
+                problems.append(problem)
+        if problems:
+            self._refuse(f"fmi2Set{type_name}: " + "; ".join(problems) + " (the other values were set)")
+
+    def _assign(self, var, value) -> Optional[str]:
+        """Set one variable; return the reason it was refused, or None."""
+        name = var.name
+        if var.causality == Fmi2Causality.output:
+            return f"{name} is an output and cannot be set; value ignored"
+        spec = self._specs.get(name)
+        if spec is None:
+            return f"{name} is not a variable of the table of {type(self).__name__}; value ignored"
+        try:
+            value = _PY_TYPES[spec.type](value)
+        except Exception:
+            return f"{name}: cannot convert {str(value)[:64]!r} to {spec.type}; value ignored"
+        if spec.type == "String" and len(value) > _MAX_TEXT:
+            return f"{name}: a text of {len(value)} characters is too long; at most {_MAX_TEXT}; value ignored"
+        if (spec.causality == "parameter" and self._initialized and spec.resolved_variability == "fixed"
+                and not _same(value, self._values[name])):
+            return (f"parameter {name} is 'fixed' and cannot be changed after initialization (requested "
+                    f"{value!r}, keeping {self._values[name]!r}); call fmi2Reset first to change it")
+        self._values[name] = value
         return None
 
-    @staticmethod
-    def _fmu_state_to_bytes(state: Dict[str, Any]) -> bytes:
-        try:
-            payload = pickle.dumps(state, protocol=5)
-        except Exception as exc:
-            payload = pickle.dumps({"format": _STATE_FORMAT,
-                                    "invalid": f"fmi2SerializeFMUstate failed: {_describe(exc)}"}, protocol=5)
-        return _STATE_MAGIC + hashlib.sha256(payload).digest() + payload
-
-    @staticmethod
-    def _fmu_state_from_bytes(data: bytes) -> Dict[str, Any]:
-        try:
-            data = bytes(data)
-            n = len(_STATE_MAGIC)
-            if not data.startswith(_STATE_MAGIC):
-                raise ValueError("not a serialized state of a rocking_model FMU (bad header)")
-            digest, payload = data[n:n + 32], data[n + 32:]
-            if hashlib.sha256(payload).digest() != digest:
-                raise ValueError("the serialized state is corrupted (SHA-256 mismatch)")
-            state = _StateUnpickler(io.BytesIO(payload)).load()
-            if not isinstance(state, dict):
-                raise ValueError("the serialized state is not a state dictionary")
-            return state
-        except Exception as exc:
-            return {"format": _STATE_FORMAT, "invalid": f"fmi2DeSerializeFMUstate failed: {_describe(exc)}"}
-
-    # ------------------------------------------------------------------ robust accessors
-    # pythonfmu raises TypeError/KeyError for a wrong value reference; turn that into an error log so no
-    # exception reaches the C wrapper.
-    def _safe_set(self, setter, vrs, values):
-        try:
-            setter(vrs, values)
-        except Exception as exc:
-            self.log(f"cannot set value references {list(vrs)}: {_describe(exc)}", Fmi2Status.error)
-
-    def _safe_get(self, getter, vrs, fallback):
-        try:
-            return getter(vrs)
-        except Exception as exc:
-            self.log(f"cannot get value references {list(vrs)}: {_describe(exc)}", Fmi2Status.error)
-            return [fallback] * len(vrs)
-
-    def set_real(self, vrs, values):
-        self._safe_set(super().set_real, vrs, values)
-
-    def set_integer(self, vrs, values):
-        self._safe_set(super().set_integer, vrs, values)
-
-    def set_boolean(self, vrs, values):
-        self._safe_set(super().set_boolean, vrs, values)
-
     def get_real(self, vrs):
-        return self._safe_get(super().get_real, vrs, math.nan)
+        return self._get(vrs, "Real", math.nan)
 
     def get_integer(self, vrs):
-        return self._safe_get(super().get_integer, vrs, 0)
+        return self._get(vrs, "Integer", 0)
 
     def get_boolean(self, vrs):
-        return self._safe_get(super().get_boolean, vrs, False)
+        return self._get(vrs, "Boolean", False)
+
+    def get_string(self, vrs):
+        return self._get(vrs, "String", "")
+
+    def set_real(self, vrs, values):
+        self._set(vrs, values, "Real")
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, "Integer")
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, "Boolean")
+
+    def set_string(self, vrs, values):
+        self._set(vrs, values, "String")
 
 
 def _same(a, b) -> bool:
@@ -616,27 +779,103 @@ def _describe(exc: BaseException) -> str:
     return text if isinstance(exc, ValueError) and text else f"{type(exc).__name__}: {text}"
 
 
-# FMU state: the slave attributes that make up the state, the version of its layout, the serialization header
-_STATE_FIELDS = ("_values", "_sim", "_initialized", "_error", "_pending", "_frozen", "_t", "_t0")
-_STATE_FORMAT = 1
-_STATE_MAGIC = b"rocking_model FMU state v1\n"
+def adopt_slave_class(namespace: dict, cls: type) -> None:
+    """Called at the end of an FMU's slave script when the pythonfmu 0.7 wrapper re-executes it (at every
+    instantiation it executes the file's text in the namespace of the module of that name, with separate
+    locals, then takes the class from the module).
 
-_SAFE_BUILTINS = frozenset({"set", "frozenset", "list", "dict", "tuple", "complex", "float", "int", "bool",
-                            "str", "bytes", "bytearray", "slice", "range"})
-_SAFE_NUMPY = frozenset({("numpy", "ndarray"), ("numpy", "dtype"),
-                         ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
-                         ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
-                         ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer")})
+    * The class of this file becomes the module's class, so an FMU whose module name was first loaded by
+      another FMU (another version of the package) still runs its own class.
+    * The wrapper releases one reference to the module's namespace that it never took (``Py_DECREF`` of the
+      borrowed ``PyModule_GetDict``): one reference is added here, or the namespace would be freed under the
+      functions that use it after a few instantiations and the host would crash in its garbage collector."""
+    namespace[cls.__name__] = cls
+    try:
+        import ctypes
+        ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
+    except Exception:  # pragma: no cover - ctypes without the Python C API: nothing better to do
+        pass
 
 
-class _StateUnpickler(pickle.Unpickler):
-    """Unpickler for serialized FMU states: rocking_model classes, numpy arrays and plain builtins only."""
+def _forget_resources_path(resources) -> None:
+    """The pythonfmu 0.7 C wrapper inserts the resources folder at the front of sys.path at every
+    instantiation, only to import the slave module. Once it is imported (this runs in the slave's
+    constructor) the entries are dropped, so sys.path does not grow with instances and an FMU's folder does
+    not shadow the host's modules; the bundled package is found through its own __path__ from then on."""
+    if not resources:
+        return
+    try:
+        while resources in sys.path:
+            sys.path.remove(resources)
+    except Exception:  # pragma: no cover - never raise into the C wrapper
+        pass
 
-    def find_class(self, module, name):
-        if (module == "rocking_model" or module.startswith("rocking_model.")
-                or (module == "builtins" and name in _SAFE_BUILTINS) or (module, name) in _SAFE_NUMPY):
-            return super().find_class(module, name)
-        raise pickle.UnpicklingError(f"global {module}.{name} is not allowed in an FMU state")
+
+def _rebase_package(resources) -> None:
+    """Point the bundled package (and its subpackages) at this FMU's resources when the folder it was first
+    imported from is gone: FMUs with the same package digest share the imported modules, and an importer may
+    delete an FMU's extraction folder (fmpy.simulate_fmu does) while another instance of that digest lives on
+    and still imports submodules lazily. The digest guarantees the code is the same."""
+    if not resources:
+        return
+    try:
+        package = __name__.rpartition(".")[0]
+        root = os.path.join(resources, package)
+        module = sys.modules.get(package)
+        if module is None or not os.path.isdir(root) or all(os.path.isdir(p) for p in module.__path__):
+            return
+        for name, mod in list(sys.modules.items()):
+            if (name == package or name.startswith(package + ".")) and getattr(mod, "__path__", None) is not None:
+                mod.__path__[:] = [os.path.join(root, *name.split(".")[1:])]
+    except Exception:  # pragma: no cover - never raise into the C wrapper
+        pass
+
+
+def _var_type(var) -> str:
+    """FMI type name of a pythonfmu variable."""
+    for cls, name in ((Real, "Real"), (Integer, "Integer"), (Boolean, "Boolean"), (String, "String")):
+        if isinstance(var, cls):
+            return name
+    return type(var).__name__
+
+
+#: [characters] longest text kept in a state or accepted for a String variable (a file path, a message)
+_MAX_TEXT = 4096
+#: FMI 2.0 fmi2Integer is a 32-bit int
+_INT32 = (-2**31, 2**31 - 1)
+
+
+def _check_keys(where: str, obj, keys) -> None:
+    if not isinstance(obj, dict):
+        raise ValueError(f"state field {where} is not an object")
+    missing, extra = set(keys) - set(obj), set(obj) - set(keys)
+    if missing or extra:
+        parts = ([f"missing {sorted(missing)}"] if missing else []) + \
+                ([f"unexpected {sorted(str(k)[:64] for k in extra)[:10]}"] if extra else [])
+        raise ValueError(f"state field {where}: " + ", ".join(parts))
+
+
+def _check_value(name: str, type_: str, value):
+    """A variable value read from a state document, checked for its FMI type."""
+    if type_ == "Real":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"state value of {name} = {str(value)[:64]!r} is not a Real")
+        return float(value)
+    if type_ == "Integer":
+        if isinstance(value, bool) or not isinstance(value, int) or not _INT32[0] <= value <= _INT32[1]:
+            raise ValueError(f"state value of {name} = {str(value)[:64]!r} is not a 32-bit Integer")
+        return value
+    if type_ == "Boolean":
+        if not isinstance(value, bool):
+            raise ValueError(f"state value of {name} = {str(value)[:64]!r} is not a Boolean")
+        return value
+    if not isinstance(value, str) or len(value) > _MAX_TEXT:
+        raise ValueError(f"state value of {name} is not a String of at most {_MAX_TEXT} characters")
+    return value
+
+
+class FMUInitializationError(RuntimeError):
+    """Raised out of exit_initialization_mode on invalid parameters (pythonfmu 0.7: fmi2Fatal)."""
 
 
 # ----------------------------------------------------------------------------------------------------

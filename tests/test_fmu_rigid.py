@@ -129,10 +129,14 @@ def test_model_description_units_variability_structure(fmu):
 
 
 def test_fmu_bundles_package_without_bytecode(fmu):
+    import build_fmu
+
     names = zipfile.ZipFile(fmu).namelist()
-    assert "resources/rocking_model/fmi.py" in names
-    assert "resources/rocking_model/simulation.py" in names
+    alias = f"rocking_model_{build_fmu.package_digest()}"   # the bundled copy's own import name
+    assert f"resources/{alias}/fmi.py" in names
+    assert f"resources/{alias}/simulation.py" in names
     assert "resources/RigidRockingBlock.py" in names
+    assert not [n for n in names if n.startswith("resources/rocking_model/")]
     assert not [n for n in names if "__pycache__" in n or n.endswith(".pyc")]
 
 
