@@ -907,9 +907,16 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
     def logger(env, instance, status, category, message):
         messages.append((int(status), _text(category), _text(message)))
 
-    result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
-                               output_interval=output_interval, start_values=dict(start_values or {}),
-                               input=input, output=output, debug_logging=True, logger=logger, **kwargs)
+    from fmpy.fmi1 import FMICallException
+
+    try:
+        result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
+                                   output_interval=output_interval, start_values=dict(start_values or {}),
+                                   input=input, output=output, debug_logging=True, logger=logger, **kwargs)
+    except FMICallException as exc:
+        # invalid parameters: fmi2ExitInitializationMode fails (fmi2Fatal with pythonfmu 0.7)
+        errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
+        raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
     errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
     t_last = float(result["time"][-1])
     early = t_last < stop_time and not math.isclose(t_last, stop_time, rel_tol=1e-9, abs_tol=1e-12)
