@@ -29,46 +29,53 @@ What the base class provides:
   (zero-order hold, the importer sets the inputs at the start of each step) and copies
   ``Simulator.outputs()`` to the output variables;
 * FMU state (``canGetAndSetFMUstate`` and ``canSerializeFMUstate`` are true): ``fmi2GetFMUstate`` captures
-  a deep copy of the complete internal state -- the whole `Simulator` (integrator arrays, contact mode,
-  counters, impact log, step-size memory), the values of every parameter, input and output, the
-  communication time and the status flags (initialized, frozen, failed, pending error) -- and
-  ``fmi2SetFMUstate`` restores it, in the same or in another instance of the same FMU, so that
-  save -> step -> restore -> step gives bit-identical outputs (rollback for iterative masters).
-  ``fmi2SerializeFMUstate`` writes the state as a pickle (protocol 5) behind a header and a SHA-256 digest;
-  ``fmi2DeSerializeFMUstate`` checks both and unpickles with a restricted unpickler that only loads
-  ``rocking_model`` classes, numpy arrays and plain builtins. A state of another FMU, a corrupted byte
-  string or a failed capture is rejected when it is set: error log, the instance keeps its state and the
+  the complete internal state -- the values of every variable, the communication time, the status flags
+  (initialized, terminated, frozen, failed, pending error) and the simulator's plain-data state
+  (`Simulator.get_state`: time, contact mode, coordinates, counters, step-size memory) -- as the serialized
+  byte string of `rocking_model.fmi_state` (versioned, data only, no pickle). ``fmi2SetFMUstate`` checks
+  every field (type, shape, range), rebuilds the simulator from the saved parameter values and sets its
+  state, in the same or in another instance of the same FMU, so that save -> step -> restore -> step gives
+  bit-identical outputs (rollback for iterative masters). A state of another FMU, a corrupted, truncated,
+  foreign or junk byte string is rejected when it is set: error log, the instance keeps its state and the
   next ``do_step`` is discarded once;
 * ``fmi2Reset``: the pythonfmu 0.7 C wrapper re-creates the Python object (start values, not initialized);
   :meth:`RockingSlave.reset` does the same in place for direct use of the class.
 
-Error handling. No Python exception ever reaches the pythonfmu C wrapper: there an exception becomes
-``fmi2Fatal`` and the wrapper releases the Python instance, so any later call on the instance (e.g.
-``fmi2Terminate``) dereferences freed memory and crashes the importer. Instead, a failing ``do_step``
-returns False, which pythonfmu 0.7 maps to ``fmi2Discard`` with ``fmi2LastSuccessfulTime`` = the start of
-the step and ``fmi2GetBooleanStatus(fmi2Terminated)`` = true; fmpy then ends the simulation early without
-raising (use :func:`run_fmu` to get an exception). ``exit_initialization_mode`` always returns fmi2OK.
+Error handling under the pythonfmu 0.7 C wrapper, which can return fmi2OK, fmi2Discard (``do_step``
+returns False) or -- for a Python exception -- fmi2Fatal, and nothing else:
 
 * invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range)
-  are caught in ``exit_initialization_mode`` and logged with ``Fmi2Status.error``; every ``do_step``
-  then logs the message again and returns False;
+  or an invalid ``fmi2SetupExperiment`` start time: ``exit_initialization_mode`` raises, so
+  ``fmi2ExitInitializationMode`` returns fmi2Fatal and fmpy raises ``FMICallException``; the message goes to
+  the importer's logger (as the fatal message) and to stderr. The instance is kept alive for the wrapper
+  (`_raise_fatal`), so fmi2Terminate, fmi2FreeInstance, fmi2Reset and any other later call are safe; every
+  ``do_step`` logs the message again and returns False until fmi2Reset;
 * an invalid input (non-finite, or outside the declared ``min``/``max``), a step size that is not
   positive and finite, or a ``current_time`` that does not match the FMU's time (after a rollback with
   ``fmi2SetFMUstate`` the FMU's time is the restored one): error log, ``do_step`` returns False, the
   state is unchanged (the step can be retried with a valid input);
-* an exception inside the integrator: error log, the instance is marked failed, ``do_step`` returns
+* a step whose internal work would exceed the simulator's budget (`WorkLimitError`) or that would leave the
+  physical ranges (``ValueError`` from the simulator): error log naming the cause and the way out,
+  ``do_step`` returns False, the state is unchanged (the simulator restores itself);
+* any other exception inside the integrator: error log, the instance is marked failed, ``do_step`` returns
   False from then on;
-* a ``fixed`` parameter set to a new value after initialization: the value is rejected (the old one is
-  kept), an error is logged and the next ``do_step`` is discarded once, so the mistake is not silent;
+* calls the wrapper can only answer with fmi2OK are refused by an error log and a discard of the next
+  ``do_step`` (so the mistake shows even with logging off): a value reference that is unknown, of another
+  type or an output set (the other references of the same call are served; a bad getter reference reads
+  NaN / 0 / False / ""), a ``fixed`` parameter changed after initialization (the old value is kept),
+  fmi2EnterInitializationMode / fmi2ExitInitializationMode / fmi2SetupExperiment after initialization
+  (the state is kept), and a rejected FMU state; ``do_step`` after fmi2Terminate is refused;
 * once the output named by ``freeze_output`` (``"overturned"``) is true the integration stops, the outputs
   stay frozen and ``do_step`` keeps returning True.
 
-pythonfmu 0.7 can only report fmi2OK, fmi2Discard (``do_step`` returns False) or -- for an exception --
-fmi2Fatal; it has no way to return fmi2Error from Python. Every error therefore goes out as an error log
-(status fmi2Error in the logger callback) plus fmi2Discard of the next ``do_step``.
+Messages are queued with `RockingSlave.log`, which doubles every ``%`` (the FMI logger treats the message as
+a printf format). They reach the importer only when it instantiates the FMU with ``loggingOn = fmi2True``
+(``fmpy.simulate_fmu(..., debug_logging=True)``), a property of the pythonfmu 0.7 C wrapper; the fatal
+message of invalid parameters also goes to stderr.
 
-Log messages reach the importer only when it instantiates the FMU with ``loggingOn = fmi2True``
-(``fmpy.simulate_fmu(..., debug_logging=True)``); that is a property of the pythonfmu 0.7 C wrapper.
+Each FMU bundles the package under the digest of its sources (``build_fmu.py``), so FMUs built from other
+versions and a host's own ``rocking_model`` can live in one process; `adopt_slave_class` and
+`_forget_resources_path` work around the wrapper's handling of the slave module and of ``sys.path``.
 """
 from __future__ import annotations
 
