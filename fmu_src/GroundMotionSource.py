@@ -51,9 +51,10 @@ class GroundMotionSource(RockingSlave):
         self.register_variable(String(
             "units", causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
             initial=Fmi2Initial.exact,
-            description="Acceleration units of the record file for motion = 1: '' = as the file states them, "
-                        "m/s2 if a CSV file states none; else one of g, m/s2, cm/s2 (= gal), mm/s2, in/s2, "
-                        "ft/s2 (an error if the file states other units)"))
+            description="Acceleration units of the record file for motion = 1: '' = as the file states them "
+                        "(a CSV file that states none: m/s2); else one of g, m/s2, cm/s2 (= gal), mm/s2, in/s2, "
+                        "ft/s2: the units of a CSV file that states none (an error if it states others), or "
+                        "they replace those on the 3rd line of an AT2 file"))
 
     def create_simulator(self, p, t0):
         from rocking_model.cosim import MotionSource, ground_motion_from_parameters
