@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .ground_motion import PULSES
+
 ROOT = Path(__file__).resolve().parent.parent
-PULSES = ("sine", "cosine", "ricker", "rectangular")
 UNITS_OF = {"phi": "rad", "phi_dot": "rad/s", "x": "m", "y": "m", "x_dot": "m/s", "y_dot": "m/s", "energy": "J",
             "u": "m", "u_dot": "m/s", "top_displacement": "m", "contact": "0 full/1 left/2 right/3 flight"}
 RIGID_PARAMS = ("b", "h", "m", "g", "e_N")
@@ -75,6 +76,7 @@ def _motion(args):
     """(GroundMotion, description, default t_end [s])."""
     from . import ground_motion as gm
     from .records import load_motion, unit_factor
+    from .validation import check_real
 
     if args.record and args.pulse:
         raise UsageError("give either --record or --pulse, not both")
@@ -92,19 +94,18 @@ def _motion(args):
         return gm.ConstantMotion(0.0), "no ground motion", 5.0
     if args.amplitude is None:
         raise UsageError("--pulse needs --amplitude (in --amplitude-units, default m/s2)")
-    A = args.amplitude * unit_factor(args.amplitude_units) * args.scale
+    A = args.amplitude * unit_factor(args.amplitude_units)
     if args.pulse == "rectangular":
         if args.duration is None:
             raise UsageError("--pulse rectangular needs --duration [s]")
-        m = gm.RectangularPulse(A, args.duration, args.t0)
-        desc = f"rectangular pulse A = {A:.4g} m/s2, duration {args.duration:g} s"
+        m = gm.pulse_from_parameters("rectangular", A, t_start=args.t0, duration=args.duration, scale=args.scale)
+        desc = f"rectangular pulse A = {m.A:.4g} m/s2, duration {args.duration:g} s"
     else:
         if args.frequency is None:
             raise UsageError(f"--pulse {args.pulse} needs --frequency [Hz]")
-        w = 2.0 * math.pi * args.frequency
-        cls = {"sine": gm.SinePulse, "cosine": gm.CosinePulse, "ricker": gm.RickerPulse}[args.pulse]
-        m = cls(A, w) if args.pulse == "ricker" and args.t0 == 0.0 else cls(A, w, args.t0)
-        desc = f"{args.pulse} pulse A = {A:.4g} m/s2, f_p = {args.frequency:g} Hz"
+        w = 2.0 * math.pi * check_real("--frequency", args.frequency, lo=0.0, lo_open=True)
+        m = gm.pulse_from_parameters(args.pulse, A, w, args.t0, scale=args.scale)
+        desc = f"{args.pulse} pulse A = {m.A:.4g} m/s2, f_p = {args.frequency:g} Hz"
     if args.resample:
         m = m.resampled(args.resample)
     return m, desc, m.support[1] + 5.0
@@ -290,7 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--amplitude-units", default="m/s2", help="g, m/s2 (default), cm/s2, ...")
     g.add_argument("--frequency", type=float, help="pulse frequency f_p [Hz] (omega_p = 2 pi f_p)")
     g.add_argument("--duration", type=float, help="rectangular pulse duration [s]")
-    g.add_argument("--t0", type=float, default=0.0, help="pulse start [s] (Ricker: centre; default 1.5/f_p)")
+    g.add_argument("--t0", type=float, help="pulse start [s], default 0 (Ricker: centre, default 1.5/f_p)")
     g.add_argument("--scale", type=float, default=1.0, help="scale factor on the motion [1]")
     g.add_argument("--resample", type=float, help="resample the motion every DT [s] (linear)")
     _solver_options(s)

@@ -32,7 +32,8 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from .ground_motion import GroundMotion, SampledMotion, SinePulse
+from .ground_motion import GroundMotion, pulse_from_parameters
+from .records import Record, load_motion, unit_factor
 from .validation import check_real
 
 __all__ = ["MotionSource", "load_record", "ground_motion_from_parameters", "Component", "Connection",
@@ -43,59 +44,40 @@ NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
 
 # ------------------------------------------------------------------------------------------------------
 # the ground-motion source component
-def load_record(path) -> SampledMotion:
-    """Read a ground-motion record: a text/CSV file with two columns, time [s] and ag [m/s2], separated by
-    commas, semicolons or white space; lines that do not start with a number (headers, comments) are
-    skipped."""
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"record = {str(path)!r}: no such file")
-    t, a = [], []
-    with open(path, newline="") as f:
-        for line in f:
-            fields = line.replace(",", " ").replace(";", " ").split()
-            if len(fields) < 2:
-                continue
-            try:
-                ti, ai = float(fields[0]), float(fields[1])
-            except ValueError:
-                continue
-            t.append(ti)
-            a.append(ai)
-    if len(t) < 2:
-        raise ValueError(f"record = {str(path)!r}: fewer than two (time, ag) rows")
-    return SampledMotion(t, a)
+#: units of a CSV record for the GroundMotionSource FMU when neither the file nor the ``units`` parameter
+#: states them (the FMU's historical reading)
+RECORD_DEFAULT_UNITS = "m/s2"
+
+
+def load_record(path, units: Optional[str] = None) -> Record:
+    """Read the ground-motion record of the GroundMotionSource FMU with `rocking_model.records` (the reader
+    of the CLI and the ensembles, with the same errors): a PEER ``.AT2`` file (units from its line 3, else
+    g), a two-column ``.csv``/``.txt``/``.dat``/``.tsv`` file (time [s], acceleration; units from the header
+    ``time [s], ag [cm/s2]`` or a ``# units: g`` comment, else ``units``, else m/s2) or ``synthetic[:seed]``.
+    ``units`` that contradict the units the file states are an error. Returns a `Record` (ag in m/s2)."""
+    return load_motion(str(path), units or None, default_units=RECORD_DEFAULT_UNITS)
 
 
 def ground_motion_from_parameters(p: Mapping[str, Any]) -> GroundMotion:
     """The ground motion named by the GroundMotionSource parameters: ``motion`` 0 = one-sine pulse
-    (``A`` [m/s2], ``omega_p`` [rad/s], ``t_start`` [s]), 1 = sampled record file ``record`` (see
-    `load_record`), both multiplied by ``scale``."""
-    motion = int(p.get("motion", 0))
+    (``A`` [m/s2], ``omega_p`` [rad/s], ``t_start`` [s], built by
+    `rocking_model.ground_motion.pulse_from_parameters` like the CLI's and the ensembles' pulses), 1 = the
+    record ``record`` (a file or ``synthetic[:seed]``, read by `load_record` in ``units``; "" = as the file
+    states, else m/s2); both multiplied by ``scale`` [1]. Raises ValueError naming the parameter and its
+    allowed values."""
+    motion = p.get("motion", 0)
+    scale = check_real("scale", p.get("scale", 1.0))
+    units = str(p.get("units", "") or "")
+    if units:
+        unit_factor(units)          # a misspelt unit is an error whatever the motion
     if motion == 0:
-        gm = SinePulse(A=p["A"], omega_p=p["omega_p"], t0=p.get("t_start", 0.0))
-    elif motion == 1:
+        return pulse_from_parameters("sine", p["A"], p["omega_p"], p.get("t_start", 0.0), scale=scale)
+    if motion == 1:
         record = str(p.get("record", ""))
         if not record:
-            raise ValueError("record = '' : motion = 1 needs the path of a record file")
-        gm = load_record(record)
-    else:
-        raise ValueError(f"motion = {motion} is not supported; allowed values 0 (sine pulse), 1 (record)")
-    return _Scaled(gm, check_real("scale", p.get("scale", 1.0)))
-
-
-class _Scaled(GroundMotion):
-    def __init__(self, motion: GroundMotion, scale: float):
-        self.motion, self.scale = motion, scale
-
-    def __call__(self, t):
-        return self.scale * self.motion(t)
-
-    def next_breakpoint(self, t):
-        return self.motion.next_breakpoint(t)
-
-    def continuous_at(self, tb):
-        return self.motion.continuous_at(tb)
+            raise ValueError("record = '': motion = 1 needs a record file (.AT2, .csv) or synthetic[:seed]")
+        return load_record(record, units).scaled(scale)
+    raise ValueError(f"motion = {motion!r} is not supported; allowed values: 0 (sine pulse), 1 (record)")
 
 
 class MotionSource:

@@ -24,8 +24,10 @@ import time
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
-#: pulse kinds of the grids -> ground-motion class name (rectangular: duration 2 pi / omega_p)
-PULSES = ("sine", "cosine", "ricker", "rectangular")
+from .ground_motion import PULSES
+
+# PULSES: the pulse kinds of the grids, built by `ground_motion.pulse_from_parameters` (rectangular:
+# duration 2 pi / omega_p)
 SCHEMES = ("event_driven", "moreau_jean")
 
 #: case fields, in output column order
@@ -157,16 +159,10 @@ def case_motion(case: dict):
     kind = case["motion"]
     if kind == "record":
         return _record(case["record"], case.get("units") or "").scaled(case["scale"])
-    A, w = case["A"] * case.get("scale", 1.0), case["omega_p"]
-    if kind == "sine":
-        return gm.SinePulse(A, w)
-    if kind == "cosine":
-        return gm.CosinePulse(A, w)
-    if kind == "ricker":
-        return gm.RickerPulse(A, w)
-    if kind == "rectangular":
-        return gm.RectangularPulse(A, 2.0 * math.pi / w)
-    raise ValueError(f"motion = {kind!r} is not supported; allowed values: record, {', '.join(PULSES)}")
+    if kind not in PULSES:
+        raise ValueError(f"motion = {kind!r} is not supported; allowed values: record, {', '.join(PULSES)}")
+    # the pulse starts at t = 0 (Ricker: centred at 1.5 T_p); a rectangular pulse lasts 2 pi / omega_p
+    return gm.pulse_from_parameters(kind, case["A"], case["omega_p"], scale=case.get("scale", 1.0))
 
 
 def case_model(case: dict):

@@ -294,6 +294,47 @@ class RectangularPulse(_JumpBreakpoints, GroundMotion):
         return RectangularPulse(self.A * check_real("factor", factor), self.duration, self.t0)
 
 
+#: pulse kinds of `pulse_from_parameters`
+PULSES = ("sine", "cosine", "ricker", "rectangular")
+
+
+def pulse_from_parameters(kind: str, A: float, omega_p: float | None = None, t_start: float | None = None,
+                          duration: float | None = None, scale: float = 1.0) -> GroundMotion:
+    """The pulse named by plain parameters: the one factory behind the CLI, the ensembles and the
+    GroundMotionSource FMU (identical parameters give identical motions everywhere).
+
+    kind: "sine" (`SinePulse`), "cosine" (`CosinePulse`), "ricker" (`RickerPulse`) or "rectangular"
+    (`RectangularPulse`). A [m/s2]: amplitude (peak), multiplied by ``scale`` [1]. omega_p [rad/s] > 0:
+    circular frequency (sine, cosine, ricker); for the rectangular pulse it gives the duration 2 pi / omega_p
+    when ``duration`` [s] > 0 is not given (give one of the two). t_start [s]: start of the pulse, the centre
+    t_c for the Ricker wavelet; None: 0 (Ricker: 1.5 T_p, T_p = 2 pi / omega_p). Raises ValueError naming
+    the parameter and its allowed range."""
+    if kind not in PULSES:
+        raise ValueError(f"pulse = {kind!r} is not supported; allowed values: " + ", ".join(map(repr, PULSES)))
+    A = check_real("A", A) * check_real("scale", scale)
+    if t_start is not None:
+        t_start = check_real("t_start", t_start)
+    if omega_p is not None:
+        omega_p = check_real("omega_p", omega_p, lo=0.0, lo_open=True)
+    if kind == "rectangular":
+        if (duration is None) == (omega_p is None):
+            raise ValueError("a rectangular pulse needs either duration [s] (allowed range (0, inf)) or omega_p "
+                             "[rad/s] (duration 2 pi / omega_p), not " + ("both" if omega_p is not None else "neither"))
+        if duration is None:
+            duration = 2.0 * math.pi / omega_p
+        duration = check_real("duration", duration, lo=0.0, lo_open=True)
+        return RectangularPulse(A, duration, 0.0 if t_start is None else t_start)
+    if duration is not None:
+        raise ValueError(f"duration = {duration!r} applies to the rectangular pulse only; a {kind} pulse lasts "
+                         "2 pi / omega_p")
+    if omega_p is None:
+        raise ValueError(f"a {kind} pulse needs omega_p [rad/s]; allowed range (0, inf)")
+    if kind == "ricker":
+        return RickerPulse(A, omega_p, t_start)
+    cls = SinePulse if kind == "sine" else CosinePulse
+    return cls(A, omega_p, 0.0 if t_start is None else t_start)
+
+
 def as_ground_motion(ag) -> GroundMotion:
     """Accept a GroundMotion, a number, a callable or a (t, ag) pair of arrays."""
     if isinstance(ag, GroundMotion):

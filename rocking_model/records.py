@@ -49,21 +49,29 @@ def unit_factor(units: str) -> float:
 
 
 class Record(SampledMotion):
-    """A sampled record: t [s], ag [m/s2]; ``name``, ``source`` (file or None), ``header`` (list of str)."""
+    """A sampled record: t [s], ag [m/s2]; ``name``, ``source`` (file or None), ``header`` (list of str),
+    ``units`` (the units of the values in the file, None if not read from a file) and ``units_assumed``
+    (True when the file did not state them and no units were given: a reader's default was used)."""
 
-    def __init__(self, t, ag, name: str = "record", source: str | None = None, header=()):
+    def __init__(self, t, ag, name: str = "record", source: str | None = None, header=(),
+                 units: str | None = None, units_assumed: bool = False):
         super().__init__(t, ag)
         self.name = str(name)
         self.source = source
         self.header = list(header)
+        self.units = units
+        self.units_assumed = bool(units_assumed)
+
+    def _like(self, t, ag, name: str) -> "Record":
+        return Record(t, ag, name, self.source, self.header, self.units, self.units_assumed)
 
     def scaled(self, factor: float) -> "Record":
         factor = check_real("factor", factor)
-        return Record(self.t, factor * self.ag, f"{self.name} x {factor:g}", self.source, self.header)
+        return self._like(self.t, factor * self.ag, f"{self.name} x {factor:g}")
 
     def resampled(self, dt: float, t_start: float | None = None, t_end: float | None = None) -> "Record":
         r = super().resampled(dt, t_start, t_end)
-        return Record(r.t, r.ag, f"{self.name} @ {dt:g} s", self.source, self.header)
+        return self._like(r.t, r.ag, f"{self.name} @ {dt:g} s")
 
     def __repr__(self) -> str:
         return (f"Record({self.name!r}, {self.t.size} samples, dt = {self.dt:g} s, "
@@ -147,8 +155,11 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     if npts < 2:
         raise ValueError(f"{where}: NPTS = {npts} is out of range; allowed range [2, inf)")
     header = lines[:first]
+    assumed = False
     if units is None:
-        units = next((u for u in map(_at2_units, header) if u), "g")
+        units = next((u for u in map(_at2_units, header) if u), None)
+        if units is None:
+            units, assumed = "g", True          # the PEER convention
     factor = unit_factor(units)
     values: list[float] = []
     for j in range(first, len(lines)):
@@ -162,7 +173,7 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     ag = np.array(values[:npts]) * factor
     if not np.all(np.isfinite(ag)):
         raise ValueError(f"{path}: the samples must be finite numbers")
-    return Record(np.arange(npts) * dt, ag, name or path.stem, str(path), header)
+    return Record(np.arange(npts) * dt, ag, name or path.stem, str(path), header, units, assumed)
 
 
 def write_at2(path, t, ag, units: str = "g", title: str = "rocking_model record",
@@ -194,14 +205,16 @@ def write_at2(path, t, ag, units: str = "g", title: str = "rocking_model record"
 _UNIT_IN_HEADER = re.compile(r"[\[(]([^\])]+)[\])]")
 
 
-def read_csv(path, units: str | None = None, name: str | None = None) -> Record:
+def read_csv(path, units: str | None = None, name: str | None = None,
+             default_units: str | None = None) -> Record:
     """Read a two-column text file (time [s], acceleration) into a `Record` (ag converted to m/s2).
 
     Separators: comma, semicolon, tab or spaces. Lines starting with '#' are comments. An optional first
     non-comment line is a header; the acceleration units are taken from it (``time [s], ag [g]`` or
-    ``t (s), acc (cm/s2)``) or from a comment ``# units: g``, else from ``units``. Units neither stated nor
-    given, or stated and given differently, are an error. Times must be strictly increasing. Raises
-    ValueError naming the file and line of the first problem."""
+    ``t (s), acc (cm/s2)``) or from a comment ``# units: g``, else from ``units``, else from
+    ``default_units``. Units neither stated nor given (and no ``default_units``), or stated and given
+    differently, are an error. Times must be strictly increasing. Raises ValueError naming the file and line
+    of the first problem."""
     path = Path(path)
     try:
         lines = path.read_text(errors="replace").splitlines()
@@ -245,14 +258,17 @@ def read_csv(path, units: str | None = None, name: str | None = None) -> Record:
         a.append(row[1])
     if len(t) < 2:
         raise ValueError(f"{path}: {len(t)} data rows, expected at least 2 (time [s], acceleration)")
+    if units is None and stated is None and default_units is not None:
+        factor = unit_factor(default_units)
+        return Record(np.array(t), np.array(a) * factor, name or path.stem, str(path), [], default_units, True)
     if units is None and stated is None:
         raise ValueError(f"{path}: acceleration units are not stated (header 'time [s], ag [g]' or "
                          f"'# units: g'); give them (units=..., CLI --units); allowed values: "
                          + ", ".join(UNITS))
     if units is not None and stated is not None and unit_factor(units) != unit_factor(stated):
         raise ValueError(f"{path}: the file states units {stated!r}, but units = {units!r} was given")
-    factor = unit_factor(units if units is not None else stated)
-    return Record(np.array(t), np.array(a) * factor, name or path.stem, str(path), [])
+    used = units if units is not None else stated
+    return Record(np.array(t), np.array(a) * unit_factor(used), name or path.stem, str(path), [], used)
 
 
 def _is_float(s: str) -> bool:
@@ -276,13 +292,15 @@ def write_csv(path, t, ag, units: str = "m/s2") -> Path:
     return path
 
 
-def read_record(path, units: str | None = None, name: str | None = None) -> Record:
-    """Read ``path`` by its extension: .AT2 (PEER) or .csv/.txt/.dat (two columns)."""
+def read_record(path, units: str | None = None, name: str | None = None,
+                default_units: str | None = None) -> Record:
+    """Read ``path`` by its extension: .AT2 (PEER; units from its line 3, else g) or .csv/.txt/.dat/.tsv
+    (two columns, `read_csv`; ``default_units`` applies to these only)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".at2":
         return read_at2(path, units, name)
     if suffix in (".csv", ".txt", ".dat", ".tsv"):
-        return read_csv(path, units, name)
+        return read_csv(path, units, name, default_units)
     raise ValueError(f"{path}: unknown record format {suffix!r}; allowed: .AT2 (PEER), .csv/.txt/.dat/.tsv")
 
 
@@ -320,8 +338,9 @@ def synthetic_motion(seed: int = 2017, **kwargs) -> Record:
     return Record(t, a, f"synthetic:{seed}")
 
 
-def load_motion(spec: str, units: str | None = None) -> Record:
-    """A record from a CLI/ensemble spec: a file path (.AT2, .csv) or ``synthetic[:seed]``."""
+def load_motion(spec: str, units: str | None = None, default_units: str | None = None) -> Record:
+    """A record from a CLI/ensemble/FMU spec: a file path (.AT2, .csv, read by `read_record`) or
+    ``synthetic[:seed]``."""
     s = str(spec)
     if s == "synthetic" or s.startswith("synthetic:"):
         seed = s.partition(":")[2] or "2017"
@@ -331,4 +350,4 @@ def load_motion(spec: str, units: str | None = None) -> Record:
             raise ValueError(f"record {s!r}: the seed must be an integer (synthetic:2017)") from None
     if not Path(s).exists():
         raise ValueError(f"record {s!r}: no such file")
-    return read_record(s, units)
+    return read_record(s, units, default_units=default_units)

@@ -56,6 +56,12 @@ def test_simulate_record_scaled(tmp_path, capsys):
     (["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "0:1:2"],
      "frequency ratio = 0 is out of range"),
     (["ensemble", "--workers", "0"], "give either --record"),
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "-1"],
+     "--frequency = -1 is out of range; allowed range (0, inf)"),
+    (["simulate", "--pulse", "rectangular", "--amplitude", "3", "--duration", "0"],
+     "duration = 0 is out of range; allowed range (0, inf)"),
+    (["simulate", "--pulse", "ricker", "--amplitude", "3", "--frequency", "2", "--t0", "nan"],
+     "t_start = nan is not finite"),
 ])
 def test_bad_input_exits_2_without_traceback(argv, msg, capsys, tmp_path):
     assert main(argv + ["--out", str(tmp_path / "o.csv" if argv[0] == "ensemble" else tmp_path)]) == 2

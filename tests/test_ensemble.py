@@ -29,6 +29,25 @@ def test_pulse_grid_is_dimensionless_and_ids_are_stable():
         pulse_cases("sine", amplitude_ratios=[-1], frequency_ratios=[1])
 
 
+def test_case_motion_uses_the_pulse_factory():
+    """Each pulse kind of a case is `pulse_from_parameters(kind, A, omega_p, scale=scale)`: starts at 0
+    (Ricker centred at 1.5 T_p), rectangular for 2 pi / omega_p; an unknown kind names the field."""
+    from rocking_model.ensemble import PULSES, case_motion
+    from rocking_model.ground_motion import RectangularPulse, RickerPulse, pulse_from_parameters
+
+    for kind in PULSES:
+        c = dict(pulse_cases(kind, amplitudes=[2.0], frequencies=[0.8])[0], scale=1.5)
+        m, ref = case_motion(c), pulse_from_parameters(kind, c["A"], c["omega_p"], scale=1.5)
+        assert type(m) is type(ref) and m.support == ref.support and m.A == 3.0
+        assert [m(t) for t in np.linspace(0, 5, 501)] == [ref(t) for t in np.linspace(0, 5, 501)]
+    assert case_motion(pulse_cases("ricker", amplitudes=[2.0], frequencies=[0.8])[0]).t_c == \
+        RickerPulse(2.0, 2 * math.pi * 0.8).t_c
+    rect = case_motion(pulse_cases("rectangular", amplitudes=[2.0], frequencies=[0.8])[0])
+    assert isinstance(rect, RectangularPulse) and rect.duration == pytest.approx(1.25, rel=1e-15)
+    with pytest.raises(ValueError, match="motion = 'square' is not supported; allowed values: record, sine"):
+        case_motion(dict(pulse_cases("sine", amplitudes=[2.0], frequencies=[0.8])[0], motion="square"))
+
+
 def test_run_case_equals_direct_simulation():
     c = pulse_cases("sine", amplitude_ratios=[3.0], frequency_ratios=[4.0])[0]
     row = run_case(c)

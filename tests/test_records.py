@@ -6,7 +6,7 @@ import pytest
 from scipy.integrate import quad
 
 from rocking_model import RigidBlock, SampledMotion, Simulator, SinePulse
-from rocking_model.ground_motion import CosinePulse, RectangularPulse, RickerPulse
+from rocking_model.ground_motion import PULSES, CosinePulse, RectangularPulse, RickerPulse, pulse_from_parameters
 from rocking_model.records import (G_N, Record, load_motion, read_at2, read_csv, read_record, synthetic_record,
                                    unit_factor, write_at2, write_csv)
 
@@ -76,6 +76,123 @@ def test_pulse_validation(bad, match):
         bad()
 
 
+# ------------------------------------------------------------------------------------------- one factory
+def test_pulse_from_parameters_builds_each_kind():
+    A, w, t0 = 2.5, 2 * math.pi * 1.5, 0.3
+    T = 2 * math.pi / w
+    s = pulse_from_parameters("sine", A, w, t0, scale=2.0)
+    assert type(s) is SinePulse and (s.A, s.omega_p, s.t0) == (5.0, w, t0)
+    assert type(pulse_from_parameters("sine", A, w)) is SinePulse and pulse_from_parameters("sine", A, w).t0 == 0.0
+    c = pulse_from_parameters("cosine", A, w, t0)
+    assert type(c) is CosinePulse and c(t0 + 0.5 * T) == pytest.approx(-A)
+    r = pulse_from_parameters("ricker", A, w)
+    assert type(r) is RickerPulse and r.t_c == pytest.approx(1.5 * T)        # default centre
+    assert pulse_from_parameters("ricker", A, w, t0).t_c == t0                  # t_start is the centre
+    rect = pulse_from_parameters("rectangular", A, w, t0)
+    assert type(rect) is RectangularPulse and rect.duration == T and rect.support == (t0, t0 + T)
+    rect = pulse_from_parameters("rectangular", A, t_start=t0, duration=0.4)
+    assert rect.support == (t0, t0 + 0.4) and rect(t0 + 0.2) == A
+    assert set(PULSES) == {"sine", "cosine", "ricker", "rectangular"}
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(kind="square", A=1.0, omega_p=1.0), r"pulse = 'square' is not supported; allowed values: 'sine'"),
+    (dict(kind="sine", A=1.0, omega_p=0.0), r"omega_p = 0 is out of range; allowed range \(0, inf\)"),
+    (dict(kind="cosine", A=1.0), r"a cosine pulse needs omega_p \[rad/s\]; allowed range \(0, inf\)"),
+    (dict(kind="ricker", A=float("nan"), omega_p=1.0), r"A = nan is not finite"),
+    (dict(kind="sine", A=1.0, omega_p=1.0, t_start=float("inf")), r"t_start = inf is not finite"),
+    (dict(kind="sine", A=1.0, omega_p=1.0, scale="x"), r"scale must be a real number"),
+    (dict(kind="sine", A=1.0, omega_p=1.0, duration=0.5), r"duration = 0.5 applies to the rectangular pulse only"),
+    (dict(kind="rectangular", A=1.0), r"needs either duration \[s\] \(allowed range \(0, inf\)\) or omega_p.*neither"),
+    (dict(kind="rectangular", A=1.0, omega_p=1.0, duration=1.0), r"not both"),
+    (dict(kind="rectangular", A=1.0, duration=-0.1), r"duration = -0.1 is out of range; allowed range \(0, inf\)"),
+])
+def test_pulse_from_parameters_errors_name_the_parameter(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        pulse_from_parameters(**kwargs)
+
+
+def _same_motion(a, b, t_end):
+    """Same class, same parameters, bit-identical values and breakpoints."""
+    assert type(a) is type(b)
+    grid = np.linspace(-0.1, t_end, 1237).tolist()
+    assert [a(t) for t in grid] == [b(t) for t in grid]
+    bp_a, bp_b, t = [], [], -1.0
+    while math.isfinite(t) and len(bp_a) < 50:
+        bp_a.append(a.next_breakpoint(t))
+        bp_b.append(b.next_breakpoint(t))
+        t = bp_a[-1]
+    assert bp_a == bp_b and a.support == b.support
+
+
+@pytest.mark.parametrize("kind", PULSES)
+def test_cli_ensemble_and_fmu_build_the_same_pulse(kind):
+    """The CLI (``rocking simulate --pulse``), the ensembles (`case_motion`) and the GroundMotionSource FMU
+    (`ground_motion_from_parameters`, sine only) build identical motions from identical parameters."""
+    from rocking_model import cli, cosim, ensemble
+
+    A, f, scale = 2.75, 1.3, 1.7
+    w = 2.0 * math.pi * f
+    argv = ["simulate", "--pulse", kind, "--amplitude", repr(A), "--scale", repr(scale)]
+    argv += ["--duration", repr(2 * math.pi / w)] if kind == "rectangular" else ["--frequency", repr(f)]
+    from_cli, _, _ = cli._motion(cli.build_parser().parse_args(argv))
+    case = dict(ensemble.pulse_cases(kind, amplitudes=[A], frequencies=[f])[0], scale=scale)
+    from_ensemble = ensemble.case_motion(case)
+    factory = pulse_from_parameters(kind, A, w, scale=scale)
+    t_end = factory.support[1] + 0.5
+    _same_motion(from_cli, factory, t_end)
+    _same_motion(from_ensemble, factory, t_end)
+    if kind == "sine":
+        from_fmu = cosim.ground_motion_from_parameters(dict(motion=0, A=A, omega_p=w, t_start=0.0, scale=scale))
+        _same_motion(from_fmu, factory, t_end)
+        assert max(abs(factory(t)) for t in np.linspace(0, t_end, 101)) == pytest.approx(A * scale, rel=1e-3)
+
+
+def test_cli_ensemble_and_fmu_read_the_same_record(tmp_path):
+    """A CSV headed ``time [s],ag [cm/s2]`` and an AT2 file: the three callers read identical records
+    (units converted once, by `rocking_model.records`), scaled identically."""
+    from rocking_model import cli, cosim, ensemble
+
+    t, a = synthetic_record(duration=2.0, seed=5)
+    files = [write_csv(tmp_path / "r.csv", t, a, units="cm/s2"), write_at2(tmp_path / "r.AT2", t, a)]
+    for path in files:
+        from_cli, _, _ = cli._motion(cli.build_parser().parse_args(["simulate", "--record", str(path),
+                                                                       "--scale", "1.5"]))
+        from_ensemble = ensemble.case_motion(ensemble.record_cases([str(path)], scales=[1.5])[0])
+        from_fmu = cosim.ground_motion_from_parameters(dict(motion=1, record=str(path), scale=1.5))
+        for m in (from_ensemble, from_fmu):
+            assert type(m) is Record and np.array_equal(m.t, from_cli.t) and np.array_equal(m.ag, from_cli.ag)
+        np.testing.assert_allclose(from_fmu.ag, 1.5 * a, rtol=1e-14, atol=1e-14)
+
+
+def test_fmu_record_parameters(tmp_path):
+    """GroundMotionSource's record/units parameters: units from the file, else the units parameter, else m/s2;
+    the reader's errors unchanged."""
+    from rocking_model.cosim import ground_motion_from_parameters as gmp
+
+    bare = tmp_path / "bare.csv"
+    bare.write_text("0.0,1.0\n0.5,-2.0\n")
+    m = gmp(dict(motion=1, record=str(bare)))
+    assert np.array_equal(m.ag, [1.0, -2.0]) and m.units == "m/s2" and m.units_assumed
+    m = gmp(dict(motion=1, record=str(bare), units="g"))
+    assert np.array_equal(m.ag, [G_N, -2.0 * G_N]) and m.units == "g" and not m.units_assumed
+    cm = tmp_path / "cm.csv"
+    cm.write_text("time [s],ag [cm/s2]\n0.0,100\n0.5,-250\n")
+    m = gmp(dict(motion=1, record=str(cm)))
+    assert np.array_equal(m.ag, [1.0, -2.5]) and m.units == "cm/s2" and not m.units_assumed
+    with pytest.raises(ValueError, match=r"cm.csv: the file states units 'cm/s2', but units = 'g' was given"):
+        gmp(dict(motion=1, record=str(cm), units="g"))
+    with pytest.raises(ValueError, match=r"units = 'furlong' is not supported; allowed values: g, m/s2"):
+        gmp(dict(motion=0, A=1.0, omega_p=1.0, units="furlong"))
+    with pytest.raises(ValueError, match=r"record = '': motion = 1 needs a record file"):
+        gmp(dict(motion=1, record=""))
+    with pytest.raises(ValueError, match=r"motion = 2 is not supported; allowed values: 0 \(sine pulse\), 1"):
+        gmp(dict(motion=2))
+    with pytest.raises(ValueError, match=r"scale = inf is not finite"):
+        gmp(dict(motion=0, A=1.0, omega_p=1.0, scale=math.inf))
+    assert gmp(dict(motion=1, record="synthetic:2017")).pga == pytest.approx(0.4 * 9.81)
+
+
 def test_scaled_and_resampled():
     s = SinePulse(2.0, 2 * math.pi, 0.5).scaled(1.5)
     assert isinstance(s, SinePulse) and s.A == 3.0 and s(0.75) == pytest.approx(3.0)
@@ -118,6 +235,11 @@ def test_read_at2_new_and_old_headers(tmp_path):
     assert isinstance(r, Record) and r.name == "new" and r.t.size == 7
     assert np.array_equal(r.t, np.arange(7) * 0.005)
     assert np.array_equal(r.ag, np.array([0.01, -0.02, 0.3, -0.004, 0.0005, 0.0, -0.01234567]) * G_N)
+    assert r.units == "g" and not r.units_assumed
+    p.write_text(NEW_AT2.replace("IN UNITS OF G", ""))
+    assert read_at2(p).units == "g" and read_at2(p).units_assumed          # the PEER convention
+    assert np.array_equal(read_at2(p, units="cm/s2").ag, np.array([0.01, -0.02, 0.3, -0.004, 0.0005, 0.0,
+                                                                     -0.01234567]) * 0.01)
     q = tmp_path / "old.at2"
     q.write_text(OLD_AT2)
     r = read_record(q)
@@ -163,6 +285,11 @@ def test_read_csv_units(tmp_path):
     assert np.allclose(read_csv(n, units="mm/s2").ag, [0.001, 0.002])
     with pytest.raises(ValueError, match="units are not stated"):
         read_csv(n)
+    d = read_record(n, default_units="cm/s2")              # a default applies only when nothing is stated
+    assert np.allclose(d.ag, [0.01, 0.02]) and d.units == "cm/s2" and d.units_assumed
+    assert read_csv(p, default_units="g").units == "cm/s^2" and not read_csv(p, default_units="g").units_assumed
+    s = read_csv(n, units="mm/s2").scaled(2.0).resampled(0.005)
+    assert s.units == "mm/s2" and not s.units_assumed       # carried through scaled and resampled
     with pytest.raises(ValueError, match="states units 'cm/s\\^2', but units = 'g'"):
         read_csv(p, units="g")
     assert unit_factor("m/s/s") == 1.0 and unit_factor("Gal") == 0.01 and unit_factor("cm/sec2") == 0.01

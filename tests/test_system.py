@@ -91,15 +91,74 @@ def test_source_fmu_outputs_the_pulse_at_the_communication_points(fmus):
 
 
 def test_source_fmu_reads_a_record_file(fmus, tmp_path):
+    """A CSV file whose header states no units: read as m/s2 (the FMU's default), with a warning."""
     record = tmp_path / "rec.csv"
     record.write_text("time,ag\n0.0,0.0\n0.5,1.0\n1.0,-1.0\n")
-    res = run_fmu(fmus["GroundMotionSource"], stop_time=1.2, output_interval=0.1,
-                  start_values={"motion": 1, "record": str(record)})
+    messages = []
+    res = fmpy.simulate_fmu(str(fmus["GroundMotionSource"]), stop_time=1.2, output_interval=0.1,
+                            start_values={"motion": 1, "record": str(record)}, debug_logging=True,
+                            logger=lambda env, inst, status, cat, msg: messages.append((status, msg.decode())))
     np.testing.assert_allclose(res["ag"], np.interp(res["time"], [0, 0.5, 1.0], [0, 1.0, -1.0], right=0.0),
                                atol=1e-12)
+    assert any("does not state its acceleration units; read as m/s2" in m for _, m in messages)
     with pytest.raises(FMUError, match=r"no such file"):
         run_fmu(fmus["GroundMotionSource"], stop_time=0.1, output_interval=0.1,
                 start_values={"motion": 1, "record": str(tmp_path / "missing.csv")})
+
+
+def test_source_fmu_reads_units_from_the_csv_header(fmus, tmp_path):
+    """``time [s],ag [cm/s2]``: the FMU outputs m/s2, the file's values / 100 (it read them as m/s2 before)."""
+    t = np.round(np.arange(0.0, 1.0 + 1e-9, 0.01), 12)
+    a_cm = 250.0 * np.sin(2 * np.pi * t) * np.exp(-t)
+    record = tmp_path / "cm.csv"
+    record.write_text("time [s],ag [cm/s2]\n" + "".join(f"{ti!r},{ai!r}\n" for ti, ai in zip(t.tolist(), a_cm.tolist())))
+    res = run_fmu(fmus["GroundMotionSource"], stop_time=1.0, output_interval=0.01,
+                  start_values={"motion": 1, "record": str(record)})
+    assert np.abs(res["ag"]).max() == pytest.approx(np.abs(a_cm).max() / 100.0, rel=1e-12)
+    np.testing.assert_allclose(res["ag"], np.interp(res["time"], t, a_cm) / 100.0, rtol=0, atol=1e-12)
+    # units = "cm/s2" agrees with the header; units = "g" contradicts it: the reader's error
+    same = run_fmu(fmus["GroundMotionSource"], stop_time=1.0, output_interval=0.01,
+                   start_values={"motion": 1, "record": str(record), "units": "cm/s2"})
+    np.testing.assert_array_equal(same["ag"], res["ag"])
+    with pytest.raises(FMUError) as exc:
+        run_fmu(fmus["GroundMotionSource"], stop_time=0.1, output_interval=0.01,
+                start_values={"motion": 1, "record": str(record), "units": "g"})
+    assert "the file states units 'cm/s2', but units = 'g' was given" in str(exc.value)
+
+
+def test_source_fmu_reads_a_peer_at2_file(fmus, tmp_path):
+    """A PEER AT2 file (units of g): the FMU outputs the samples of `records.read_at2`."""
+    from rocking_model.records import read_at2, synthetic_record, write_at2
+
+    t, a = synthetic_record(duration=2.0, dt=0.01, seed=3)
+    path = write_at2(tmp_path / "RSN_TEST.AT2", t, a, digits=7)          # PEER's 7 digits
+    rec = read_at2(path)
+    res = run_fmu(fmus["GroundMotionSource"], stop_time=2.0, output_interval=0.01,
+                  start_values={"motion": 1, "record": str(path), "scale": 2.0})
+    assert res["time"].size == rec.t.size
+    np.testing.assert_allclose(res["ag"], 2.0 * rec.ag, rtol=1e-12, atol=1e-12)
+    assert np.abs(res["ag"]).max() == pytest.approx(2.0 * rec.pga, rel=1e-12)
+
+
+@pytest.mark.parametrize("name, text, units", [
+    ("bad.csv", "time [s],ag [g]\n0.0,0.1\n0.01,abc\n", ""),
+    ("back.csv", "time [s],ag [g]\n0.0,0.1\n0.02,0.2\n0.01,0.3\n", ""),
+    ("bad.AT2", "title\nevent\nACCELERATION TIME SERIES IN UNITS OF G\nNPTS=  9, DT= .01 SEC\n.1 .2 .3\n", ""),
+    ("ok.csv", "0.0,0.1\n0.01,0.2\n", "furlong"),
+    ("rec.xlsx", "0.0,0.1\n0.01,0.2\n", ""),
+])
+def test_source_fmu_reports_the_record_readers_errors(fmus, tmp_path, name, text, units):
+    """A bad record file: the FMU fails with the message of `rocking_model.records` (as the CLI prints it)."""
+    from rocking_model.records import read_record
+
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(ValueError) as expected:
+        read_record(path, units or None, default_units="m/s2")
+    with pytest.raises(FMUError) as exc:
+        run_fmu(fmus["GroundMotionSource"], stop_time=0.1, output_interval=0.01,
+                start_values={"motion": 1, "record": str(path), "units": units})
+    assert str(expected.value) in str(exc.value)
 
 
 # ------------------------------------------------------------------------------ fmpy master
