@@ -1,0 +1,253 @@
+"""Conformance and fault suite (issue 12): classes of misuse and bad input over the four FMUs
+(RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource, LinearBuildingStorey), driving every
+FMI 2.0 co-simulation function through fmpy's low-level ``FMU2Slave``.
+
+The cases live in tests/fault_harness.py (a case = a small function or a row of a table). Each runs in a
+process of its own -- forked by a harness server that imported fmpy and numpy once -- with a timeout, so a
+crash (SIGSEGV in the pythonfmu 0.7 C wrapper) or a hang is a failed case, never a dead pytest. The cases
+selected for the session run up front on all cores (``FAULT_SUITE_JOBS``, default: the CPU count, at most 4);
+each test then asserts on its case's JSON record:
+
+1. the process survived (exit code 0, no signal) and finished within the case's timeout;
+2. the statuses follow FMI 2.0 as far as the pythonfmu 0.7 wrapper allows (fmi2OK, fmi2Discard, or fmi2Fatal
+   for invalid parameters at fmi2ExitInitializationMode; a call the wrapper can only answer with fmi2OK is
+   followed by a discarded fmi2DoStep);
+3. the logged message names the variable or the call;
+4. the state after a refused call is bit-identical to before (every variable as exact floats and the bytes of
+   fmi2SerializeFMUstate), and the instance steps on exactly like a control instance that never saw the call.
+
+Checks of kinds 2-4 are recorded by the worker as it goes; a case declares which kinds it must contain.
+The summary line (classes tried / passing, the longest case, the longest single FMI call) is printed at the
+end of the session. Run one case by hand: ``python tests/fault_harness.py --case <id> --config <json>``
+(the config file is written into the session's temporary folder).
+"""
+from __future__ import annotations
+
+import json
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("fmpy")
+pytest.importorskip("pythonfmu")
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+import fault_harness as fh  # noqa: E402
+
+sys.path.remove(str(HERE))
+
+MIN_CLASSES = 100
+JOBS = int(os.environ.get("FAULT_SUITE_JOBS", "0")) or max(2, min(4, os.cpu_count() or 2))
+
+
+# ---------------------------------------------------------------------------------------------- running
+@pytest.fixture(scope="session")
+def fault_config(tmp_path_factory):
+    """Build the four FMUs once, extract each once (the cases share the read-only folders)."""
+    import importlib.util
+
+    from fmpy import extract
+
+    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    dest = tmp_path_factory.mktemp("fault_fmus")
+    paths = build.build_all(dest, names=list(fh.FMUS))
+    fmus = {p.stem: {"path": str(p), "unzip": str(extract(str(p), unzipdir=str(dest / f"{p.stem}_unzipped")))}
+            for p in paths}
+    config = dest / "fmus.json"
+    config.write_text(json.dumps({"fmus": fmus}))
+    return config
+
+
+class _Server:
+    """A harness fork server (tests/fault_harness.py --serve) fed one request per line."""
+
+    def __init__(self, pycache: Path):
+        env = {**os.environ, "FAULT_SUITE_PYCACHE": str(pycache)}
+        self.proc = subprocess.Popen([sys.executable, str(HERE / "fault_harness.py"), "--serve"], cwd=str(ROOT),
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1, env=env)
+
+    def run(self, request: dict) -> dict:
+        self.proc.stdin.write(json.dumps(request) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError("the harness server died")
+        return json.loads(line)
+
+    def close(self):
+        try:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=10)
+        except Exception:
+            self.proc.kill()
+
+
+def _run_plain(request: dict) -> dict:
+    """Fallback without the fork server (FAULT_SUITE_NO_FORK=1): one fresh interpreter per case."""
+    t0 = time.perf_counter()
+    cwd = Path(request["cwd"])
+    try:
+        with open(cwd / "stdout.txt", "w") as out, open(cwd / "stderr.txt", "w") as err:
+            proc = subprocess.run([sys.executable, str(HERE / "fault_harness.py"), "--case", request["case"],
+                                   "--config", request["config"], "--out", request["out"]], cwd=str(cwd),
+                                  stdout=out, stderr=err, timeout=request["timeout"])
+        rc, sig = (proc.returncode, None) if proc.returncode >= 0 else (None, -proc.returncode)
+        return {"case": request["case"], "rc": rc, "signal": sig, "timed_out": False,
+                "elapsed": time.perf_counter() - t0}
+    except subprocess.TimeoutExpired:
+        return {"case": request["case"], "rc": None, "signal": None, "timed_out": True,
+                "elapsed": time.perf_counter() - t0}
+
+
+def _selected_cases(session) -> list:
+    ids = []
+    for item in session.items:
+        callspec = getattr(item, "callspec", None)
+        if callspec is not None and "cid" in callspec.params and item.module.__name__ == __name__:
+            ids.append(callspec.params["cid"])
+    return ids
+
+
+@pytest.fixture(scope="session")
+def fault_records(request, fault_config, tmp_path_factory):
+    """Run every selected case (in parallel: JOBS fork servers) and return {case id: outcome}."""
+    cids = _selected_cases(request.session) or list(fh.CASES)
+    base = tmp_path_factory.mktemp("fault_cases")
+    todo: "queue.Queue[str]" = queue.Queue()
+    for cid in sorted(cids, key=lambda c: -fh.CASES[c].timeout):
+        todo.put(cid)
+    results: dict = {}
+    no_fork = os.environ.get("FAULT_SUITE_NO_FORK") == "1"
+    t_start = time.perf_counter()
+
+    def worker():
+        server = None if no_fork else _Server(base / "pycache")
+        try:
+            while True:
+                try:
+                    cid = todo.get_nowait()
+                except queue.Empty:
+                    return
+                cwd = base / cid.replace("/", "__")
+                cwd.mkdir(parents=True)
+                req = {"case": cid, "config": str(fault_config), "out": str(cwd / "record.json"), "cwd": str(cwd),
+                       "timeout": fh.CASES[cid].timeout}
+                try:
+                    outcome = _run_plain(req) if server is None else server.run(req)
+                except Exception as exc:  # the server itself died: report it, start another one
+                    outcome = {"case": cid, "rc": None, "signal": None, "timed_out": False, "elapsed": 0.0,
+                               "server_error": repr(exc)}
+                    server.close()
+                    server = _Server(base / "pycache")
+                rec_path = cwd / "record.json"
+                outcome["record"] = json.loads(rec_path.read_text()) if rec_path.exists() else None
+                outcome["stderr"] = (cwd / "stderr.txt").read_text(errors="replace")[-3000:] \
+                    if (cwd / "stderr.txt").exists() else ""
+                outcome["cwd"] = str(cwd)
+                results[cid] = outcome
+        finally:
+            if server is not None:
+                server.close()
+
+    threads = [threading.Thread(target=worker, daemon=True) for _ in range(JOBS)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    wall = time.perf_counter() - t_start
+    yield results
+    _summary(request.config, results, wall)
+
+
+def _verdict(cid: str, outcome: dict) -> list:
+    """The list of failures of one case (empty: the case passes)."""
+    case = fh.CASES[cid]
+    problems = []
+    if outcome.get("server_error"):
+        problems.append(f"harness server error: {outcome['server_error']}")
+    if outcome["timed_out"]:
+        problems.append(f"did not finish within {case.timeout:g} s (a hang)")
+    elif outcome["signal"] is not None:
+        problems.append(f"the process died with signal {outcome['signal']} (a crash)")
+    elif outcome["rc"] != 0:
+        problems.append(f"the process exited with code {outcome['rc']}")
+    rec = outcome.get("record")
+    if rec is None:
+        problems.append("no record written" + (f"; stderr: {outcome['stderr'][-1500:]}" if outcome["stderr"] else ""))
+        return problems
+    if rec.get("error"):
+        problems.append(f"the case raised:\n{rec['error']}")
+    if rec.get("pwned"):
+        problems.append("the file 'pwned' exists: code from a state was executed")
+    checks = rec.get("checks") or []
+    for kind in case.kinds:
+        if not any(c["kind"] == kind for c in checks):
+            problems.append(f"no check of kind {kind!r} was reached")
+    for c in checks:
+        if not c["ok"]:
+            problems.append(f"[{c['kind']}] {c['label']}: {json.dumps(c['detail'], default=repr)[:1500]}")
+    return problems
+
+
+def _summary(config, results: dict, wall: float) -> None:
+    tried = len(results)
+    verdicts = {cid: _verdict(cid, o) for cid, o in results.items()}
+    passing = sum(1 for v in verdicts.values() if not v)
+    xfail = [cid for cid in results if fh.CASES[cid].xfail]
+    xfail_failing = sum(1 for cid in xfail if verdicts[cid])
+    longest = max(results.items(), key=lambda kv: kv[1]["elapsed"], default=(None, {"elapsed": 0.0}))
+    slow_call = max(((c.get("elapsed", 0.0), cid, c) for cid, o in results.items()
+                     for c in [((o.get("record") or {}).get("max_call") or {})]), default=(0.0, None, {}))
+    families: dict = {}
+    for cid, v in verdicts.items():
+        fam = fh.CASES[cid].family
+        t, p = families.get(fam, (0, 0))
+        families[fam] = (t + 1, p + (not v))
+    lines = [f"fault suite: {tried} classes tried, {passing} passing ({len(xfail)} strict xfails for the pythonfmu "
+             f"0.7 wrapper, {xfail_failing} of them failing as expected); cases wall time {wall:.1f} s on {JOBS} "
+             f"processes",
+             f"  longest case: {longest[0]} {longest[1]['elapsed']:.2f} s; longest FMI call: "
+             f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}",
+             "  by family: " + ", ".join(f"{f} {p}/{t}" for f, (t, p) in sorted(families.items()))]
+    out_dir = os.environ.get("FAULT_SUITE_REPORT")
+    if out_dir:
+        Path(out_dir).write_text(json.dumps({cid: {"problems": v, "elapsed": results[cid]["elapsed"],
+                                                   "figures": (results[cid].get("record") or {}).get("figures"),
+                                                   "what": fh.CASES[cid].what}
+                                             for cid, v in verdicts.items()}, indent=1, default=repr))
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    for line in lines:
+        if reporter is not None:
+            reporter.write_line(line)
+        else:  # pragma: no cover
+            print(line)
+
+
+# ---------------------------------------------------------------------------------------------- tests
+def _params():
+    out = []
+    for cid, case in fh.CASES.items():
+        marks = [pytest.mark.xfail(strict=True, reason=case.xfail)] if case.xfail else []
+        out.append(pytest.param(cid, id=cid, marks=marks))
+    return out
+
+
+def test_at_least_100_classes():
+    assert len(fh.CASES) >= MIN_CLASSES
+    assert {c.fn for c in fh.CASES.values()} and len({c.family for c in fh.CASES.values()}) >= 10
+
+
+@pytest.mark.parametrize("cid", _params())
+def test_fault_case(fault_records, cid):
+    problems = _verdict(cid, fault_records[cid])
+    assert not problems, f"{cid} ({fh.CASES[cid].what}):\n  " + "\n  ".join(problems)
