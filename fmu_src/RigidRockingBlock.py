@@ -4,7 +4,7 @@ Thin wrapper: the FMI plumbing lives in `rocking_model.fmi`, the physics in `roc
 ``python build_fmu.py`` (writes dist/RigidRockingBlock.fmu). The module name is unique on purpose: two FMUs
 whose scripts share a module name cannot be loaded in the same process.
 """
-from rocking_model.fmi import DefaultExperiment, RockingSlave, Var
+from rocking_model.fmi import AG_MAX, DefaultExperiment, RockingSlave, Var
 
 
 class RigidRockingBlock(RockingSlave):
@@ -39,8 +39,9 @@ class RigidRockingBlock(RockingSlave):
         Var("tolerance", "parameter", 1e-8, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
         # input
-        Var("ag", "input", 0.0, unit="m/s2",
-            description="Horizontal ground acceleration (held constant over each communication step)"),
+        Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
+            description="Horizontal ground acceleration (held constant over each communication step), "
+                        "|ag| <= 1000 m/s2 (about 100 g)"),
         # outputs
         Var("phi", "output", unit="rad", description="Rotation of the block"),
         Var("phi_dot", "output", unit="rad/s", description="Angular velocity of the block"),

@@ -6,7 +6,8 @@ from .models.flexible_oscillator import FlexibleOscillator
 from .models.rigid_block import RigidBlock
 from .modes import Mode
 from .simulation import Result, Simulator, simulate
+from .validation import AG_MAX, WorkLimitError
 
 __all__ = ["RigidBlock", "FlexibleOscillator", "Mode", "Simulator", "simulate", "Result", "GroundMotion", "ConstantMotion",
-           "FunctionMotion", "SampledMotion", "SinePulse"]
+           "FunctionMotion", "SampledMotion", "SinePulse", "AG_MAX", "WorkLimitError"]
 __version__ = "0.1.0"

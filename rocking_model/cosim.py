@@ -83,22 +83,59 @@ def ground_motion_from_parameters(p: Mapping[str, Any]) -> GroundMotion:
 class MotionSource:
     """A ground motion as a stepwise component (``t``, ``advance(t_end)``, ``outputs()``): the output
     ``ag`` at a communication point t is ag(t), exactly as the standalone FMU would be driven by a table
-    sampled at the communication points."""
+    sampled at the communication points.
+
+    Every value must be a finite number with |ag| <= AG_MAX (1000 m/s2): a motion whose known peak exceeds
+    it is refused here, and a step whose end value is out of range is refused by `advance` (ValueError
+    naming ag, the time kept). `get_state` / `set_state` save and load the time as plain data."""
 
     def __init__(self, motion: GroundMotion, t0: float = 0.0):
-        self.motion = motion
-        self.t = float(t0)
+        from .ground_motion import checked_motion
+
+        self.motion = checked_motion(motion)
+        self.t = check_real("t0", t0)
+        self._ag = self._value(self.t)
+
+    def _value(self, t: float) -> float:
+        from .validation import check_ag
+
+        value = self.motion(t)
+        try:
+            return check_ag(value)
+        except ValueError:
+            raise ValueError(f"ag({t:.17g}) = {float(value)!r} is out of range or not finite; allowed range "
+                             "[-1000, 1000] m/s2 (AG_MAX)") from None
 
     def advance(self, t_end: float) -> None:
+        """Move to ``t_end`` [s]; the output becomes ag(t_end). Raises ValueError (state kept) for a t_end
+        before the current time or not finite, or an ag(t_end) out of range."""
+        t_end = check_real("t_end", t_end)
         if t_end < self.t:
             raise ValueError(f"t_end = {t_end!r} is before the current time {self.t!r}")
-        self.t = float(t_end)
+        value = self._value(t_end)
+        self.t, self._ag = t_end, value
 
     def outputs(self) -> dict:
-        value = float(self.motion(self.t))
-        if not math.isfinite(value):
-            raise ValueError(f"ag({self.t:g}) = {value!r} is not finite")
-        return {"ag": value}
+        return {"ag": self._ag}
+
+    #: the `get_state` fields
+    STATE_KEYS = ("version", "model", "t")
+
+    def get_state(self) -> dict:
+        """The time [s] (the motion is a parameter: rebuild the source from it, then `set_state`) as a flat
+        dict of plain values, with a version and the component's name."""
+        return {"version": 1, "model": "MotionSource", "t": float(self.t)}
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
+        from .validation import check_state_keys, state_float, state_int, state_str
+
+        check_state_keys(state, self.STATE_KEYS)
+        state_int(state, "version", 1, 1)
+        state_str(state, "model", "MotionSource")
+        t = state_float(state, "t")
+        value = self._value(t)
+        self.t, self._ag = t, value
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -93,15 +93,9 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from .fmi_state import decode_state, encode_state
-from .validation import check_real
+from .validation import AG_MAX, WorkLimitError, check_real
 
-try:
-    from .simulation import WorkLimitError
-except ImportError:  # pragma: no cover - until the work budget lands
-    class WorkLimitError(RuntimeError):
-        pass
-
-__all__ = ["UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
+__all__ = ["AG_MAX", "UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
            "adopt_slave_class"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).

@@ -1,8 +1,10 @@
 """Horizontal ground accelerations ag(t) [m/s2], positive in +x.
 
 Every ground motion is a callable ag(t) that also tells the integrators where it has kinks or jumps
-(`next_breakpoint`), so that the event-driven scheme never integrates across one, and whether it is
-constant (`constant`).
+(`next_breakpoint`), so that the event-driven scheme never integrates across one, whether it is
+constant (`constant`) and, when known, a bound of |ag| (`peak_bound`), which `Simulator.advance` compares
+with `AG_MAX` (1000 m/s2, about 100 g) before any work. Motions without a known bound are checked value by
+value as the integrators read them.
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from .validation import check_real
+from .validation import AG_MAX, check_ag, check_real
 
 
 class GroundMotion:
@@ -36,6 +38,15 @@ class GroundMotion:
 
     #: (t_start, t_end) [s] outside which ag is zero, or None when unbounded or unknown
     support: tuple[float, float] | None = None
+
+    #: True when __call__ itself refuses values outside [-AG_MAX, AG_MAX] (ValueError naming ag)
+    self_checked = False
+
+    @property
+    def peak_bound(self) -> float | None:
+        """An upper bound of |ag(t)| over all t [m/s2], or None when unknown (then the simulators check
+        each value they read)."""
+        return None
 
     def scaled(self, factor: float) -> "GroundMotion":
         """This motion times ``factor`` [1] (same breakpoints)."""
@@ -66,28 +77,85 @@ class ConstantMotion(GroundMotion):
     constant = True
 
     def __init__(self, value: float):
-        self.value = check_real("ag", value)
+        self.value = check_ag(value)
 
     def __call__(self, t):
         return self.value
 
+    @property
+    def peak_bound(self):
+        return abs(self.value)
+
+    def scaled(self, factor: float) -> "ConstantMotion":
+        return ConstantMotion(self.value * check_real("factor", factor))
+
 
 class FunctionMotion(GroundMotion):
-    """Wrap a user callable ag(t); `breakpoints` lists its known kinks [s]."""
+    """Wrap a user callable ag(t); `breakpoints` lists its known kinks [s]. Every value is checked: a value
+    that is not a finite number in [-AG_MAX, AG_MAX] raises ValueError naming ag (and the time)."""
+
+    self_checked = True
 
     def __init__(self, fun: Callable[[float], float], breakpoints=()):
         self.fun = fun
         self._bp = np.sort(np.asarray(breakpoints, dtype=float))
 
     def __call__(self, t):
-        value = float(self.fun(t))
-        if not math.isfinite(value):
-            raise ValueError(f"ag({t:g}) = {value!r} is not finite; allowed range (-inf, inf)")
-        return value
+        return _checked_value(self.fun, t)
 
     def next_breakpoint(self, t):
         i = np.searchsorted(self._bp, t, side="right")
         return float(self._bp[i]) if i < self._bp.size else math.inf
+
+
+def _checked_value(fun, t: float) -> float:
+    """fun(t) as a float in [-AG_MAX, AG_MAX] or ValueError naming ag and t."""
+    try:
+        value = float(fun(t))
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"ag({t:.17g}) must be a real number; the ground motion raised "
+                         f"{type(exc).__name__}: {exc}") from None
+    if -AG_MAX <= value <= AG_MAX:
+        return value
+    if not math.isfinite(value):
+        raise ValueError(f"ag({t:.17g}) = {value!r} is not finite; allowed range [{-AG_MAX:g}, {AG_MAX:g}] "
+                         "m/s2 (AG_MAX)")
+    raise ValueError(f"ag({t:.17g}) = {value:g} is out of range; allowed range [{-AG_MAX:g}, {AG_MAX:g}] m/s2 "
+                     "(AG_MAX, about 100 g)")
+
+
+class CheckedMotion(GroundMotion):
+    """A ground motion without a known peak bound, with every value checked (`_checked_value`): what the
+    simulators run instead of a user's GroundMotion subclass, so that a value out of range stops the step
+    with a ValueError naming ag instead of overflowing inside the integrator."""
+
+    self_checked = True
+
+    def __init__(self, motion: GroundMotion):
+        self.motion = motion
+        self.support = motion.support
+
+    def __call__(self, t):
+        return _checked_value(self.motion, t)
+
+    def next_breakpoint(self, t):
+        return self.motion.next_breakpoint(t)
+
+    def continuous_at(self, tb):
+        return self.motion.continuous_at(tb)
+
+
+def checked_motion(motion: GroundMotion) -> GroundMotion:
+    """``motion`` ready for an integrator: refused (ValueError naming ag) when its known peak exceeds
+    AG_MAX, wrapped in `CheckedMotion` when its peak is unknown and it does not check its values itself."""
+    peak = motion.peak_bound
+    if peak is None:
+        return motion if motion.self_checked else CheckedMotion(motion)
+    if not peak <= AG_MAX:
+        raise ValueError(f"ag: the ground motion's peak |ag| = {peak:g} m/s2 is out of range; allowed range "
+                         f"[{-AG_MAX:g}, {AG_MAX:g}] m/s2 (AG_MAX, about 100 g; check the units of the record "
+                         "and its scale factor)")
+    return motion
 
 
 class SampledMotion(GroundMotion):
@@ -107,6 +175,7 @@ class SampledMotion(GroundMotion):
         self.t, self.ag = t, ag
         self._tl, self._al = t.tolist(), ag.tolist()
         self._i = 0                      # interval of the last evaluation
+        self._peak = float(np.max(np.abs(ag)))
 
     def __call__(self, t):
         tl = self._tl
@@ -144,7 +213,12 @@ class SampledMotion(GroundMotion):
     @property
     def pga(self) -> float:
         """Peak |ag| over the samples [m/s2]."""
-        return float(np.max(np.abs(self.ag)))
+        return self._peak
+
+    @property
+    def peak_bound(self):
+        # linear interpolation between the samples and zero outside: the samples' peak
+        return self._peak
 
     def scaled(self, factor: float) -> "SampledMotion":
         factor = check_real("factor", factor)
@@ -159,9 +233,16 @@ class ScaledMotion(GroundMotion):
         self.factor = check_real("factor", factor)
         self.constant = self.motion.constant
         self.support = self.motion.support
+        if self.constant:
+            self.value = self.factor * self.motion(0.0)   # what the integrators read of a constant motion
 
     def __call__(self, t):
         return self.factor * self.motion(t)
+
+    @property
+    def peak_bound(self):
+        peak = self.motion.peak_bound
+        return None if peak is None else abs(self.factor) * peak
 
     def next_breakpoint(self, t):
         return self.motion.next_breakpoint(t)
@@ -188,6 +269,10 @@ class SinePulse(GroundMotion):
         if t < self.t0 or t > self.t1:
             return 0.0
         return self.A * math.sin(self.omega_p * (t - self.t0))
+
+    @property
+    def peak_bound(self):
+        return abs(self.A)
 
     def next_breakpoint(self, t):
         for tb in (self.t0, self.t1):
@@ -270,6 +355,10 @@ class RickerPulse(GroundMotion):
         x = 0.25 * (self.omega_p * (t - self.t_c)) ** 2
         return self.A * (1.0 - 2.0 * x) * math.exp(-x)
 
+    @property
+    def peak_bound(self):
+        return abs(self.A)        # the peak, at t_c
+
     def scaled(self, factor):
         return RickerPulse(self.A * check_real("factor", factor), self.omega_p, self.t_c)
 
@@ -289,6 +378,10 @@ class RectangularPulse(_JumpBreakpoints, GroundMotion):
 
     def __call__(self, t):
         return self.A if self.t0 < t <= self.t1 else 0.0
+
+    @property
+    def peak_bound(self):
+        return abs(self.A)
 
     def scaled(self, factor):
         return RectangularPulse(self.A * check_real("factor", factor), self.duration, self.t0)

@@ -47,14 +47,34 @@ class BoundedLog(list):
     """A list that keeps its last ``maxlen`` entries (None: all), trimmed in chunks so that appending stays
     O(1) amortized and memory stays bounded over arbitrarily long runs."""
 
+    #: while True the log is not trimmed (a `Simulator.advance` in progress: on failure the entries it
+    #: appended are cut off again, which needs the older ones still there); `release` trims
+    held = False
+
     def __init__(self, maxlen: int | None = None):
         super().__init__()
         self.maxlen = maxlen
 
     def append(self, item) -> None:
         super().append(item)
+        if self.maxlen is not None and len(self) > 2 * self.maxlen and not self.held:
+            del self[:len(self) - self.maxlen]
+
+    def hold(self) -> int:
+        """Stop trimming (see `held`); returns the current length (to `cut` back to)."""
+        self.held = True
+        return len(self)
+
+    def release(self) -> None:
+        """Trim again (and now, if the log grew past its bound while held)."""
+        self.held = False
         if self.maxlen is not None and len(self) > 2 * self.maxlen:
             del self[:len(self) - self.maxlen]
+
+    def cut(self, n: int) -> None:
+        """Drop the entries appended since the log had length ``n`` (while held) and release it."""
+        del self[n:]
+        self.held = False
 
     def tail(self) -> list:
         """The last ``maxlen`` entries (all when maxlen is None): the chunked trimming keeps up to 2 maxlen."""

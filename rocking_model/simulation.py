@@ -6,14 +6,30 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion
+from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion, checked_motion
 from .integrators.event_driven import EventDriven
 from .integrators.moreau_jean import MoreauJean
 from .models.base import RockingModel
 from .modes import Mode
-from .validation import check_choice, check_real
+from .validation import (AG_MAX, WorkLimitError, check_choice, check_real, check_state_keys, state_int,
+                         state_str)
 
 SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
+
+#: [1] smallest dt_max (other than 0, the scheme's default) relative to the model's time scale 1/p: a
+#: Moreau-Jean step of 1e-6/p has a first-order error of ~1e-6 of the motion (finer than any rocking study
+#: resolves), while the work per second of motion grows as 1/dt_max: 1e6 steps per time scale would make one
+#: second of a typical block (1/p ~ 0.2-0.5 s) cost minutes. The same bound holds for the event-driven cap.
+DT_MIN_REL = 1e-6
+
+#: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
+#: plus events. 1e5 steps take about 1 to 5 s (measured, both models and schemes, see
+#: docs/robustness_library.md) and cover 100 s of motion at the Moreau-Jean default dt_max = 1e-3 s.
+MAX_STEPS = 100_000
+
+#: version of the `Simulator.get_state` dict
+STATE_VERSION = 1
+_HEADER = ("version", "scheme", "model", "n_dof")
 
 
 class Simulator:
@@ -25,7 +41,8 @@ class Simulator:
     scheme : "moreau_jean" (0) or "event_driven" (1).
     dt_max : [s] Moreau-Jean step (the largest; each `advance` is split in equal steps; default 1e-3 s,
         and at most 0.25/omega for the flexible oscillator), or the largest step of the event-driven scheme
-        (default: none). None or 0 selects the scheme's default (0 is how the FMUs spell it).
+        (default: none). None or 0 selects the scheme's default (0 is how the FMUs spell it); otherwise at
+        least DT_MIN_REL * model.time_scale (1e-6/p).
     tolerance : [1] relative (and scaled absolute) tolerance of the event-driven scheme, in [1e-14, 1e-2].
     theta : [1] Moreau-Jean theta in [0.5, 1].
     zeno_tol : [1] event-driven Zeno rule, v_Zeno = zeno_tol * sqrt(g L).
@@ -33,14 +50,22 @@ class Simulator:
         at tolerances of 1e-6 and looser).
     impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
         log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
+    max_steps : work budget of one `advance` call: internal steps (Moreau-Jean steps, or Runge-Kutta steps
+        plus events), default MAX_STEPS = 100000; None = unlimited (trusted batch use). An advance that needs
+        more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the simulator as it was.
     t0 : [s] start time.
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
+
+    Every `advance` either completes with finite outputs or raises (ValueError for bad input or a motion
+    that overflows, WorkLimitError for too much work) with the state exactly as before the call.
+    `get_state` / `set_state` save and load the state as a flat dict of plain values.
     """
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = 1e-6, t0: float = 0.0,
-                 method: str = "DOP853", impact_log_size: int | None = 10000, **initial):
+                 method: str = "DOP853", impact_log_size: int | None = 10000,
+                 max_steps: int | None = MAX_STEPS, **initial):
         if not isinstance(model, RockingModel):
             raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
         self.model = model
@@ -49,12 +74,25 @@ class Simulator:
         mode, q, v = model.initial_state(**initial)
         if impact_log_size is not None:
             impact_log_size = int(check_real("impact_log_size", impact_log_size, lo=0.0))
+        if max_steps is not None:
+            n = check_real("max_steps", max_steps, lo=1.0, hi=2.0 ** 53)
+            if n != int(n):
+                raise ValueError(f"max_steps = {max_steps!r} must be a whole number; allowed range [1, 2^53] "
+                                 "or None (unlimited)")
+            max_steps = int(n)
+        self.max_steps = max_steps
         dt = check_real("dt_max", dt_max, lo=0.0) if dt_max is not None else 0.0   # 0: the scheme's default
+        dt_min = DT_MIN_REL * model.time_scale
+        if 0.0 < dt < dt_min:
+            raise ValueError(f"dt_max = {dt:g} is out of range; allowed values 0 (the scheme's default) or "
+                             f"[{dt_min:.3g}, inf) s: at least {DT_MIN_REL:g} times the model's time scale "
+                             f"1/p = {model.time_scale:.3g} s")
         if self.scheme == "moreau_jean":
             dt = dt or 1e-3
             theta = check_real("theta", theta, lo=0.5, hi=1.0)
             self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta,
                                          impact_log_size=impact_log_size)
+            self._token = "v"            # replaced (never mutated) whenever the state changes
         else:
             dt = dt or math.inf                                 # uncapped
             tol = check_real("tolerance", tolerance, lo=1e-14, hi=1e-2)
@@ -63,6 +101,9 @@ class Simulator:
                                                      0: "DOP853", 1: "DOPRI5"})
             self.integrator = EventDriven(model, mode, q, v, t0, tolerance=tol, dt_max=dt, zeno_tol=zt,
                                           method=method, impact_log_size=impact_log_size)
+            self._token = "y"
+        self._out = None              # (state token, model outputs) of the last checked state
+        self._motion = None           # (motion, checked motion) of the last non-constant input
 
     @property
     def t(self) -> float:
@@ -74,26 +115,122 @@ class Simulator:
         """Times of the (last ``impact_log_size``) impacts [s]."""
         return self.integrator.impact_times.tail()
 
+    def _ground_motion(self, ag) -> GroundMotion:
+        """``ag`` as a GroundMotion ready for the integrator: |ag| <= AG_MAX checked (constant, known peak)
+        or checked value by value (`rocking_model.ground_motion.checked_motion`)."""
+        if type(ag) is float or type(ag) is int:
+            return ConstantMotion(ag)             # checks |ag| <= AG_MAX
+        last = self._motion
+        if last is not None and last[0] is ag:
+            return last[1]
+        gm = checked_motion(as_ground_motion(ag))
+        if not gm.constant:
+            self._motion = (ag, gm)               # the same object each step: keep its integrator caches
+        return gm
+
     def advance(self, t_end: float, ag) -> None:
         """Integrate to exactly ``t_end`` [s] under ground acceleration ``ag``: a number [m/s2] held
-        constant, a callable ag(t), a (t, ag) pair of arrays or a GroundMotion."""
-        t_end = check_real("t_end", t_end)
-        if t_end < self.t:
-            raise ValueError(f"t_end = {t_end:.17g} is before the current time; allowed range "
-                             f"[{self.t:.17g}, inf)")
-        self.integrator.advance(t_end, as_ground_motion(ag))
+        constant, a callable ag(t), a (t, ag) pair of arrays or a GroundMotion; |ag| <= AG_MAX.
 
+        Raises ValueError (bad t_end or ag, or a motion that overflows: the message names the likely
+        cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
+        exactly as before the call."""
+        t_end = check_real("t_end", t_end)
+        integ = self.integrator
+        if t_end < integ.t:
+            raise ValueError(f"t_end = {t_end:.17g} is before the current time; allowed range "
+                             f"[{integ.t:.17g}, inf)")
+        gm = self._ground_motion(ag)
+        snap = integ.checkpoint()
+        try:
+            integ.advance(t_end, gm, max_steps=self.max_steps)
+            out = integ.outputs()
+            if not math.isfinite(sum(out.values())):
+                bad = {k: v for k, v in out.items() if not math.isfinite(v)}
+                if bad:
+                    raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}" for k, v in bad.items()))
+        except WorkLimitError:
+            integ.rollback(snap)
+            raise
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+            t_fail = integ.t
+            integ.rollback(snap)
+            msg = str(exc)
+            if isinstance(exc, ValueError) and (" = " in msg or msg.startswith("ag")):
+                raise                 # a checked input (ag of a callable, ...): the message names it
+            raise ValueError(self._diverged(exc, t_end, gm, t_fail)) from exc
+        except BaseException:
+            integ.rollback(snap)
+            raise
+        integ.commit(snap)
+        self._out = (getattr(integ, self._token), out)
+
+    def _diverged(self, exc, t_end, gm, t_fail) -> str:
+        """Message of an advance whose motion overflowed: where, and the likely cause."""
+        model = self.model
+        q, v = self.integrator.state()
+        peak = gm.peak_bound
+        causes = []
+        if peak is not None and peak > 10.0 * model.g:
+            causes.append(f"the ground acceleration (|ag| up to {peak:g} m/s2, {peak / model.g:.3g} g)")
+        if model.e_N > 0.0:
+            causes.append(f"energy created at impacts by e_N = {model.e_N:g} with sticking (physics notes, "
+                          "section 6)")
+        causes.append(f"a state far outside the model's range (|q| up to {float(np.max(np.abs(q))):.3g}, "
+                      f"|v| up to {float(np.max(np.abs(v))):.3g} at t = {self.t:.17g} s)")
+        return (f"the motion is not finite in the step from t = {self.t:.17g} s to t_end = {t_end:.17g} s "
+                f"(at t = {t_fail:.17g} s: {type(exc).__name__}: {exc}); the step was refused and the state "
+                f"kept. Likely cause: {'; or '.join(causes)}")
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Full generalized coordinates and velocities (q, v)."""
         return self.integrator.state()
 
     def outputs(self) -> dict:
         """Model outputs plus contact (int), impacts (int) and overturned (bool)."""
-        out = self.integrator.outputs()
-        out["contact"] = int(self.integrator.mode)
-        out["impacts"] = int(self.integrator.impacts)
-        out["overturned"] = bool(self.integrator.overturned)
+        integ = self.integrator
+        cached = self._out
+        if cached is not None and cached[0] is getattr(integ, self._token):
+            out = dict(cached[1])         # computed (and checked finite) at the end of the last advance
+        else:
+            out = integ.outputs()
+        out["contact"] = int(integ.mode)
+        out["impacts"] = int(integ.impacts)
+        out["overturned"] = bool(integ.overturned)
         return out
+
+    # ------------------------------------------------------------------ plain-data state
+    def get_state(self) -> dict:
+        """The state that determines all future outputs, as a flat dict of plain values (`json.dumps`
+        works; floats may be nan only where a field means "unset").
+
+        Header: version (int, STATE_VERSION), scheme ("moreau_jean" / "event_driven"), model (class name),
+        n_dof (full dimension). Event-driven: t [s], mode (0-3, `Mode`), y (reduced state of the mode:
+        coordinates then velocities), impacts, overturned, n_steps, h (last step size [s], nan before the
+        first), impact_times [s], impact_log (rows t, v_minus, v_plus flattened, 1 + 2 n_dof floats each).
+        Moreau-Jean: t, q, v (full coordinates and velocities), mode, closed (corners that carried
+        impulse in the last step), impacts, overturned, n_steps, impact_times. The logs hold at most
+        impact_log_size entries (impact_log at most min(1000, impact_log_size) rows).
+
+        The model, its parameters and the solver settings are not in it: rebuild the Simulator from the same
+        parameters, then `set_state`; both then give bit-identical outputs for the same inputs."""
+        integ = self.integrator
+        state = {"version": STATE_VERSION, "scheme": self.scheme, "model": type(self.model).__name__,
+                 "n_dof": self.model.n_dof}
+        state.update(integ.get_state())
+        return state
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict into this simulator (built with the same model and settings). Every field
+        is checked (presence, no extra field, type, length for the mode, finite values, ranges, consistency
+        of phi and the corners with the mode); a bad one raises ValueError naming it and nothing changes."""
+        integ = self.integrator
+        check_state_keys(state, _HEADER + integ.STATE_KEYS)
+        state_int(state, "version", STATE_VERSION, STATE_VERSION)
+        state_str(state, "scheme", self.scheme)
+        state_str(state, "model", type(self.model).__name__)
+        state_int(state, "n_dof", self.model.n_dof, self.model.n_dof)
+        integ.set_state(state)
+        self._out = None
 
 
 @dataclass
@@ -129,9 +266,10 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     ground_motion: number, callable ag(t), (t, ag) arrays (linear interpolation) or GroundMotion.
     hold: "exact" integrates the ground motion as given; "zoh" holds ag(t_k) constant over each output
         interval, as a co-simulation master (fmpy) does with the FMU.
-    Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, t0, phi_0, ...).
+    Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, max_steps, t0, phi_0,
+    ...); the work budget max_steps applies to each output interval.
     """
-    gm = as_ground_motion(ground_motion)
+    gm = checked_motion(as_ground_motion(ground_motion))
     hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
     kwargs.setdefault("impact_log_size", None)
     sim = Simulator(model, scheme, **kwargs)
@@ -146,7 +284,8 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         # the outputs are evaluated per contact mode on arrays
         integ = sim.integrator
         samples = [(integ.mode, list(integ.y), integ.impacts, integ.overturned)]
-        samples += integ.advance(float(times[-1]), gm, samples=times[1:])
+        # the work budget applies between consecutive output samples
+        samples += integ.advance(float(times[-1]), gm, samples=times[1:], max_steps=sim.max_steps)
         modes = np.array([int(smp[0]) for smp in samples])
         values = {}
         for mode in np.unique(modes):

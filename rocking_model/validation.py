@@ -32,3 +32,130 @@ def check_choice(name: str, value, allowed: dict):
         return allowed[value]
     names = ", ".join(repr(k) for k in allowed)
     raise ValueError(f"{name} = {value!r} is not supported; allowed values: {names}")
+
+
+#: [m/s2] largest supported |ag| (about 100 g). The strongest recorded ground motions peak near 4 g; the
+#: bound leaves room for shake-table and impulse studies while keeping every force, velocity and energy of
+#: the models many orders of magnitude below overflow (and far from the loss of all digits in the event
+#: functions, which compare the weight with the inertial force). `Simulator.advance` refuses a larger
+#: constant ag or a motion whose known peak exceeds it; a user callable that returns a larger value stops
+#: the step with a ValueError naming ag (the state is kept).
+AG_MAX = 1000.0
+
+
+def check_ag(value, name: str = "ag") -> float:
+    """``value`` as a float in [-AG_MAX, AG_MAX] [m/s2] or ValueError naming ``name``."""
+    return check_real(name, value, lo=-AG_MAX, hi=AG_MAX)
+
+
+class WorkLimitError(RuntimeError):
+    """One `Simulator.advance` would take more internal steps than its budget (``max_steps``): the step is
+    refused and the simulator is left as it was before the call. The message names the cause and the way
+    out (shorter communication steps, a larger dt_max, a looser tolerance, or max_steps=None)."""
+
+
+# ---------------------------------------------------------------------------------------------- state dicts
+#: longest str value in a state dict
+STATE_STR_MAX = 64
+#: largest int counter in a state dict (int64, what any reader can hold)
+STATE_INT_MAX = 2 ** 63 - 1
+
+
+def _field(state, key):
+    try:
+        return state[key]
+    except KeyError:
+        raise ValueError(f"state field {key!r} is missing") from None
+
+
+def check_state_keys(state, keys) -> None:
+    """``state`` is a Mapping with exactly the str keys ``keys`` or ValueError naming the first field that
+    is missing or not expected."""
+    from collections.abc import Mapping
+
+    if not isinstance(state, Mapping):
+        raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
+    for key in keys:
+        if key not in state:
+            raise ValueError(f"state field {key!r} is missing")
+    extra = [k for k in state if k not in keys]
+    if extra:
+        raise ValueError(f"state field {str(extra[0])[:STATE_STR_MAX]!r} is not expected; allowed fields: "
+                         f"{', '.join(sorted(keys))}")
+
+
+def state_bool(state, key: str) -> bool:
+    value = _field(state, key)
+    if type(value) is not bool:
+        raise ValueError(f"state field {key!r} must be a bool, got {type(value).__name__}")
+    return value
+
+
+def state_int(state, key: str, lo: int = 0, hi: int = STATE_INT_MAX) -> int:
+    value = _field(state, key)
+    if type(value) is not int:
+        raise ValueError(f"state field {key!r} must be an int, got {type(value).__name__}")
+    if not lo <= value <= hi:
+        raise ValueError(f"state field {key!r} = {value} is out of range; allowed range [{lo}, {hi}]")
+    return value
+
+
+def _as_float(key, value) -> float:
+    if type(value) is float:
+        return value
+    if type(value) is int:
+        return float(value)
+    raise ValueError(f"state field {key!r} must be a float, got {type(value).__name__}")
+
+
+def state_float(state, key: str, *, lo: float = -math.inf, hi: float = math.inf, nan_ok: bool = False,
+                lo_open: bool = False) -> float:
+    """A finite float in [lo, hi] (or (lo, hi] with lo_open); nan too when ``nan_ok``."""
+    x = _as_float(key, _field(state, key))
+    if nan_ok and x != x:
+        return x
+    if math.isfinite(x) and (lo < x or (not lo_open and x == lo)) and x <= hi:
+        return x
+    what = "finite" if not math.isfinite(x) else "in range"
+    rng = f"{'(' if lo_open or lo == -math.inf else '['}{lo:g}, {hi:g}{')' if hi == math.inf else ']'}"
+    raise ValueError(f"state field {key!r} = {x!r} is not {what}; allowed range {rng}"
+                     + (" or nan (unset)" if nan_ok else ""))
+
+
+def state_floats(state, key: str, *, length: int | None = None, multiple: int | None = None,
+                 max_len: int | None = None) -> list[float]:
+    """A list of finite floats with the given length (or a multiple of ``multiple``, at most max_len)."""
+    value = _field(state, key)
+    if not isinstance(value, (list, tuple)):
+        raise ValueError(f"state field {key!r} must be a list of floats, got {type(value).__name__}")
+    n = len(value)
+    if length is not None and n != length:
+        raise ValueError(f"state field {key!r} has {n} values; expected {length}")
+    if multiple is not None and n % multiple:
+        raise ValueError(f"state field {key!r} has {n} values; expected a multiple of {multiple}")
+    if max_len is not None and n > max_len:
+        raise ValueError(f"state field {key!r} has {n} values; allowed at most {max_len}")
+    out = [_as_float(key, v) for v in value]
+    for i, x in enumerate(out):
+        if not math.isfinite(x):
+            raise ValueError(f"state field {key!r}[{i}] = {x!r} is not finite")
+    return out
+
+
+def state_ints(state, key: str, *, lo: int, hi: int, max_len: int) -> list[int]:
+    value = _field(state, key)
+    if not isinstance(value, (list, tuple)) or len(value) > max_len:
+        raise ValueError(f"state field {key!r} must be a list of at most {max_len} ints")
+    for i, v in enumerate(value):
+        if type(v) is not int or not lo <= v <= hi:
+            raise ValueError(f"state field {key!r}[{i}] = {v!r} must be an int in [{lo}, {hi}]")
+    return list(value)
+
+
+def state_str(state, key: str, expected: str | None = None) -> str:
+    value = _field(state, key)
+    if type(value) is not str or len(value) > STATE_STR_MAX:
+        raise ValueError(f"state field {key!r} must be a str of at most {STATE_STR_MAX} characters")
+    if expected is not None and value != expected:
+        raise ValueError(f"state field {key!r} = {value!r} does not match this simulator; expected {expected!r}")
+    return value

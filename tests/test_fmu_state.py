@@ -210,7 +210,8 @@ def test_state_taken_before_initialization_and_after_an_error(fmus):
     inst.fmu.enterInitializationMode()
     fresh = inst.fmu.getFMUstate()
     inst.set(b=-1.0)
-    inst.fmu.exitInitializationMode()
+    with pytest.raises(FMICallException):  # invalid parameters: fmi2Fatal (pythonfmu 0.7), instance kept
+        inst.fmu.exitInitializationMode()
     assert inst.step() == FMI2_DISCARD
     failed = inst.fmu.getFMUstate()
     inst.fmu.setFMUstate(fresh)  # back to initialization mode with the start values
@@ -233,9 +234,9 @@ def test_foreign_or_corrupted_state_is_rejected(fmus):
     before = outputs(rigid, RIGID)
     blob = flex.fmu.serializeFMUstate(flex.fmu.getFMUstate())
     for bad, reason in ((blob, "belongs to FMU 'FlexibleRockingOscillator'"),
-                        (blob[:-7], "corrupted"),
+                        (blob[:-7], "truncated"),
                         (blob[:40] + bytes([blob[40] ^ 1]) + blob[41:], "corrupted"),
-                        (b"not a state at all", "bad header")):
+                        (b"not a state at all", "not a rocking_model FMU state")):
         state = rigid.fmu.deSerializeFMUstate(bad)
         rigid.fmu.setFMUstate(state)
         assert outputs(rigid, RIGID) == before  # the instance keeps its state
@@ -248,15 +249,42 @@ def test_foreign_or_corrupted_state_is_rejected(fmus):
     flex.free()
 
 
-def test_restricted_unpickler_refuses_foreign_globals():
+class _Gadget:
+    """Unpickling this runs a shell command: what a pickle-based state format would execute."""
+
+    def __reduce__(self):
+        import os
+        return (os.system, ("touch pwned",))
+
+
+def test_state_bytes_never_execute_code(fmus, tmp_path, monkeypatch):
+    """The state format is data only (rocking_model.fmi_state): a pickle gadget, in the old pickle layout or
+    inside a well-formed new header, is rejected and nothing runs."""
     import hashlib
     import pickle
 
-    from rocking_model.fmi import RockingSlave, _STATE_MAGIC
+    from rocking_model.fmi_state import MAGIC, decode_state, encode_state
 
-    payload = pickle.dumps({"format": 1, "evil": print}, protocol=5)
-    state = RockingSlave._fmu_state_from_bytes(_STATE_MAGIC + hashlib.sha256(payload).digest() + payload)
-    assert "builtins.print is not allowed" in state["invalid"]
+    monkeypatch.chdir(tmp_path)
+    payload = pickle.dumps({"format": 1, "fields": _Gadget()}, protocol=5)
+    old_layout = b"rocking_model FMU state v1\n" + hashlib.sha256(payload).digest() + payload
+    blob = encode_state({"x": 1})
+    assert decode_state(blob) == {"x": 1}
+    # the gadget behind a valid header of the new format (magic, version, length, digest)
+    new_header = blob[:len(MAGIC) + 4] + len(payload).to_bytes(4, "little") + hashlib.sha256(payload).digest() \
+        + payload
+    inst = Instance(fmus[RIGID])
+    inst.init(phi_0=0.02)
+    drive(inst, RIGID, 0, 2, 0.0)
+    before = outputs(inst, RIGID)
+    for bad, reason in ((old_layout, "bad header"), (new_header, "not valid JSON")):
+        inst.fmu.setFMUstate(inst.fmu.deSerializeFMUstate(bad))
+        assert reason in inst.errors()[-1]
+        assert outputs(inst, RIGID) == before
+        assert inst.step() == FMI2_DISCARD and inst.step() == 0
+        before = outputs(inst, RIGID)
+    assert not (tmp_path / "pwned").exists()
+    inst.free()
 
 
 def test_model_description_declares_state_capabilities(fmus):

@@ -27,6 +27,8 @@
   counted.
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
+- Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus events and raises
+  `WorkLimitError` when one call (or, with samples, the stretch between two samples) needs more than N.
 """
 from __future__ import annotations
 
@@ -37,6 +39,7 @@ import numpy as np
 
 from ..contact import closed_candidates, impact, inverse_mass, project_to_ground, uplift
 from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
+from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
 
@@ -100,6 +103,8 @@ class EventDriven:
 
     name = "event_driven"
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
+    _max_work = None        #: work budget of the current `advance` (None: unlimited)
+    _work_end = math.inf    #: value of n_steps at which the budget runs out
 
     def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
                  tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = 1e-6,
@@ -155,6 +160,75 @@ class EventDriven:
         self._fn_cache = (key, ag, fns)
         return fns
 
+    # ------------------------------------------------------------------ plain-data state
+    #: fields of `get_state` (the Simulator adds the header: version, scheme, model, n_dof)
+    STATE_KEYS = ("t", "mode", "y", "impacts", "overturned", "n_steps", "h", "impact_times", "impact_log")
+
+    def get_state(self) -> dict:
+        """What determines the future of this integrator, as plain data (see `Simulator.get_state`).
+
+        The live Runge-Kutta stepper (``_live``) is left out: a restart from (t, y) with the last step size
+        ``h`` takes the same steps bit for bit (its FSAL derivative is evaluated at the stored time). The
+        impact logs keep their last ``maxlen`` entries (what `BoundedLog.tail` returns); each impact_log row
+        (t, v_minus, v_plus) is flattened to 1 + 2 n_dof floats."""
+        flat = []
+        for t, vm, vp in self.impact_log.tail():
+            flat.append(float(t))
+            flat.extend(float(a) for a in vm)
+            flat.extend(float(a) for a in vp)
+        return {"t": float(self.t), "mode": int(self.mode), "y": [float(a) for a in self.y],
+                "impacts": int(self.impacts), "overturned": bool(self.overturned), "n_steps": int(self.n_steps),
+                "h": math.nan if self._h is None else float(self._h),
+                "impact_times": [float(a) for a in self.impact_times.tail()], "impact_log": flat}
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict (header and keys checked by the caller): every field is checked for type,
+        length, range and consistency with the model (ValueError naming the field); nothing changes on
+        error."""
+        model = self.model
+        t = state_float(state, "t")
+        mode = Mode(state_int(state, "mode", 0, 3))
+        k = len(model.mode_dofs(mode))
+        y = state_floats(state, "y", length=2 * k)
+        impacts = state_int(state, "impacts")
+        overturned = state_bool(state, "overturned")
+        n_steps = state_int(state, "n_steps")
+        h = state_float(state, "h", lo=0.0, lo_open=True, nan_ok=True)
+        times = _check_times(state, "impact_times", state_floats(
+            state, "impact_times", max_len=self.impact_times.maxlen), t, impacts)
+        n = 1 + 2 * model.n_dof
+        flat = state_floats(state, "impact_log", multiple=n,
+                            max_len=None if self.impact_log.maxlen is None else n * self.impact_log.maxlen)
+        rows = [(flat[i], np.array(flat[i + 1:i + 1 + model.n_dof]), np.array(flat[i + 1 + model.n_dof:i + n]))
+                for i in range(0, len(flat), n)]
+        _check_times(state, "impact_log", [r[0] for r in rows], t, impacts)
+        q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
+        _check_configuration(model, state, "y", q, v, overturned, gap_tol=1e-6 * model.length_scale)
+        # all checked: assign
+        self.t, self.impacts, self.overturned, self.n_steps = t, impacts, overturned, n_steps
+        self._h = None if h != h else h
+        self.mode, self.k, self.y, self._full = mode, k, y, None
+        self._live = None
+        self.impact_times = _log(self.impact_times.maxlen, times)
+        self.impact_log = _log(self.impact_log.maxlen, rows)
+
+    def checkpoint(self):
+        """A cheap snapshot before an `advance` (`rollback` restores it exactly, `commit` drops it): the
+        attributes are replaced, never mutated in place, except the two logs, which are held untrimmed."""
+        return dict(self.__dict__), self.impact_times.hold(), self.impact_log.hold()
+
+    def rollback(self, snap) -> None:
+        d, n_times, n_log = snap
+        d["impact_times"].cut(n_times)
+        d["impact_log"].cut(n_log)
+        self.__dict__.clear()
+        self.__dict__.update(d)
+        self._live = None             # it has moved on; a restart from (t, y, _h) is bit-identical
+
+    def commit(self, snap) -> None:
+        self.impact_times.release()
+        self.impact_log.release()
+
     def __getstate__(self):
         state = dict(self.__dict__)
         state.pop("_fn_cache", None)      # closures: rebuilt on demand
@@ -178,11 +252,17 @@ class EventDriven:
         return [self.tolerance * a for a in s] + [self.tolerance * a / ts for a in s]
 
     # ------------------------------------------------------------------ driver
-    def advance(self, t_end: float, ag, samples=None):
+    def advance(self, t_end: float, ag, samples=None, max_steps: int | None = None):
         """Integrate to exactly t_end; ``ag`` is a GroundMotion.
 
         samples: increasing times in (t, t_end] at which to record the motion; returns the list of
-        (mode, y, impacts, overturned) there (None when no samples are asked for)."""
+        (mode, y, impacts, overturned) there (None when no samples are asked for).
+        max_steps: work budget (None: unlimited): Runge-Kutta steps plus events of this call or, with
+        samples, between two consecutive samples; exceeding it raises `WorkLimitError` (the state is then
+        partly advanced: `Simulator.advance` restores it)."""
+        self._max_work = max_steps
+        self._work_end = math.inf if max_steps is None else self.n_steps + max_steps
+        self._span = (self.t, t_end)
         out = None if samples is None else []
         pending = deque(float(s) for s in samples) if samples is not None else None
         if t_end <= self.t or self.overturned:
@@ -206,9 +286,11 @@ class EventDriven:
                 self._live = None
                 kink = False
                 n_events += 1
+                self._work_end -= 1            # an event costs about one step (LCPs, root finding)
                 if n_events > self.max_events:
-                    raise RuntimeError(f"event-driven scheme: more than {self.max_events} events in one "
-                                       f"step at t = {self.t:.17g}; the motion does not settle")
+                    raise WorkLimitError(f"event_driven: more than {self.max_events} events in one advance "
+                                         f"at t = {self.t:.17g} s; the motion does not settle; the step was "
+                                         "refused. Way out: shorter communication steps")
             elif t_stop == tb:
                 # a kink of ag (a sample of a record): the contact forces stay continuous, so the mode holds
                 # and the step goes on across it; a jump: re-decide the mode and restart
@@ -242,9 +324,12 @@ class EventDriven:
     def _segment(self, t_stop: float, ag, pending, out) -> bool:
         """Integrate the current mode towards t_stop; returns True if an event ended the segment."""
         mode, k = self.mode, self.k
-        while pending and pending[0] <= self.t:
-            pending.popleft()
-            out.append((mode, list(self.y), self.impacts, False))
+        if pending and pending[0] <= self.t:
+            while pending and pending[0] <= self.t:
+                pending.popleft()
+                out.append((mode, list(self.y), self.impacts, False))
+            if self._max_work is not None:
+                self._work_end = self.n_steps + self._max_work
         if k == 0 and ag.constant:
             # nothing moves and the (positive) contact forces cannot change
             self.t = t_stop
@@ -268,6 +353,8 @@ class EventDriven:
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
+            if self.n_steps > self._work_end:
+                raise WorkLimitError(self._work_message(stepper))
             g_new = G(stepper.t, stepper.y)
             g_new[2] = 0.5 * math.pi - abs(g_new[2])
             dense = None
@@ -360,8 +447,25 @@ class EventDriven:
                                     max_step=max_step, first_step=self._h if self.k else None)
 
     def _record_samples(self, pending, out, mode, dense, t_last, inclusive):
-        while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
-            out.append((mode, dense(pending.popleft()), self.impacts, False))
+        if pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
+            while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
+                out.append((mode, dense(pending.popleft()), self.impacts, False))
+            if self._max_work is not None:
+                self._work_end = self.n_steps + self._max_work      # the budget applies per output sample
+
+    def _work_message(self, stepper) -> str:
+        """Why the step is refused (`WorkLimitError`) and how to get it through."""
+        t0, t_end = self._span
+        model = self.model
+        omega = getattr(model, "omega", None)
+        stiff = f", column omega = {omega:.6g} rad/s" if omega is not None else ""
+        return (f"event_driven: advancing from t = {t0:.17g} s by {t_end - t0:.6g} s needs more than "
+                f"max_steps = {self._max_work} internal steps (Runge-Kutta steps plus events); stopped at "
+                f"t = {stepper.t:.17g} s in mode {self.mode.name} with steps of {stepper.h_abs:.3g} s "
+                f"(tolerance = {self.tolerance:g}, dt_max = {self.dt_max:g} s, method {self.method}"
+                f"{stiff}, time scale 1/p = {model.time_scale:.3g} s); the step was refused and the state kept. "
+                "Way out: shorter communication steps, a looser tolerance, a larger dt_max (0: uncapped), or "
+                "max_steps=None (unlimited, for trusted batch runs)")
 
     @staticmethod
     def _rise(dense, G, i, t0, t1, level):
@@ -489,3 +593,39 @@ class EventDriven:
 
     def _enter(self, q, v, ag_t):
         self._set_state(self._select_mode(q, v, ag_t), q, v)
+
+
+# ---------------------------------------------------------------------------------------------- state checks
+def _log(maxlen, items) -> BoundedLog:
+    log = BoundedLog(maxlen)
+    log.extend(items)
+    return log
+
+
+def _check_times(state, key, times, t, impacts) -> list:
+    """Impact times: at most ``impacts`` of them, non-decreasing, not after t (up to round-off)."""
+    if len(times) > impacts:
+        raise ValueError(f"state field {key!r} holds {len(times)} impacts, more than impacts = {impacts}")
+    t_max = t + 1e-12 * max(1.0, abs(t))
+    for i, ti in enumerate(times):
+        if ti > t_max or (i and ti < times[i - 1]):
+            raise ValueError(f"state field {key!r}: impact time {ti!r} is after t = {t!r} or out of order")
+    return times
+
+
+def _check_configuration(model, state, key, q, v, overturned, gap_tol) -> None:
+    """The full state (q, v) read from field ``key``: |phi| < pi/2 unless overturned, corners not below the
+    ground by more than gap_tol [m], and the outputs finite."""
+    phi = float(q[model.phi_index])
+    if not overturned and not abs(phi) < 0.5 * math.pi:
+        raise ValueError(f"state field {key!r}: |phi| = {abs(phi):g} rad reaches pi/2 but 'overturned' is "
+                         "False; allowed range (-pi/2, pi/2)")
+    gaps = model.gaps(q)
+    if not overturned and min(gaps) < -gap_tol:
+        raise ValueError(f"state field {key!r}: a base corner is {-min(gaps):g} m below the ground; allowed at "
+                         f"most {gap_tol:g} m")
+    out = model.outputs(q, v)
+    bad = [name for name, value in out.items() if not math.isfinite(value)]
+    if bad:
+        raise ValueError(f"state field {key!r} gives non-finite outputs ({', '.join(bad)}); the values are too "
+                         "large for the model")

@@ -24,6 +24,8 @@ import numpy as np
 from ..contact import inverse_mass, project_to_ground
 from ..lcp import solve_contact_lcp
 from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
+from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int, state_ints
+from .event_driven import _check_configuration, _check_times, _log
 
 
 class MoreauJean:
@@ -48,15 +50,21 @@ class MoreauJean:
         # corners that carried impulse in the last step (impacts are counted on newly closing corners)
         self._closed = set(CLOSED[self.mode])
 
-    def advance(self, t_end: float, ag) -> None:
-        """Integrate to exactly t_end in equal steps of at most dt_max."""
+    def advance(self, t_end: float, ag, max_steps: int | None = None) -> None:
+        """Integrate to exactly t_end in equal steps of at most dt_max.
+
+        max_steps: work budget of this call (None: unlimited). The number of steps is known before any
+        work: more than max_steps raises `WorkLimitError` at once, with the state untouched."""
         span = t_end - self.t
         if span <= 0.0:
             return
         if self.overturned:
             self.t = t_end
             return
-        n = max(1, math.ceil(span / self.dt_max * (1.0 - 1e-12)))
+        steps = span / self.dt_max * (1.0 - 1e-12)       # a float: may exceed any int (refused below)
+        if max_steps is not None and steps > max_steps:
+            raise WorkLimitError(self.work_message(span, steps, max_steps))
+        n = max(1, math.ceil(steps))
         t0 = self.t
         dt = span / n
         for k in range(n):
@@ -66,6 +74,17 @@ class MoreauJean:
             if self.overturned:
                 self.t = t_end
                 return
+
+    def work_message(self, span: float, steps: float, max_steps: int) -> str:
+        """Why a step of ``span`` [s] is refused and how to get it through."""
+        model = self.model
+        limit = model.step_limit
+        why = (f"dt = min(dt_max, 0.25/omega) = {self.dt_max:.6g} s (the column's omega = "
+               f"{0.25 / limit:.6g} rad/s)" if limit <= self.dt_max else f"dt_max = {self.dt_max:.6g} s")
+        return (f"moreau_jean: advancing from t = {self.t:.17g} s by {span:.6g} s needs {math.ceil(steps):.6g} "
+                f"steps of {why}, more than max_steps = {max_steps} per advance; the step was refused and "
+                f"the state kept. Way out: communication steps of at most {max_steps * self.dt_max:.6g} s, a "
+                f"larger dt_max, or max_steps=None (unlimited, for trusted batch runs)")
 
     def _step(self, t, dt, ag):
         model, theta = self.model, self.theta
@@ -143,6 +162,59 @@ class MoreauJean:
     def state(self):
         """Full (q, v)."""
         return self.q, self.v
+
+    # ------------------------------------------------------------------ plain-data state
+    #: fields of `get_state` (the Simulator adds the header: version, scheme, model, n_dof)
+    STATE_KEYS = ("t", "q", "v", "mode", "closed", "impacts", "overturned", "n_steps", "impact_times")
+
+    def get_state(self) -> dict:
+        """What determines the future of this integrator, as plain data (see `Simulator.get_state`):
+        ``closed`` lists the corners that carried impulse in the last step (an impact is counted when a
+        corner outside it closes; the LCP starts from it)."""
+        return {"t": float(self.t), "q": [float(a) for a in self.q], "v": [float(a) for a in self.v],
+                "mode": int(self.mode), "closed": sorted(int(i) for i in self._closed),
+                "impacts": int(self.impacts), "overturned": bool(self.overturned), "n_steps": int(self.n_steps),
+                "impact_times": [float(a) for a in self.impact_times.tail()]}
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict (header and keys checked by the caller); ValueError naming the field,
+        nothing changed, on error."""
+        model = self.model
+        n = model.n_dof
+        t = state_float(state, "t")
+        q = np.array(state_floats(state, "q", length=n))
+        v = np.array(state_floats(state, "v", length=n))
+        mode = Mode(state_int(state, "mode", 0, 3))
+        closed = state_ints(state, "closed", lo=0, hi=1, max_len=2)
+        if closed != sorted(set(closed)):
+            raise ValueError(f"state field 'closed' = {closed!r} must list distinct corners in increasing order")
+        if mode_from_closed(closed) != mode:
+            raise ValueError(f"state field 'mode' = {int(mode)} does not match 'closed' = {closed!r}; expected "
+                             f"{int(mode_from_closed(closed))}")
+        impacts = state_int(state, "impacts")
+        overturned = state_bool(state, "overturned")
+        n_steps = state_int(state, "n_steps")
+        times = _check_times(state, "impact_times", state_floats(
+            state, "impact_times", max_len=self.impact_times.maxlen), t, impacts)
+        # the time-stepper lets corners sink by O(dt |v|) before the impulse stops them: only junk (a corner a
+        # whole length scale below the ground) is refused
+        _check_configuration(model, state, "q", q, v, overturned, gap_tol=model.length_scale)
+        self.t, self.q, self.v, self.mode, self._closed = t, q, v, mode, set(closed)
+        self.impacts, self.overturned, self.n_steps = impacts, overturned, n_steps
+        self.impact_times = _log(self.impact_times.maxlen, times)
+
+    def checkpoint(self):
+        """A cheap snapshot before an `advance` (see `EventDriven.checkpoint`)."""
+        return dict(self.__dict__), self.impact_times.hold()
+
+    def rollback(self, snap) -> None:
+        d, n_times = snap
+        d["impact_times"].cut(n_times)
+        self.__dict__.clear()
+        self.__dict__.update(d)
+
+    def commit(self, snap) -> None:
+        self.impact_times.release()
 
     def outputs(self) -> dict:
         """The model's outputs at the current time."""

@@ -64,7 +64,10 @@ class _Compiled:
         ns = tab.n_stages
         names = [f"k{s}" for s in range(len(tab.A))]
         ys = [f"y{j}" for j in range(n)]
-        lines = ["def rk_step(fun, t, y, f, h, atol, rtol):"]
+        # t_new is the end of the step as the stepper stores it (t + h up to round-off when the step is
+        # clipped to t_bound): the FSAL derivative is evaluated there, so that a restart at (t_new, y_new)
+        # computes the same f and goes on bit-identically (`EventDriven` restarts after a state restore)
+        lines = ["def rk_step(fun, t, y, f, h, atol, rtol, t_new):"]
         lines.append(f"    {', '.join(ys)}, = y")
         lines.append(f"    {', '.join(f'k0_{j}' for j in range(n))}, = f")
         for s in range(1, ns - 1):
@@ -74,7 +77,7 @@ class _Compiled:
             lines.append(f"    yn{j} = y{j} + h*{_lincomb(tab.B, names, j)}")
         lines.append(f"    y_new = [{', '.join(f'yn{j}' for j in range(n))}]")
         last = ns - 1
-        lines.append(f"    {', '.join(f'k{last}_{j}' for j in range(n))}, = f_new = fun(t + h, y_new)")
+        lines.append(f"    {', '.join(f'k{last}_{j}' for j in range(n))}, = f_new = fun(t_new, y_new)")
         errs = []
         for j in range(n):
             errs.extend(tab.error_sources(names, j))
@@ -193,8 +196,12 @@ class ExplicitRK:
                 t_new = t_bound
                 h = t_new - t
                 h_abs = abs(h)
-            y_new, f_new, err, K = rk_step(self.fun, t, y, self.f, h, atol, rtol)
+            y_new, f_new, err, K = rk_step(self.fun, t, y, self.f, h, atol, rtol, t_new)
             if err < 1.0 or h_abs <= min_step:
+                if not err < 1.0 and not math.isfinite(err):
+                    # even the smallest step does not give a finite state: the motion has overflowed
+                    raise FloatingPointError(f"{self.tableau.name}: the state is not finite after a step of "
+                                             f"{h:.3g} s from t = {t:.17g} s (y = {y!r})")
                 factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err ** self._err_exp)
                 if rejected:
                     factor = min(1.0, factor)

@@ -31,13 +31,22 @@ from ..validation import check_choice, check_real
 from .base import RockingModel
 
 
+#: [rad/s] largest fixed-base circular frequency omega = sqrt(k_tilde/m_tilde) of the column (1.6 kHz).
+#: Rocking structures have columns of 1 to 100 Hz; at omega = 1e4 rad/s the column's deflection under a
+#: lateral 1 g is g/omega^2 ~ 1e-7 m and omega/p exceeds 300 for any structure taller than 1 cm: it rocks
+#: as a rigid body (use `RigidBlock`). The cost of resolving the column grows with omega (Moreau-Jean
+#: sub-steps to 0.25/omega: 4e4 steps per second of motion at the bound), so an unbounded EI lets one
+#: co-simulation step take minutes (EI = 1e15 measured at ~10 s per 0.01 s step).
+OMEGA_MAX = 1e4
+
+
 @dataclass(frozen=True)
 class FlexibleOscillator(RockingModel):
     """Flexible rocking oscillator of Giouvanidis & Dimitrakopoulos (2017), appendix.
 
     Parameters (SI units): m top mass [kg] (> 0), m_c column mass [kg] (>= 0), m_b base mass [kg] (>= 0),
     rho radius of gyration of the base [m] (>= 0), h column height [m] (> 0), b base half-width [m] (> 0),
-    EI flexural rigidity [N m2] (> 0), zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
+    EI flexural rigidity [N m2] (> 0, and omega = sqrt(3 EI/(h^3 m_tilde)) <= OMEGA_MAX = 1e4 rad/s), zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
     [1] in [0, 1], g gravity [m/s2] (> 0), impact_rule 0 (LCP with Newton's law, default) or 1 (classical
     rule of the earlier literature: angular momentum about the impacting corner conserved, u_dot continuous,
     rocking on about the new corner; `rocking_model.post_impact.classical_impact`). The mass matrix must be non-singular, which needs rotary inertia
@@ -97,6 +106,14 @@ class FlexibleOscillator(RockingModel):
         d["J0"] = d["I_mb"] + m * h ** 2 + m_c * h ** 2 / 3.0
         d["J_eff"] = d["J0"] - d["C"] ** 2 / d["m_tilde"]
         d["c"] = 2.0 * self.zeta * math.sqrt(d["m_tilde"] * d["k_tilde"])
+        omega = math.sqrt(d["k_tilde"] / d["m_tilde"])
+        if omega > OMEGA_MAX:
+            EI_max = OMEGA_MAX ** 2 * d["m_tilde"] * h ** 3 / 3.0
+            raise ValueError(
+                f"EI = {self.EI:g} is out of range for m = {m:g}, m_c = {m_c:g}, h = {h:g}; allowed range "
+                f"(0, {EI_max:.6g}] N m2: the column's circular frequency omega = sqrt(3 EI/(h^3 m_tilde)) = "
+                f"{omega:.4g} rad/s exceeds OMEGA_MAX = {OMEGA_MAX:g} rad/s; a column this stiff rocks as a "
+                "rigid body: use RigidBlock")
         for k, val in d.items():
             object.__setattr__(self, k, val)
 

@@ -30,17 +30,33 @@ from typing import Dict, Tuple
 
 import numpy as np
 
-from ..validation import check_real
+from ..validation import (check_ag, check_real, check_state_keys, state_float, state_floats, state_int,
+                          state_str)
 
 __all__ = ["LinearStorey", "StoreySimulator"]
 
 
+#: [s] shortest period of an elastic storey (T = 0 is the rigid one). Building storeys have periods of
+#: 0.05 to 5 s; below 1 ms the storey follows the ground to within (omega^2)^-1 ag ~ 2.5e-8 ag m, i.e. it is
+#: rigid (use T = 0), and omega^2 = (2 pi / T)^2 would overflow for T below ~1e-154 s.
+T_MIN = 1e-3
+#: [s] longest period: the storey is then practically free (a floor that does not follow the ground)
+T_MAX = 1e4
+#: [1] largest damping ratio (as the flexible oscillator's zeta): far past critical damping (1)
+ZETA_MAX = 10.0
+
+
 class LinearStorey:
-    """Damped SDOF storey: period T [s] (>= 0; 0 = rigid), damping ratio zeta [1] (>= 0)."""
+    """Damped SDOF storey: period T [s] (0 = rigid, else in [T_MIN, T_MAX] = [1e-3, 1e4]), damping ratio
+    zeta [1] in [0, ZETA_MAX = 10]."""
 
     def __init__(self, T: float = 0.5, zeta: float = 0.05):
-        self.T = check_real("T", T, lo=0.0)
-        self.zeta = check_real("zeta", zeta, lo=0.0)
+        self.T = check_real("T", T, lo=0.0, hi=T_MAX)
+        if 0.0 < self.T < T_MIN:
+            raise ValueError(f"T = {self.T:g} is out of range; allowed values 0 (rigid storey) or "
+                             f"[{T_MIN:g}, {T_MAX:g}] s: a storey stiffer than T = {T_MIN:g} s moves with the "
+                             "ground (use T = 0)")
+        self.zeta = check_real("zeta", zeta, lo=0.0, hi=ZETA_MAX)
 
     @property
     def rigid(self) -> bool:
@@ -74,7 +90,8 @@ class LinearStorey:
 
 class StoreySimulator:
     """Stepwise integration of a `LinearStorey` (the interface the FMU plumbing expects: ``t``,
-    ``advance(t_end, ag)``, ``outputs()``)."""
+    ``advance(t_end, ag)``, ``outputs()``, ``get_state()`` / ``set_state()``). Each step costs one 3x3
+    matrix exponential at most (cached per step length): bounded work for any step length."""
 
     def __init__(self, storey: LinearStorey, t0: float = 0.0, u_0: float = 0.0, u_dot_0: float = 0.0):
         self.storey = storey
@@ -86,22 +103,33 @@ class StoreySimulator:
         self.x = np.array([u_0, u_dot_0])
         self.ag = 0.0        # ground acceleration held over the last step (rigid storey output)
         self._cache: Dict[float, Tuple[np.ndarray, np.ndarray]] = {}
+        self._check(self.x, 0.0, "u_0, u_dot_0")
+
+    def _check(self, x, ag, cause) -> None:
+        """The outputs of state x are finite, or ValueError naming ``cause``."""
+        a = ag if self.storey.rigid else self.storey.floor_acceleration(float(x[0]), float(x[1]))
+        if not (math.isfinite(float(x[0])) and math.isfinite(float(x[1])) and math.isfinite(a)):
+            raise ValueError(f"the storey's state is not finite ({cause}: u = {float(x[0])!r}, u_dot = "
+                             f"{float(x[1])!r}, a_floor = {a!r}); the values are too large for the storey")
 
     def advance(self, t_end: float, ag: float) -> None:
-        """Integrate exactly to t_end [s] with ag [m/s2] held constant."""
-        ag = check_real("ag", ag)
-        dt = float(t_end) - self.t
+        """Integrate exactly to t_end [s] with ag [m/s2] held constant, |ag| <= AG_MAX. Raises ValueError
+        (state kept) for a bad t_end or ag, or outputs that would not be finite."""
+        ag = check_ag(ag)
+        t_end = check_real("t_end", t_end)
+        dt = t_end - self.t
         if dt < 0.0:
             raise ValueError(f"t_end = {t_end!r} is before the current time {self.t!r}")
+        x = self.x
         if dt > 0.0 and not self.storey.rigid:
             if dt not in self._cache:
                 if len(self._cache) > 16:
                     self._cache.clear()
                 self._cache[dt] = self.storey.transition(dt)
             Phi, Gamma = self._cache[dt]
-            self.x = Phi @ self.x + Gamma * ag
-        self.ag = ag
-        self.t = float(t_end)
+            x = Phi @ self.x + Gamma * ag
+            self._check(x, ag, f"step of {dt:g} s to t = {t_end!r} with ag = {ag:g}")
+        self.x, self.ag, self.t = x, ag, t_end
 
     def outputs(self) -> dict:
         u, u_dot = float(self.x[0]), float(self.x[1])
@@ -110,3 +138,33 @@ class StoreySimulator:
         else:
             a_floor = self.storey.floor_acceleration(u, u_dot)
         return {"u": u, "u_dot": u_dot, "a_floor": float(a_floor)}
+
+    #: the `get_state` fields
+    STATE_KEYS = ("version", "model", "t", "x", "ag")
+
+    def get_state(self) -> dict:
+        """t [s], x = [u [m], u_dot [m/s]] and the ag [m/s2] held over the last step (the rigid storey's
+        output) as a flat dict of plain values with a version and the model's name; the storey's T and zeta
+        are parameters (rebuild the simulator from them, then `set_state`)."""
+        return {"version": 1, "model": "LinearStorey", "t": float(self.t),
+                "x": [float(a) for a in self.x], "ag": float(self.ag)}
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
+        check_state_keys(state, self.STATE_KEYS)
+        state_int(state, "version", 1, 1)
+        state_str(state, "model", "LinearStorey")
+        t = state_float(state, "t")
+        x = np.array(state_floats(state, "x", length=2))
+        ag = state_float(state, "ag")
+        try:
+            check_ag(ag)
+        except ValueError as exc:
+            raise ValueError(f"state field 'ag': {exc}") from None
+        if self.storey.rigid and (x[0] != 0.0 or x[1] != 0.0):
+            raise ValueError("state field 'x' must be [0, 0] for a rigid storey (T = 0)")
+        try:
+            self._check(x, ag, "state field 'x'")
+        except ValueError as exc:
+            raise ValueError(f"state field 'x': {exc}") from None
+        self.t, self.x, self.ag = t, x, ag
