@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import os
+from contextlib import nullcontext as _nullcontext
 import queue
 import subprocess
 import sys
@@ -206,8 +207,11 @@ def _summary(config, results: dict, wall: float) -> None:
     xfail = [cid for cid in results if fh.CASES[cid].xfail]
     xfail_failing = sum(1 for cid in xfail if verdicts[cid])
     longest = max(results.items(), key=lambda kv: kv[1]["elapsed"], default=(None, {"elapsed": 0.0}))
-    slow_call = max(((c.get("elapsed", 0.0), cid, c) for cid, o in results.items()
-                     for c in [((o.get("record") or {}).get("max_call") or {})]), default=(0.0, None, {}))
+    def slowest(key):
+        return max(((c.get("elapsed", 0.0), cid, c) for cid, o in results.items()
+                    for c in [((o.get("record") or {}).get(key) or {})]), default=(0.0, None, {}))
+
+    slow_call, slow_step = slowest("max_call"), slowest("max_step")
     families: dict = {}
     for cid, v in verdicts.items():
         fam = fh.CASES[cid].family
@@ -217,7 +221,8 @@ def _summary(config, results: dict, wall: float) -> None:
              f"0.7 wrapper, {xfail_failing} of them failing as expected); cases wall time {wall:.1f} s on {JOBS} "
              f"processes",
              f"  longest case: {longest[0]} {longest[1]['elapsed']:.2f} s; longest FMI call: "
-             f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}",
+             f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}; longest fmi2DoStep: "
+             f"{slow_step[0]:.3f} s in {slow_step[1]}",
              "  by family: " + ", ".join(f"{f} {p}/{t}" for f, (t, p) in sorted(families.items()))]
     out_dir = os.environ.get("FAULT_SUITE_REPORT")
     if out_dir:
@@ -226,11 +231,15 @@ def _summary(config, results: dict, wall: float) -> None:
                                                    "what": fh.CASES[cid].what}
                                              for cid, v in verdicts.items()}, indent=1, default=repr))
     reporter = config.pluginmanager.get_plugin("terminalreporter")
-    for line in lines:
+    capture = config.pluginmanager.get_plugin("capturemanager")
+    with capture.global_and_fixture_disabled() if capture is not None else _nullcontext():
         if reporter is not None:
-            reporter.write_line(line)
-        else:  # pragma: no cover
-            print(line)
+            reporter.ensure_newline()
+        for line in lines:
+            if reporter is not None:
+                reporter.write_line(line)
+            else:  # pragma: no cover
+                print(line)
 
 
 # ---------------------------------------------------------------------------------------------- tests
