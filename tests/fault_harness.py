@@ -908,7 +908,7 @@ for _fmu, _whats in ((RIGID, ("setReal-unknown", "setReal-vr-2^32-1", "setIntege
                      (STOREY, ("setReal-unknown", "setReal-output", "setReal-fixed-after-init", "getReal-unknown")),
                      (GMS, ("setReal-unknown", "setReal-output", "setReal-fixed-after-init", "getReal-unknown"))):
     for _what in _whats:
-        add(f"vr/{SHORT[_fmu]}/{_what}", bad_reference, fmu=_fmu, what=_what)
+        add(f"vr/{SHORT[_fmu]}/{_what}", bad_reference, fmu=_fmu, what=_what, desc=f"{_fmu}: {_what}")
 
 
 def fixed_same_value(h: Harness):
@@ -1011,7 +1011,7 @@ def string_calls(h: Harness, fmu: str, what: str):
 for _fmu in FMUS:
     for _what in ("setString-vr0", "getString-vr0", "setString-unknown", "getString-unknown") if _fmu != GMS \
             else ("setString-unknown", "getString-unknown", "setString-on-Real", "setString-record-after-init"):
-        add(f"string/{SHORT[_fmu]}/{_what}", string_calls, fmu=_fmu, what=_what)
+        add(f"string/{SHORT[_fmu]}/{_what}", string_calls, fmu=_fmu, what=_what, desc=f"{_fmu}: {_what}")
 
 
 def string_too_long_before_init(h: Harness):
@@ -1521,10 +1521,10 @@ for _what in ("pickle-gadget", "pickle-gadget-via-rocking_model.fmi", "pickle-in
               "json-invalid", "json-deep", "payload-2MiB", "t=nan", "initialized-string", "value-wrong-type",
               "value-missing", "extra-key", "signature", "pending-huge", "array-length", "array-wrong-type",
               "mode=7", "negative-impacts", "negative-n_steps", "sim-nan"):
-    add(f"badstate/rigid/{_what}", bad_state, what=_what)
+    add(f"badstate/rigid/{_what}", bad_state, what=_what, desc=f"RigidRockingBlock: FMU state '{_what}'")
 for _fmu in (FLEX, STOREY, GMS):
     for _what in ("pickle-gadget-via-rocking_model.fmi", "other-fmu", "value-wrong-type"):
-        add(f"badstate/{SHORT[_fmu]}/{_what}", bad_state, what=_what, fmu=_fmu)
+        add(f"badstate/{SHORT[_fmu]}/{_what}", bad_state, what=_what, fmu=_fmu, desc=f"{_fmu}: FMU state '{_what}'")
 
 
 # ---------------------------------------------------------------------------------------------- reset
@@ -1691,7 +1691,7 @@ def unsupported(h: Harness, what: str):
 
 
 for _what in ("setRealInputDerivatives", "getRealOutputDerivatives", "cancelStep", "getStatus"):
-    add(f"misc/rigid/{_what}", unsupported, what=_what)
+    add(f"misc/rigid/{_what}", unsupported, what=_what, desc=f"RigidRockingBlock: fmi2{_what[0].upper()}{_what[1:]} (not supported)")
 
 
 def status_queries(h: Harness):
