@@ -166,8 +166,8 @@ def fingerprint() -> dict:
     h = {}
     h["libm"] = hashlib.sha256(repr([(math.sin(v), math.cos(v), math.atan(v), math.exp(v))
                                      for v in x.tolist()]).encode()).hexdigest()[:12]
-    h["numpy"] = hashlib.sha256(b"".join(f(x).tobytes() for f in (np.sin, np.cos, np.exp, np.arctan)) + np.abs(x).sum().tobytes()
-                                ).hexdigest()[:12]
+    ufuncs = b"".join(f(x).tobytes() for f in (np.sin, np.cos, np.exp, np.arctan))
+    h["numpy"] = hashlib.sha256(ufuncs + np.abs(x).sum().tobytes()).hexdigest()[:12]
     M = np.random.default_rng(1).standard_normal((40, 40))
     h["blas"] = hashlib.sha256((M @ M).tobytes() + (M @ M[0]).tobytes() + np.linalg.inv(M[:4, :4]).tobytes()
                                ).hexdigest()[:12]

@@ -70,11 +70,12 @@ QUIET_VERDICT = dict(finite=True, no_penetration=True, right_side=True, bounded_
                      overturned=False, at_rest_at_end=True, energy_below_tipping=True)
 VERDICTS = {f"{MOD}:ten_minute_{s}": dict(QUIET_VERDICT, impact_log_bounded=True) for s in ("ED", "MJ")}
 BOUNDS = {
-    # measured (nominal, 1-ulp seeds 1..8, other kernels): ED 0.1205 alpha, E/E_tip 0.024, 24 episodes,
-    # 2990..3012 impacts; MJ 0.0272 alpha, 17 impacts, 133 uplifts
-    f"{MOD}:ten_minute_ED": dict(max_phi_over_alpha=(0.05, 0.5), max_E_over_E_tip=(None, 0.25),
+    # measured in 14 runs (nominal, 1-ulp seeds 1..8; generic kernels nominal and seeds 2, 3; OpenBLAS
+    # Sandybridge nominal and seed 4): ED max |phi| 0.1205 alpha and E/E_tip 0.240 in all 14, 24 rocking
+    # episodes, 2989..3014 impacts; MJ 0.0272 alpha, E/E_tip 0.054, 17 impacts, 133 uplifts in all 14
+    f"{MOD}:ten_minute_ED": dict(max_phi_over_alpha=(0.05, 0.5), max_E_over_E_tip=(None, 0.5),
                                  episodes=(15, None), impacts=(1000, None)),
-    f"{MOD}:ten_minute_MJ": dict(max_phi_over_alpha=(0.005, 0.5), max_E_over_E_tip=(None, 0.25),
+    f"{MOD}:ten_minute_MJ": dict(max_phi_over_alpha=(0.005, 0.5), max_E_over_E_tip=(None, 0.5),
                                  episodes=(20, None), impacts=(10, None)),
 }
 
@@ -117,7 +118,8 @@ def test_ten_minute_record(scheme, kernel_rerun):
 
 def five_g_pulse(model_name: str, scheme: str, pert: Perturbation):
     """A 5 g, 2 Hz one-sine pulse, 3 s; 25 times the block's uplift threshold (0.2 g): it overturns at
-    0.55 to 0.74 s (rigid ED 0.58, MJ 0.55; flexible ED 0.61, MJ 0.74 s), far from any boundary."""
+    0.55 to 0.74 s (rigid ED 0.58, MJ 0.55; flexible ED 0.61, MJ 0.74 s; the same in the 14 runs of the
+    ten-minute record's measurement), far from any boundary."""
     model = RigidBlock(**SLENDER) if model_name == "rigid" else FlexibleOscillator()
     gm = SinePulse(pert.scalar(5.0 * G, 1), pert.scalar(2 * math.pi * 2.0, 2))
     return Trace(model, scheme, gm, grid(3.0), phi_0=pert.scalar(0.0)), {}
@@ -150,9 +152,10 @@ def test_five_g_pulse_overturns_cleanly(model_name, scheme):
     assert tr.T[-1] == pytest.approx(3.0)
 
 
-#: 5 g rectangular impulse of 5 ms at t = 0.1 s; the run ends at IMPULSE_END [s]: the body is at rest from
-#: 3.5 to 4.4 s on (rigid ED 4.40, MJ 3.50, flexible 3.83 / 3.84 s); the last IMPULSE_REST seconds must be
-#: exact rest
+#: 5 g rectangular impulse of 5 ms at t = 0.1 s; the run ends at IMPULSE_END [s] (it was 10 s): the body
+#: is at rest from 3.5 to 4.4 s on (rigid ED 4.40, MJ 3.50, flexible 3.83 / 3.84 s); the last IMPULSE_REST
+#: seconds must be exact rest. Max |phi|: rigid 0.0553 (ED) / 0.0550 (MJ) alpha, flexible 0.0466 alpha,
+#: the same to 4 digits in the 14 runs of the ten-minute record's measurement
 IMPULSE = dict(A=5.0 * G, duration=5e-3, t0=0.1)
 IMPULSE_END, IMPULSE_REST = 6.0, 1.0
 
@@ -174,7 +177,6 @@ for _m in ("rigid", "flexible"):
         VERDICTS[f"{MOD}:short_impulse_{_m}_{_s}"] = dict(QUIET_VERDICT)
         if _m == "flexible":
             del VERDICTS[f"{MOD}:short_impulse_{_m}_{_s}"]["energy_below_tipping"]   # rigid blocks only
-        # measured: max |phi| 0.055 alpha (rigid), 0.047 alpha (flexible), both schemes
         BOUNDS[f"{MOD}:short_impulse_{_m}_{_s}"] = dict(max_phi_over_alpha=(0.01, 0.5))
 
 
