@@ -6,6 +6,11 @@ expected) plus a closed form or a comparison between the schemes. Tests that fai
 integrator bug keep their strict assertion and are marked ``xfail(strict=True)`` with the bug's number
 (the list in the issue / the report), so that a fix shows up as XPASS.
 
+Round-off (issue 12): the long and violent scenes (free rocking to rest under a long quiet input, large
+steps, the stored 30 s record, the README quickstart that overturns) are named scenes of `roundoff`; they
+are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
+that overturn are checked up to `sane_horizon`, where the documented limitation starts (docs/limitations.md).
+
 Tolerances (measured first, then set with a margin):
 - event-driven (ED): corners in contact are exact in the reduced coordinates; a corner at an event is taken
   a round-off beyond the root, so penetration <= PEN_ED = 1e-9 L (the scheme's gap_tol); a grazing chatter
@@ -296,8 +301,16 @@ def kernel_rerun():
 @pytest.mark.parametrize("scheme", ["ED", "MJ"])
 @pytest.mark.parametrize("model_name", ["rigid", "flexible"])
 def test_impact_accumulation_reaches_full_contact(model_name, scheme, kernel_rerun):
+    """Free rocking from 0.51 alpha (block) / 0.25 alpha (column) ends in full contact before t_rest and stays
+    there under the quiet input (below the uplift threshold): a verdict far from any boundary, the same 1 ulp
+    off and under other kernels (ED scenes, section 9)."""
     tr, k = settle_run(model_name, scheme)
     assert_sane(tr)
+    key = f"{MOD}:settle_{model_name}_{scheme}"
+    if key in VERDICTS:
+        summary = nominal(key)[1]
+        assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+        check_bounds(summary["figures"], BOUNDS[key], key)
     modes = tr.modes
     assert modes[k] == Mode.FULL, f"not at rest after {tr.t[k]} s"
     # full contact is reached once and for all: no spurious rocking afterwards, not under the quiet input
@@ -715,7 +728,8 @@ def test_stiff_column_fixed_base_vibration(scheme, kw):
     ("rigid", "ED"), ("rigid", "MJ"), ("stiff-flexible", "ED"), ("stiff-flexible", "MJ")])
 def test_large_steps_stay_physical(model_name, scheme):
     """dt = 0.05 s (p dt = 0.13 for the block; omega dt = 13 for the stiff column): a 0.25 g, 1.5 Hz pulse
-    (ED: max |phi| 0.039 rad block, 0.028 rad column, no overturning) and free rocking to rest. Finite, no
+    (ED: max |phi| 0.039 rad = 0.20 alpha block, 0.028 rad = 0.14 alpha column, no overturning, the same in
+    14 runs 1 ulp off and under other kernels) and free rocking to rest. Finite, no
     penetration beyond 2 dt v, no overturning, at rest at the end. (MJ at dt = 0.05 s under-resolves the
     block, max |phi| 0.003 rad, 0 impacts: accuracy, not stability.) With the stiff column MJ overturned
     spuriously at dt = 0.05, 0.02, 0.01 and 0.005 s (bug 9: first flight at 0.5 / 0.36 / 0.40 / 0.39 s with
@@ -775,7 +789,8 @@ def test_flexible_record_stays_on_the_right_side_event_driven():
     scaled by 0.15/0.4 (PGA 0.15 g), zero-order hold per 0.01 s, tolerance 1e-10: rocked on pivot 2 (right)
     with phi > 0 from 13.57 s and 'overturned'. MJ at dt = 2e-4 s: max |phi| ~ 0.02 rad. The outcome was
     round-off sensitive (synthetic_record(pga_g=0.15) did not show it), hence the stored record; the verdict
-    (right side, no overturning, max |phi| < 0.05 rad) is re-run 1 ulp off and under other kernels."""
+    (right side, no overturning, max |phi| < 0.05 rad; measured 0.012 rad in all 14 runs 1 ulp off and under
+    other kernels) is re-run 1 ulp off and under other kernels."""
     key = f"{MOD}:flexible_record_ED"
     tr, summary = nominal(key)
     wrong = ((tr.modes == 1) & (tr.phi < -1e-9)) | ((tr.modes == 2) & (tr.phi > 1e-9))
