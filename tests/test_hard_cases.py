@@ -6,6 +6,11 @@ expected) plus a closed form or a comparison between the schemes. Tests that fai
 integrator bug keep their strict assertion and are marked ``xfail(strict=True)`` with the bug's number
 (the list in the issue / the report), so that a fix shows up as XPASS.
 
+Round-off (issue 12): the long and violent scenes (free rocking to rest under a long quiet input, large
+steps, the stored 30 s record, the README quickstart that overturns) are named scenes of `roundoff`; they
+are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
+that overturn are checked up to `sane_horizon`, where the documented limitation starts (docs/limitations.md).
+
 Tolerances (measured first, then set with a margin):
 - event-driven (ED): corners in contact are exact in the reduced coordinates; a corner at an event is taken
   a round-off beyond the root, so penetration <= PEN_ED = 1e-9 L (the scheme's gap_tol); a grazing chatter
@@ -25,9 +30,14 @@ import pytest
 
 from rocking_model import (ConstantMotion, FlexibleOscillator, FunctionMotion, RigidBlock, SampledMotion,
                            Simulator, SinePulse, simulate)
+from rocking_model.contact import inverse_mass
 from rocking_model.modes import Mode
 
+import roundoff
+from roundoff import Perturbation, check_bounds, describe_mismatch, scene
+
 G = 9.81
+MOD = __name__
 DATA = pathlib.Path(__file__).parent / "data" / "hard_cases"
 
 ED = ("event_driven", dict(tolerance=1e-10))
@@ -127,40 +137,84 @@ def pen_tol(tr, dt=None, v=None):
     return max(2.0 * dt * v, 1e-12 * L)
 
 
-#: beyond this rotation [rad] an overturning block's sticking pivot unloads (lambda_N -> 0 with lambda_T != 0:
-#: a block falling from the top grazes lambda_N = 0 at phi ~ 1.43 rad, a driven one lifts off earlier); the
-#: no-sliding model has no consistent contact state there (see test_sustained_step_lift_off_*), so the
-#: geometric checks of overturning runs stop at PHI_SANE (the outcome is decided long before).
-PHI_SANE = 1.0
+def sane_horizon(phi, modes, overturned, alpha: float) -> int:
+    """Number of leading output samples on which the geometric invariants are the model's own promise.
 
-
-def assert_sane(tr, overturn_ok=False, pen=None):
-    """Finite, no penetration beyond the documented tolerance, each pivot on its own side, |phi| < pi/2
-    unless overturning is allowed (then the geometric checks stop once |phi| > PHI_SANE)."""
-    q, v = np.array(tr.q), np.array(tr.v)
-    assert np.all(np.isfinite(q)) and np.all(np.isfinite(v))
-    phi, modes = tr.phi, tr.modes
+    The no-sliding contact law has no consistent solution once an overturning body has fallen past its
+    tipping point and its pivot unloads (lambda_N -> 0 while the sticking force is not 0: the pivot's free
+    normal acceleration is negative, so 'closed' needs tension and 'open' penetrates; physics.md section 6),
+    nor for a landing at a steep angle on a sliding corner (bug 7). Both happen only in the *final fall*
+    of an overturning run: the samples after the last one within the tipping angle (|phi| <= alpha) before
+    the overturning flag is set. The checks therefore cover
+    - every sample of a run that does not overturn;
+    - in a run that overturns: everything up to its final fall, and the final fall as long as the body
+      still rocks on its outer pivot (phi > 0: LEFT); they stop at the first sample of the final fall off
+      that pivot (lift-off or flight: from there on the corner may sink, which docs/limitations.md
+      measures; test_overturning_lift_off_sinks_a_corner_as_documented).
+    The frozen samples after overturning repeat the overturning state and are checked with it when it was
+    reached on the pivot."""
+    phi, modes, overturned = np.asarray(phi), np.asarray(modes), np.asarray(overturned, dtype=bool)
     n = len(phi)
-    if overturn_ok and np.any(np.abs(phi) > PHI_SANE):
-        n = int(np.argmax(np.abs(phi) > PHI_SANE))
+    if not overturned.any():
+        return n
+    k_ov = int(np.argmax(overturned))
+    inside = np.nonzero(np.abs(phi[:k_ov]) <= alpha)[0]
+    k_fall = int(inside[-1]) + 1 if inside.size else 0
+    pivot = Mode.LEFT if phi[k_ov] > 0 else Mode.RIGHT
+    off = np.nonzero(modes[k_fall:k_ov + 1] != pivot)[0]
+    return k_fall + int(off[0]) if off.size else n
+
+
+def sanity_report(tr, overturn_ok=False, pen=None) -> dict:
+    """The invariants of `assert_sane` as a dict: ``finite``, ``no_penetration``, ``right_side``,
+    ``bounded_rotation`` (|phi| < pi/2 without overturning, or <= pi/2 + 0.05 when overturning is allowed),
+    ``not_overturned`` (only when overturning is not allowed), each a bool, plus ``messages`` (why not) and
+    the figures ``horizon`` (samples checked, see `sane_horizon`), ``min_gap`` [m] over them and ``tol`` [m]."""
+    q, v = np.array(tr.q), np.array(tr.v)
+    out = {"finite": bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v))), "messages": []}
+    phi, modes = tr.phi, tr.modes
+    n = sane_horizon(phi, modes, tr.overturned, tr.model.alpha) if overturn_ok else len(phi)
     tol = pen_tol(tr) if pen is None else pen
-    min_gap = min(float(tr.model.gaps(qk).min()) for qk in tr.q[:n])
-    assert min_gap >= -tol, f"penetration {min_gap:.3g} m > {tol:.3g} m"
-    phi, modes = phi[:n], modes[:n]
+    min_gap = min(float(tr.model.gaps(qk).min()) for qk in tr.q[:n]) if n else 0.0
+    out["no_penetration"] = bool(min_gap >= -tol)
+    if not out["no_penetration"]:
+        out["messages"].append(f"penetration {min_gap:.3g} m > {tol:.3g} m")
+    phi_n, modes_n = phi[:n], modes[:n]
     # MJ reports the corners that carried impulse in the last step: at an impact step phi may still be on
     # the old side by up to dt |phi_dot|
     side = 1e-9 if tr.scheme == "event_driven" else \
         2 * tr.sim.integrator.dt_max * float(np.max(np.abs(tr.phi_dot))) + 1e-12
-    left = (modes == Mode.LEFT) & (phi < -side)
-    right = (modes == Mode.RIGHT) & (phi > side)
+    left = (modes_n == Mode.LEFT) & (phi_n < -side)
+    right = (modes_n == Mode.RIGHT) & (phi_n > side)
     bad = np.nonzero(left | right)[0]
-    assert not bad.size, (f"rocking through the ground: t = {tr.T[bad[0]]:.6g} s, contact = {modes[bad[0]]}, "
-                          f"phi = {phi[bad[0]]:.3g} rad")
+    out["right_side"] = not bad.size
+    if bad.size:
+        out["messages"].append(f"rocking through the ground: t = {tr.T[bad[0]]:.6g} s, contact = "
+                               f"{modes_n[bad[0]]}, phi = {phi_n[bad[0]]:.3g} rad")
     if overturn_ok:
-        assert np.all(np.abs(tr.phi) <= 0.5 * math.pi + 0.05)
+        out["bounded_rotation"] = bool(np.all(np.abs(phi) <= 0.5 * math.pi + 0.05))
     else:
-        assert not any(tr.overturned), f"overturned at t = {tr.T[np.argmax(tr.overturned)]:.6g} s"
-        assert np.all(np.abs(phi) < 0.5 * math.pi)
+        out["not_overturned"] = not any(tr.overturned)
+        if not out["not_overturned"]:
+            out["messages"].append(f"overturned at t = {tr.T[np.argmax(tr.overturned)]:.6g} s")
+        out["bounded_rotation"] = bool(np.all(np.abs(phi_n) < 0.5 * math.pi))
+    if not out["bounded_rotation"]:
+        out["messages"].append(f"max |phi| = {np.max(np.abs(phi)):.6g} rad")
+    out.update(horizon=n, min_gap=min_gap, tol=tol)
+    return out
+
+
+SANITY_KEYS = ("finite", "no_penetration", "right_side", "bounded_rotation", "not_overturned")
+
+
+def assert_sane(tr, overturn_ok=False, pen=None):
+    """Finite, no penetration beyond the documented tolerance, each pivot on its own side, |phi| < pi/2
+    and no overturning unless overturning is allowed (then the geometric checks stop where the documented
+    limitation starts, see `sane_horizon`)."""
+    rep = sanity_report(tr, overturn_ok, pen)
+    failed = [k for k in SANITY_KEYS if k in rep and not rep[k]]
+    assert not failed, f"{failed}: {'; '.join(rep['messages'])}"
+    return rep
 
 
 def rigid_energy_ratio(block, v_minus, v_plus):
@@ -187,29 +241,76 @@ QUIET_T = {"event_driven": 60.0, "moreau_jean": 20.0}
 MJ_SETTLE = ("moreau_jean", dict(dt_max=2e-3))
 
 
-def quiet_input(model):
+def quiet_input(model, pert: Perturbation = Perturbation()):
     """Low-level input: 0.3 g tan(alpha) for the block; 0.03 g for the column (static u = 2e-4 m, uplift
     needs ~1.2e-3 m), two incommensurate sines."""
     A = 0.3 * model.g * math.tan(model.alpha) if isinstance(model, RigidBlock) else 0.03 * G
+    A = pert.scalar(A, 3)
     return FunctionMotion(lambda t: A * (0.6 * math.sin(2 * math.pi * 1.3 * t) + 0.4 * math.sin(7.1 * t)))
+
+
+def settle_scene(model_name: str, scheme_name: str, pert: Perturbation):
+    """Free rocking from phi_0 to rest, then the quiet input (60 s ED, 20 s MJ): the outcome (exact rest
+    from t_rest on) is far from a boundary, the quiet input being 0.3 of the uplift threshold."""
+    make, ini, t_rest = FREE[model_name]
+    model = make()
+    scheme = ED if scheme_name == "ED" else MJ_SETTLE
+    ini = {k: pert.scalar(v, 5 + i) for i, (k, v) in enumerate(ini.items())}
+    tr = Trace(model, scheme, 0.0, grid(t_rest), **ini)
+    tr.k_rest = len(tr.t) - 1
+    tr.extend(quiet_input(model, pert), grid(t_rest + QUIET_T[tr.scheme], 0.01, t_rest))
+    return tr, dict(rest_after=t_rest)
+
+
+#: verdicts of the scenes of this module that are re-run 1 ulp off and under other kernels, and the
+#: documented margins of their figures (filled next to each scene)
+VERDICTS: dict[str, dict] = {}
+BOUNDS: dict[str, dict] = {}
+QUIET_VERDICT = dict(finite=True, no_penetration=True, right_side=True, bounded_rotation=True,
+                     overturned=False, at_rest_at_end=True)
+for _m in ("rigid", "flexible"):
+    for _s in ("ED", "MJ"):
+        scene(f"settle_{_m}_{_s}")(functools.partial(settle_scene, _m, _s))
+    # (the MJ runs cost 4 s each: the long MJ records of test_extreme_inputs cover that scheme)
+    VERDICTS[f"{MOD}:settle_{_m}_ED"] = dict(QUIET_VERDICT, **({"energy_below_tipping": True}
+                                                               if _m == "rigid" else {}))
+    # released at 0.51 alpha (rigid, E/E_tip = 0.76) / 0.25 alpha (flexible); the quiet input keeps it down
+    BOUNDS[f"{MOD}:settle_{_m}_ED"] = dict(max_phi_over_alpha=(0.45, 0.6) if _m == "rigid" else (0.2, 0.3))
+
+
+@functools.lru_cache(maxsize=None)
+def nominal(key: str):
+    return roundoff.run_scene(key)
 
 
 @functools.lru_cache(maxsize=None)
 def settle_run(model_name, scheme_name):
-    make, ini, t_rest = FREE[model_name]
-    model = make()
-    scheme = ED if scheme_name == "ED" else MJ_SETTLE
-    tr = Trace(model, scheme, 0.0, grid(t_rest), **ini)
-    k_rest = len(tr.t) - 1
-    tr.extend(quiet_input(model), grid(t_rest + QUIET_T[tr.scheme], 0.01, t_rest))
-    return tr, k_rest
+    tr, _ = nominal(f"{MOD}:settle_{model_name}_{scheme_name}")
+    return tr, tr.k_rest
+
+
+@pytest.fixture(scope="module")
+def kernel_rerun():
+    """The re-run scenes of this module in a subprocess under other arithmetic kernels, in the background
+    (started by the first test that asks for it, collected by test_same_verdicts_under_other_kernels)."""
+    rerun = roundoff.Rerun(sorted(VERDICTS))
+    yield rerun
+    rerun.close()
 
 
 @pytest.mark.parametrize("scheme", ["ED", "MJ"])
 @pytest.mark.parametrize("model_name", ["rigid", "flexible"])
-def test_impact_accumulation_reaches_full_contact(model_name, scheme):
+def test_impact_accumulation_reaches_full_contact(model_name, scheme, kernel_rerun):
+    """Free rocking from 0.51 alpha (block) / 0.25 alpha (column) ends in full contact before t_rest and stays
+    there under the quiet input (below the uplift threshold): a verdict far from any boundary, the same 1 ulp
+    off and under other kernels (ED scenes, section 9)."""
     tr, k = settle_run(model_name, scheme)
     assert_sane(tr)
+    key = f"{MOD}:settle_{model_name}_{scheme}"
+    if key in VERDICTS:
+        summary = nominal(key)[1]
+        assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+        check_bounds(summary["figures"], BOUNDS[key], key)
     modes = tr.modes
     assert modes[k] == Mode.FULL, f"not at rest after {tr.t[k]} s"
     # full contact is reached once and for all: no spurious rocking afterwards, not under the quiet input
@@ -493,28 +594,51 @@ ED_BOUNDARIES = {2: (1.2198, 2.3366, 3.6810), 4: (1.7255, 5.1048), 6: (4.0991,)}
 BAND = {2: 0.01, 4: 0.04, 6: 0.12}
 
 
-def classify_overturn(scheme, f, k, **kw):
-    """(overturned, sanity message or None) of a one-sine pulse f g tan(alpha), omega_p = k p. Safe once the
-    pulse is over and the block is in full contact or its energy is below the overturning energy
-    m g R (1 - cos alpha) (no input, e_N = 0: the energy cannot grow)."""
+def classify_overturn(scheme, f, k, pert: Perturbation = Perturbation(), **kw):
+    """(overturned, sanity message or None) of a one-sine pulse f g tan(alpha), omega_p = k p (``pert``:
+    1 ulp on the amplitude and the frequency). Safe once the pulse is over and the block is in full contact
+    or its energy is below the overturning energy m g R (1 - cos alpha) (no input, e_N = 0: the energy
+    cannot grow)."""
     block = RigidBlock(**OVERTURN_BLOCK)
-    gm = SinePulse(f * block.g * math.tan(block.alpha), k * block.p)
+    gm = SinePulse(pert.scalar(f * block.g * math.tan(block.alpha), 1), pert.scalar(k * block.p, 2))
     e_crit = block.m * block.g * block.R * (1 - math.cos(block.alpha))
     name, opts = SCHEMES[scheme]
     sim = Simulator(block, name, **dict(opts, **kw))
+    tol = 1e-9 if scheme == "ED" else 2e-3 * 2 * block.b * 5
     t = 0.0
+    times, phi, modes, gaps, over = [], [], [], [], []
     while t < gm.t1 + 10.0:
         t += 0.05
         sim.advance(t, gm)
         q, v = sim.state()
         I = sim.integrator
-        if abs(q[2]) < PHI_SANE and block.gaps(q).min() < -(1e-9 if scheme == "ED" else 2e-3 * 2 * block.b * 5):
-            return None, f"penetration {block.gaps(q).min():.3g} m at t = {t:.2f} s"
-        if I.overturned:
-            return True, None
-        if t > gm.t1 and (I.mode == Mode.FULL or block.energy(q, v) < e_crit * (1 - 1e-6)):
-            return False, None
+        times.append(t)
+        phi.append(q[2])
+        modes.append(int(I.mode))
+        gaps.append(float(block.gaps(q).min()))
+        over.append(I.overturned)
+        done = I.overturned or (t > gm.t1 and (I.mode == Mode.FULL or block.energy(q, v) < e_crit * (1 - 1e-6)))
+        if done:
+            # the geometric check stops where the documented limitation starts (sane_horizon)
+            n = sane_horizon(phi, modes, over, block.alpha)
+            bad = [j for j in range(n) if gaps[j] < -tol]
+            if bad:
+                return None, f"penetration {gaps[bad[0]]:.3g} m at t = {times[bad[0]]:.2f} s"
+            return I.overturned, None
     raise AssertionError(f"no classification for f = {f}, omega_p = {k} p")
+
+
+@pytest.mark.parametrize("k", [2, 4, 6], ids=["wp=2p", "wp=4p", "wp=6p"])
+def test_overturning_boundaries_are_far_from_round_off(k):
+    """The regression points of the next test sit 3e-4 (in units of g tan(alpha)) on either side of the
+    measured ED boundaries: a margin round-off cannot cross. 1 ulp off (pulse amplitude and frequency) they
+    classify the same. (Measured: 1-ulp seeds 1 to 4, and the generic kernels of `roundoff.kernel_env`
+    without and with seeds 1 to 4: all 9 perturbed runs classify the 12 points as the nominal run.)"""
+    pert = Perturbation(roundoff.ULP_SEED)
+    for fb in ED_BOUNDARIES[k]:
+        for f in (fb - 3e-4, fb + 3e-4):
+            ref, got = classify_overturn("ED", f, k), classify_overturn("ED", f, k, pert)
+            assert got == ref and ref[1] is None, (k, f, ref, got)
 
 
 @pytest.mark.parametrize("k", [2, 4, 6], ids=["wp=2p", "wp=4p", "wp=6p"])
@@ -604,35 +728,77 @@ def test_stiff_column_fixed_base_vibration(scheme, kw):
     ("rigid", "ED"), ("rigid", "MJ"), ("stiff-flexible", "ED"), ("stiff-flexible", "MJ")])
 def test_large_steps_stay_physical(model_name, scheme):
     """dt = 0.05 s (p dt = 0.13 for the block; omega dt = 13 for the stiff column): a 0.25 g, 1.5 Hz pulse
-    (ED: max |phi| 0.039 rad block, 0.028 rad column, no overturning) and free rocking to rest. Finite, no
+    (ED: max |phi| 0.039 rad = 0.20 alpha block, 0.028 rad = 0.14 alpha column, no overturning, the same in
+    14 runs 1 ulp off and under other kernels) and free rocking to rest. Finite, no
     penetration beyond 2 dt v, no overturning, at rest at the end. (MJ at dt = 0.05 s under-resolves the
     block, max |phi| 0.003 rad, 0 impacts: accuracy, not stability.) With the stiff column MJ overturned
     spuriously at dt = 0.05, 0.02, 0.01 and 0.005 s (bug 9: first flight at 0.5 / 0.36 / 0.40 / 0.39 s with
     |u_dot| up to 8 m/s) until it sub-stepped to model.step_limit = 0.25/omega (max |phi| 0.031 rad)."""
-    model = RigidBlock(**SLENDER) if model_name == "rigid" else stiff_flex()
-    gm = SinePulse(0.25 * G, 2 * math.pi * 1.5)
-    tr = Trace(model, scheme, gm, grid(25.0, 0.05), dt_max=0.05)
+    key = f"{MOD}:large_steps_{model_name}_{scheme}"
+    tr, summary = nominal(key)
     assert_sane(tr)
     assert np.max(np.abs(tr.phi)) > 1e-3
     assert tr.modes[-1] == Mode.FULL and abs(tr.phi[-1]) < 1e-12
     assert tr.impacts[-1] < 300
+    if key in VERDICTS:
+        assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+        check_bounds(summary["figures"], BOUNDS[key], key)
+
+
+def large_steps_scene(model_name: str, scheme: str, pert: Perturbation):
+    """0.25 g, 1.5 Hz one-sine pulse, 25 s on a 0.05 s grid with dt_max = 0.05 s: max |phi| 0.2 alpha
+    (rigid ED), far from overturning; at rest over the last second."""
+    model = RigidBlock(**SLENDER) if model_name == "rigid" else stiff_flex()
+    gm = SinePulse(pert.scalar(0.25 * G, 1), pert.scalar(2 * math.pi * 1.5, 2))
+    tr = Trace(model, scheme, gm, grid(25.0, 0.05), dt_max=0.05, phi_0=pert.scalar(0.0))
+    return tr, dict(rest_after=24.0)
+
+
+for _m in ("rigid", "stiff-flexible"):
+    for _s in ("ED", "MJ"):
+        scene(f"large_steps_{_m}_{_s}")(functools.partial(large_steps_scene, _m, _s))
+# re-run: both rigid runs and the stiff column ED (its MJ run, 9 s, is not repeated)
+for _k, _b in (("rigid_ED", (0.1, 0.5)), ("rigid_MJ", (0.005, 0.5)), ("stiff-flexible_ED", (0.05, 0.5))):
+    VERDICTS[f"{MOD}:large_steps_{_k}"] = dict(QUIET_VERDICT, **({"energy_below_tipping": True}
+                                                                if _k.startswith("rigid") else {}))
+    BOUNDS[f"{MOD}:large_steps_{_k}"] = dict(max_phi_over_alpha=_b)
 # ================================================================================================
 # 7. Long records and extreme input
 # ================================================================================================
+def flexible_record_scene(pert: Perturbation):
+    """The stored 30 s record scaled to PGA 0.15 g, held per 0.01 s step (exactly what simulate(...,
+    hold="zoh") does), default FlexibleOscillator, ED at tolerance 1e-10."""
+    t, a = np.load(DATA / "synthetic_record_30s_0.4g.npy")
+    gm = SampledMotion(t, pert.array(a * 0.15 / 0.4, 1))
+    times = np.minimum(0.01 * np.arange(3001), 30.0)
+    tr = Trace(FlexibleOscillator(), ("event_driven", dict(tolerance=1e-10)), 0.0, [], phi_0=pert.scalar(0.0))
+    for k in range(times.size - 1):
+        tr.extend(ConstantMotion(gm(times[k])), [times[k + 1]])
+    return tr, {}
+
+
+scene("flexible_record_ED")(flexible_record_scene)
+VERDICTS[f"{MOD}:flexible_record_ED"] = dict(finite=True, no_penetration=True, right_side=True,
+                                             bounded_rotation=True, overturned=False)
+# measured: max |phi| = 0.0120 rad = 0.060 alpha (alpha = 0.201 rad), against the 0.05 rad asserted
+BOUNDS[f"{MOD}:flexible_record_ED"] = dict(max_phi_over_alpha=(0.02, 0.05 / FlexibleOscillator().alpha))
+
+
 def test_flexible_record_stays_on_the_right_side_event_driven():
     """Bug 2 (fixed in 7e74133, kept as regression): default FlexibleOscillator under the 30 s synthetic record
     scaled by 0.15/0.4 (PGA 0.15 g), zero-order hold per 0.01 s, tolerance 1e-10: rocked on pivot 2 (right)
     with phi > 0 from 13.57 s and 'overturned'. MJ at dt = 2e-4 s: max |phi| ~ 0.02 rad. The outcome was
-    round-off sensitive (synthetic_record(pga_g=0.15) did not show it), hence the stored record."""
-    t, a = np.load(DATA / "synthetic_record_30s_0.4g.npy")
-    a = a * 0.15 / 0.4
-    model = FlexibleOscillator()
-    res = simulate(model, (t, a), 30.0, scheme="event_driven", tolerance=1e-10, hold="zoh",
-                   output_interval=0.01)
-    wrong = ((res.contact == 1) & (res.phi < -1e-9)) | ((res.contact == 2) & (res.phi > 1e-9))
-    assert not wrong.any(), res.t[wrong][:3]
-    assert not res.overturned[-1]
-    assert np.abs(res.phi).max() < 0.05
+    round-off sensitive (synthetic_record(pga_g=0.15) did not show it), hence the stored record; the verdict
+    (right side, no overturning, max |phi| < 0.05 rad; measured 0.012 rad in all 14 runs 1 ulp off and under
+    other kernels) is re-run 1 ulp off and under other kernels."""
+    key = f"{MOD}:flexible_record_ED"
+    tr, summary = nominal(key)
+    wrong = ((tr.modes == 1) & (tr.phi < -1e-9)) | ((tr.modes == 2) & (tr.phi > 1e-9))
+    assert not wrong.any(), tr.T[wrong][:3]
+    assert not tr.overturned[-1]
+    assert np.abs(tr.phi).max() < 0.05
+    assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+    check_bounds(summary["figures"], BOUNDS[key], key)
 
 
 def test_flexible_lift_off_independent_of_step_cap():
@@ -725,6 +891,71 @@ def test_sustained_step_lift_off_keeps_corners_above_ground(scheme):
     assert tr.min_gap >= -tol, f"penetration {tr.min_gap:.3g} m > {tol:.3g} m"
 
 
+#: the README's FMU quickstart: b = 0.2, h = 1, ag = 3 sin(2 pi t) m/s2 for t < 1 s (a table on a 0.01 s
+#: grid, held per 0.01 s communication step as fmpy does), 5 s; the FMU's default settings
+QUICKSTART_T = np.linspace(0.0, 5.0, 501)
+QUICKSTART_AG = 3.0 * np.sin(2 * np.pi * QUICKSTART_T) * (QUICKSTART_T < 1)
+QUICKSTART_SCHEMES = {"ED": ("event_driven", dict(tolerance=1e-8)), "MJ": ("moreau_jean", dict(dt_max=1e-3))}
+#: [m] how deep a corner sinks after the pivot's lift-off in the final fall (docs/limitations.md), as
+#: measured (ED 20.42 mm at the frozen state; MJ 0.277 mm, then projected back onto the ground), +-25 %
+QUICKSTART_SINK = {"ED": (0.0153, 0.0255), "MJ": (0.21e-3, 0.35e-3)}
+
+
+def quickstart_scene(scheme: str, pert: Perturbation):
+    a = pert.array(QUICKSTART_AG, 1)
+    tr = Trace(RigidBlock(**SLENDER), QUICKSTART_SCHEMES[scheme], 0.0, [], phi_0=pert.scalar(0.0))
+    for k in range(1, QUICKSTART_T.size):
+        tr.extend(ConstantMotion(float(a[k - 1])), [QUICKSTART_T[k]])
+    tr.ag = a
+    return tr, {}
+
+
+for _s in ("ED", "MJ"):
+    scene(f"quickstart_{_s}")(functools.partial(quickstart_scene, _s))
+    VERDICTS[f"{MOD}:quickstart_{_s}"] = dict(finite=True, no_penetration=True, right_side=True,
+                                              bounded_rotation=True, overturned=True,
+                                              frozen_after_overturning=True)
+    # overturns at 2.05 s (1 s after the pulse); the sink is deterministic (no chaos in 2 s)
+    BOUNDS[f"{MOD}:quickstart_{_s}"] = dict(t_overturn=(1.9, 2.2), sink_after_horizon=QUICKSTART_SINK[_s])
+
+
+@pytest.mark.parametrize("scheme", ["ED", "MJ"])
+def test_overturning_lift_off_sinks_a_corner_as_documented(scheme, record_property):
+    """The documented limitation, measured (docs/limitations.md). The README quickstart overturns the block
+    at 2.05 s. In its final fall the pivot's normal force reaches 0 at phi = -1.34 rad while the pivot's free
+    normal acceleration is -6 m/s2 (the sticking force is not 0): with no sliding there is no consistent
+    contact state (physics.md section 6). Up to that lift-off the run is sane (`sane_horizon`); after it the
+    schemes take flight and the pivot corner sinks: ED 20.4 mm at the frozen state, MJ 0.28 mm (then
+    projected back). The figures are pinned (+-25 %) so that the day friction lands (issue 15) this test
+    fails, and the document and `sane_horizon` get updated."""
+    key = f"{MOD}:quickstart_{scheme}"
+    tr, summary = nominal(key)
+    block = tr.model
+    rep = assert_sane(tr, overturn_ok=True)
+    assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+    # where the checks stop: the last sample on the pivot, in the final fall, its normal force nearly gone
+    k = rep["horizon"] - 1
+    q, v = tr.q[k], tr.v[k]
+    pivot = tr.modes[k]
+    assert pivot == Mode.RIGHT and abs(tr.phi[k]) > block.alpha and tr.phi[k] * tr.phi_dot[k] > 0
+    ag = float(tr.ag[k])
+    i = 1                                                     # right corner
+    lam = float(block.contact_forces(Mode.RIGHT, q, v, ag)[i]) / block.force_scale
+    acc = inverse_mass(block, q) @ block.forces(q, v, ag)
+    a_free = float(block.contact_jacobians(q)[0][:, i] @ acc + block.contact_drift(q, v)[0][i])
+    print(f"{scheme}: last sample on the pivot t = {tr.T[k]:.2f} s, phi = {tr.phi[k]:.4f} rad, "
+          f"lambda_N / (m g) = {lam:.4f}, free a_N = {a_free:.3f} m/s2")
+    # measured at the last sample on the pivot (ED 1.96 s, MJ 1.98 s): lambda_N / (m g) = 0.004 (ED; MJ
+    # -0.008: its last step on the pivot already needed a pull), free normal acceleration -6.1 (ED) / -6.2
+    # (MJ) m/s2
+    assert lam < 0.05 and a_free < -0.5 * block.g, (lam, a_free)
+    # and beyond it the contact law does not hold: the corner is found below the ground
+    sink = summary["figures"]["sink_after_horizon"]
+    record_property("phi_lift_off_rad", float(tr.phi[k]))
+    record_property("sink_after_lift_off_m", sink)
+    check_bounds(summary["figures"], BOUNDS[key], key)
+
+
 # ================================================================================================
 # 8. Zero-length, tiny and variable communication steps
 # ================================================================================================
@@ -755,3 +986,37 @@ def test_zero_and_tiny_communication_steps(model_name, scheme):
     assert np.all(np.isfinite(phi))
     tol = 1e-7 if scheme == "ED" else 0.02 * np.abs(ref.phi).max()
     assert np.max(np.abs(phi - ref.phi)) < tol
+
+
+# ================================================================================================
+# 9. Round-off: the re-run scenes of this module give the same verdicts 1 ulp off and under other kernels
+# ================================================================================================
+ROUNDOFF_SCENES = sorted(VERDICTS)
+
+
+@functools.lru_cache(maxsize=None)
+def roundoff_fingerprint():
+    return roundoff.fingerprint()
+
+
+@pytest.mark.parametrize("key", ROUNDOFF_SCENES, ids=lambda k: k.partition(":")[2])
+def test_same_verdicts_one_ulp_off(key):
+    """1-ulp perturbation of the initial state and of every input number, in-process: the same verdicts
+    as the nominal run, and the documented margins hold."""
+    _, ref = nominal(key)
+    assert ref["verdict"] == VERDICTS[key], describe_mismatch(ref["verdict"], VERDICTS[key])
+    _, got = roundoff.run_scene(key, Perturbation(roundoff.ULP_SEED))
+    assert got["verdict"] == ref["verdict"], describe_mismatch(got["verdict"], ref["verdict"])
+    check_bounds(got["figures"], BOUNDS[key], f"{key} (1 ulp off)")
+
+
+@pytest.mark.parametrize("key", ROUNDOFF_SCENES, ids=lambda k: k.partition(":")[2])
+def test_same_verdicts_under_other_kernels(key, kernel_rerun):
+    """The scene re-run in a subprocess under `roundoff.kernel_env`: the same verdicts, the margins hold."""
+    res = kernel_rerun.results()
+    if res["fingerprint"] == roundoff_fingerprint():
+        pytest.skip("the generic kernels compute the same numbers as this machine's defaults")
+    _, ref = nominal(key)
+    got = res[key]
+    assert got["verdict"] == ref["verdict"], describe_mismatch(got["verdict"], ref["verdict"])
+    check_bounds(got["figures"], BOUNDS[key], f"{key} (other kernels)")

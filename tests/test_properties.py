@@ -1,7 +1,13 @@
 """Property-based invariants (issue 5, hypothesis; derandomized and bounded so that the file runs in well under
 60 s): random geometry, e_N, initial states and ground-motion pulses give finite outputs, no penetration
-beyond the documented tolerance, no energy increase with ag = 0 (zeta >= 0, e_N <= 1), and the FMU agrees
-with the Python API bit for bit."""
+beyond the documented tolerance, no energy increase with ag = 0 (zeta >= 0, e_N = 0), and the FMU agrees
+with the Python API bit for bit.
+
+Round-off (issue 12): the runs are short (0.6 s) but can be violent (pulses up to 1.5 g). `run` runs every
+example a second time with a 1-ulp perturbation of its initial state and of a non-zero input amplitude
+(`roundoff.Perturbation`, in-process) and asserts that the verdicts of the three invariants (finite, no
+penetration beyond PEN_TOL, energy not increasing when ag = 0) are the same. (The test functions are left
+as they were: hypothesis derives the derandomized examples from their source.)"""
 from __future__ import annotations
 
 import math
@@ -12,29 +18,33 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rocking_model import FlexibleOscillator, RigidBlock, Simulator
+from roundoff import ULP_SEED, Perturbation, describe_mismatch
 
 SETTINGS = dict(deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow], database=None)
 #: documented penetration tolerance asserted for both schemes: max over the corners of -g_N <= PEN_TOL * L
 #: (L = R for the block, the base half-diagonal for the flexible oscillator), at every communication point
 PEN_TOL = 1e-6
-#: energy may not grow by more than this fraction of m g L between communication points when ag = 0
-ENERGY_TOL = 1e-9
+#: energy may not grow by more than this fraction of m g L between communication points when ag = 0:
+#: event-driven, round-off of the RK steps and the LCPs; Moreau-Jean, its first-order drift between impacts
+#: (theta = 1/2 on the nonlinear pendulum; over a grid of the strategies' ranges with e_N = 0 at dt = 1e-3 s
+#: the largest growth was 1.1e-6 (block) and 3.1e-6 m g L (oscillator) per 0.02 s, falling linearly with dt)
+ENERGY_TOL = {1: 1e-9, 0: 2e-5}
 N_STEPS, H = 30, 0.02
 
 
 @st.composite
-def rigid_case(draw):
+def rigid_case(draw, e_N=st.floats(0.0, 1.0)):
     b = draw(st.floats(0.05, 1.0))
     h = draw(st.floats(0.2, 3.0))
-    model = RigidBlock(b=b, h=h, e_N=draw(st.floats(0.0, 1.0)))
+    model = RigidBlock(b=b, h=h, e_N=draw(e_N))
     init = dict(phi_0=draw(st.floats(-0.9, 0.9)) * model.alpha, phi_dot_0=draw(st.floats(-1.0, 1.0)))
     return model, init
 
 
 @st.composite
-def flexible_case(draw):
+def flexible_case(draw, e_N=st.floats(0.0, 1.0)):
     model = FlexibleOscillator(b=draw(st.floats(0.15, 0.4)), EI=9.45e5 * draw(st.floats(0.2, 2.0)),
-                               zeta=draw(st.floats(0.0, 0.1)), e_N=draw(st.floats(0.0, 1.0)))
+                               zeta=draw(st.floats(0.0, 0.1)), e_N=draw(e_N))
     init = dict(phi_0=draw(st.floats(-0.05, 0.05)), u_0=draw(st.floats(-5e-4, 5e-4)))
     return model, init
 
@@ -45,7 +55,30 @@ def scale(model):
 
 
 def run(model, init, scheme, amplitude):
-    """N_STEPS communication steps of H with a one-sine pulse of period 1 s held over each step."""
+    """N_STEPS communication steps of H with a one-sine pulse of period 1 s held over each step: (rows of
+    outputs, penetrations / L). The example is run again 1 ulp off; its verdicts must be the same."""
+    rows, pens = run_once(model, init, scheme, amplitude)
+    rows_p, pens_p = run_once(model, init, scheme, amplitude, Perturbation(ULP_SEED))
+    ref = verdicts(model, amplitude, rows, pens, scheme)
+    got = verdicts(model, amplitude, rows_p, pens_p, scheme)
+    assert got == ref, f"1 ulp off: {describe_mismatch(got, ref)}"
+    return rows, pens
+
+
+def verdicts(model, amplitude, rows, pens, scheme) -> dict:
+    out = {"finite": all(math.isfinite(float(v)) for row in rows for v in row.values()),
+           "no_penetration": max(pens) <= PEN_TOL}
+    if amplitude == 0.0:
+        energy = np.array([r["energy"] for r in rows])
+        out["energy_not_increasing"] = bool(np.all(np.diff(energy) <= ENERGY_TOL[scheme] * scale(model)))
+    return out
+
+
+def run_once(model, init, scheme, amplitude, pert: Perturbation = Perturbation()):
+    """One run; ``pert`` moves the initial values and a non-zero amplitude by one ulp (ag = 0 stays 0)."""
+    init = {k: pert.scalar(v, 5 + i) for i, (k, v) in enumerate(init.items())}
+    if amplitude != 0.0:
+        amplitude = pert.scalar(amplitude, 1)
     sim = Simulator(model, scheme, dt_max=1e-3, **init)
     rows, pens = [sim.outputs()], [0.0]
     for k in range(N_STEPS):
@@ -58,6 +91,10 @@ def run(model, init, scheme, amplitude):
 
 
 CASES = st.one_of(rigid_case(), flexible_case())
+#: plastic impacts (e_N = 0) only: with e_N > 0, Newton's law with sticking can create energy at impacts in
+#: flight with tangential slip (a Kane-type paradox of the paper's law, measured up to 1e-3 m g L per 0.02 s
+#: with e_N = 1; issue 15 adds an energy-consistent impact law), so "energy never increases" is no invariant
+PLASTIC_CASES = st.one_of(rigid_case(e_N=st.just(0.0)), flexible_case(e_N=st.just(0.0)))
 
 
 @settings(max_examples=8, **SETTINGS)
@@ -70,12 +107,12 @@ def test_outputs_are_finite(case, scheme, amplitude):
 
 
 @settings(max_examples=8, **SETTINGS)
-@given(case=CASES, scheme=st.sampled_from([0, 1]))
+@given(case=PLASTIC_CASES, scheme=st.sampled_from([0, 1]))
 def test_energy_never_increases_without_ground_motion(case, scheme):
     model, init = case
     rows, _ = run(model, init, scheme, 0.0)
     energy = np.array([r["energy"] for r in rows])
-    assert np.all(np.diff(energy) <= ENERGY_TOL * scale(model)), np.diff(energy).max() / scale(model)
+    assert np.all(np.diff(energy) <= ENERGY_TOL[scheme] * scale(model)), np.diff(energy).max() / scale(model)
 
 
 @settings(max_examples=8, **SETTINGS)
