@@ -234,7 +234,7 @@ def _summary(config, results: dict, wall: float) -> None:
     capture = config.pluginmanager.get_plugin("capturemanager")
     with capture.global_and_fixture_disabled() if capture is not None else _nullcontext():
         if reporter is not None:
-            reporter.ensure_newline()
+            reporter.write("\n")  # after the progress dots
         for line in lines:
             if reporter is not None:
                 reporter.write_line(line)
