@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,9 +24,11 @@ SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "even
 DT_MIN_REL = 1e-6
 
 #: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
-#: plus events. 1e5 steps take about 1 to 5 s (measured, both models and schemes, see
-#: docs/robustness_library.md) and cover 100 s of motion at the Moreau-Jean default dt_max = 1e-3 s.
-MAX_STEPS = 100_000
+#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us, numpy LCP) or
+#: 1/30 of an event of the flexible oscillator in flight (about 60 us): 20000 of them take at most a few
+#: seconds (the longest advance measured over the declared ranges is in docs/robustness_library.md), while
+#: they cover 20 s of motion at the Moreau-Jean default dt_max = 1e-3 s and some 600 impacts in one step.
+MAX_STEPS = 20_000
 
 #: version of the `Simulator.get_state` dict
 STATE_VERSION = 1
@@ -51,8 +54,9 @@ class Simulator:
     impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
         log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
     max_steps : work budget of one `advance` call: internal steps (Moreau-Jean steps, or Runge-Kutta steps
-        plus events), default MAX_STEPS = 100000; None = unlimited (trusted batch use). An advance that needs
-        more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the simulator as it was.
+        with each event counting EVENT_WORK = 30), default MAX_STEPS = 20000; None = unlimited (trusted batch
+        use). An advance that needs more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the
+        simulator as it was.
     t0 : [s] start time.
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
@@ -224,11 +228,14 @@ class Simulator:
         is checked (presence, no extra field, type, length for the mode, finite values, ranges, consistency
         of phi and the corners with the mode); a bad one raises ValueError naming it and nothing changes."""
         integ = self.integrator
-        check_state_keys(state, _HEADER + integ.STATE_KEYS)
+        if not isinstance(state, Mapping):
+            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
+        # the header first: a state of another version, scheme or model is named as such
         state_int(state, "version", STATE_VERSION, STATE_VERSION)
         state_str(state, "scheme", self.scheme)
         state_str(state, "model", type(self.model).__name__)
         state_int(state, "n_dof", self.model.n_dof, self.model.n_dof)
+        check_state_keys(state, _HEADER + integ.STATE_KEYS)
         integ.set_state(state)
         self._out = None
 
