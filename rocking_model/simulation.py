@@ -24,11 +24,11 @@ SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "even
 DT_MIN_REL = 1e-6
 
 #: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
-#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us, numpy LCP) or
-#: 1/30 of an event of the flexible oscillator in flight (about 60 us): 20000 of them take at most a few
-#: seconds (the longest advance measured over the declared ranges is in docs/robustness_library.md), while
-#: they cover 20 s of motion at the Moreau-Jean default dt_max = 1e-3 s and some 600 impacts in one step.
-MAX_STEPS = 20_000
+#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us: numpy, an LCP
+#: per step); 10000 of them take a few seconds at most (the longest advance measured over the declared ranges:
+#: docs/robustness_library.md), while they cover 10 s of motion at the Moreau-Jean default dt_max = 1e-3 s and
+#: over 300 impacts in one event-driven step.
+MAX_STEPS = 10_000
 
 #: version of the `Simulator.get_state` dict
 STATE_VERSION = 1
@@ -54,7 +54,7 @@ class Simulator:
     impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
         log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
     max_steps : work budget of one `advance` call: internal steps (Moreau-Jean steps, or Runge-Kutta steps
-        with each event counting EVENT_WORK = 30), default MAX_STEPS = 20000; None = unlimited (trusted batch
+        with each event counting EVENT_WORK = 30), default MAX_STEPS = 10000; None = unlimited (trusted batch
         use). An advance that needs more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the
         simulator as it was.
     t0 : [s] start time.

@@ -226,7 +226,7 @@ def test_max_steps_is_checked(value):
 
 
 def test_max_steps_none_is_unlimited_and_the_default_is_documented():
-    assert Simulator(RigidBlock()).max_steps == MAX_STEPS == 20_000
+    assert Simulator(RigidBlock()).max_steps == MAX_STEPS == 10_000
     for max_steps, refused in ((149, True), (150, False), (None, False)):
         sim = Simulator(RigidBlock(), "moreau_jean", max_steps=max_steps, dt_max=1e-3, phi_0=0.05)
         if refused:
