@@ -12,8 +12,7 @@ from .integrators.event_driven import EventDriven
 from .integrators.moreau_jean import MoreauJean
 from .models.base import RockingModel
 from .modes import Mode
-from .validation import (AG_MAX, WorkLimitError, check_choice, check_real, check_state_keys, state_int,
-                         state_str)
+from .validation import WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
 
@@ -109,6 +108,11 @@ class Simulator:
         self._out = None              # (state token, model outputs) of the last checked state
         self._motion = None           # (motion, checked motion) of the last non-constant input
 
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_motion"] = None       # a cache of the caller's input (may be a lambda: not picklable)
+        return state
+
     @property
     def t(self) -> float:
         """Current time [s]."""
@@ -152,7 +156,8 @@ class Simulator:
             if not math.isfinite(sum(out.values())):
                 bad = {k: v for k, v in out.items() if not math.isfinite(v)}
                 if bad:
-                    raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}" for k, v in bad.items()))
+                    raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}"
+                                                                              for k, v in bad.items()))
         except WorkLimitError:
             integ.rollback(snap)
             raise
@@ -185,6 +190,7 @@ class Simulator:
         return (f"the motion is not finite in the step from t = {self.t:.17g} s to t_end = {t_end:.17g} s "
                 f"(at t = {t_fail:.17g} s: {type(exc).__name__}: {exc}); the step was refused and the state "
                 f"kept. Likely cause: {'; or '.join(causes)}")
+
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Full generalized coordinates and velocities (q, v)."""
         return self.integrator.state()

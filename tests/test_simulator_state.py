@@ -136,12 +136,13 @@ _ROCKING = {}
 
 def _rocking_sim(scheme):
     """A simulator right after its first impacts (the state computed once per scheme)."""
+    opts = {"dt_max": 5e-3} if scheme == 0 else {}
     if scheme not in _ROCKING:
-        sim = Simulator(RigidBlock(b=0.2, h=1.0, e_N=0.5), scheme, phi_0=0.1, **({"dt_max": 5e-3} if scheme == 0 else {}))
+        sim = Simulator(RigidBlock(b=0.2, h=1.0, e_N=0.5), scheme, phi_0=0.1, **opts)
         sim.advance(0.6, 0.0)
         assert sim.get_state()["impacts"] >= 1
         _ROCKING[scheme] = sim.get_state()
-    sim = Simulator(RigidBlock(b=0.2, h=1.0, e_N=0.5), scheme, **({"dt_max": 5e-3} if scheme == 0 else {}))
+    sim = Simulator(RigidBlock(b=0.2, h=1.0, e_N=0.5), scheme, **opts)
     sim.set_state(_ROCKING[scheme])
     return sim
 

@@ -46,7 +46,8 @@ class FlexibleOscillator(RockingModel):
 
     Parameters (SI units): m top mass [kg] (> 0), m_c column mass [kg] (>= 0), m_b base mass [kg] (>= 0),
     rho radius of gyration of the base [m] (>= 0), h column height [m] (> 0), b base half-width [m] (> 0),
-    EI flexural rigidity [N m2] (> 0, and omega = sqrt(3 EI/(h^3 m_tilde)) <= OMEGA_MAX = 1e4 rad/s), zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
+    EI flexural rigidity [N m2] (> 0, and omega = sqrt(3 EI/(h^3 m_tilde)) <= OMEGA_MAX = 1e4 rad/s),
+    zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
     [1] in [0, 1], g gravity [m/s2] (> 0), impact_rule 0 (LCP with Newton's law, default) or 1 (classical
     rule of the earlier literature: angular momentum about the impacting corner conserved, u_dot continuous,
     rocking on about the new corner; `rocking_model.post_impact.classical_impact`). The mass matrix must be non-singular, which needs rotary inertia
