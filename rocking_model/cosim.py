@@ -130,9 +130,11 @@ class MotionSource:
         """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
         from .validation import check_state_keys, state_float, state_int, state_str
 
-        check_state_keys(state, self.STATE_KEYS)
+        if not isinstance(state, Mapping):
+            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
         state_int(state, "version", 1, 1)
         state_str(state, "model", "MotionSource")
+        check_state_keys(state, self.STATE_KEYS)
         t = state_float(state, "t")
         value = self._value(t)
         self.t, self._ag = t, value

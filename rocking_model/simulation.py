@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,8 +12,7 @@ from .integrators.event_driven import EventDriven
 from .integrators.moreau_jean import MoreauJean
 from .models.base import RockingModel
 from .modes import Mode
-from .validation import (AG_MAX, WorkLimitError, check_choice, check_real, check_state_keys, state_int,
-                         state_str)
+from .validation import WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
 
@@ -23,9 +23,11 @@ SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "even
 DT_MIN_REL = 1e-6
 
 #: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
-#: plus events. 1e5 steps take about 1 to 5 s (measured, both models and schemes, see
-#: docs/robustness_library.md) and cover 100 s of motion at the Moreau-Jean default dt_max = 1e-3 s.
-MAX_STEPS = 100_000
+#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us: numpy, an LCP
+#: per step); 10000 of them take a few seconds at most (the longest advance measured over the declared ranges:
+#: docs/robustness_library.md), while they cover 10 s of motion at the Moreau-Jean default dt_max = 1e-3 s and
+#: over 300 impacts in one event-driven step.
+MAX_STEPS = 10_000
 
 #: version of the `Simulator.get_state` dict
 STATE_VERSION = 1
@@ -51,8 +53,9 @@ class Simulator:
     impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
         log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
     max_steps : work budget of one `advance` call: internal steps (Moreau-Jean steps, or Runge-Kutta steps
-        plus events), default MAX_STEPS = 100000; None = unlimited (trusted batch use). An advance that needs
-        more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the simulator as it was.
+        with each event counting EVENT_WORK = 30), default MAX_STEPS = 10000; None = unlimited (trusted batch
+        use). An advance that needs more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the
+        simulator as it was.
     t0 : [s] start time.
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
@@ -105,6 +108,11 @@ class Simulator:
         self._out = None              # (state token, model outputs) of the last checked state
         self._motion = None           # (motion, checked motion) of the last non-constant input
 
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_motion"] = None       # a cache of the caller's input (may be a lambda: not picklable)
+        return state
+
     @property
     def t(self) -> float:
         """Current time [s]."""
@@ -148,7 +156,8 @@ class Simulator:
             if not math.isfinite(sum(out.values())):
                 bad = {k: v for k, v in out.items() if not math.isfinite(v)}
                 if bad:
-                    raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}" for k, v in bad.items()))
+                    raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}"
+                                                                              for k, v in bad.items()))
         except WorkLimitError:
             integ.rollback(snap)
             raise
@@ -181,6 +190,7 @@ class Simulator:
         return (f"the motion is not finite in the step from t = {self.t:.17g} s to t_end = {t_end:.17g} s "
                 f"(at t = {t_fail:.17g} s: {type(exc).__name__}: {exc}); the step was refused and the state "
                 f"kept. Likely cause: {'; or '.join(causes)}")
+
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Full generalized coordinates and velocities (q, v)."""
         return self.integrator.state()
@@ -224,11 +234,14 @@ class Simulator:
         is checked (presence, no extra field, type, length for the mode, finite values, ranges, consistency
         of phi and the corners with the mode); a bad one raises ValueError naming it and nothing changes."""
         integ = self.integrator
-        check_state_keys(state, _HEADER + integ.STATE_KEYS)
+        if not isinstance(state, Mapping):
+            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
+        # the header first: a state of another version, scheme or model is named as such
         state_int(state, "version", STATE_VERSION, STATE_VERSION)
         state_str(state, "scheme", self.scheme)
         state_str(state, "model", type(self.model).__name__)
         state_int(state, "n_dof", self.model.n_dof, self.model.n_dof)
+        check_state_keys(state, _HEADER + integ.STATE_KEYS)
         integ.set_state(state)
         self._out = None
 

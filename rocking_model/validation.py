@@ -84,6 +84,10 @@ def check_state_keys(state, keys) -> None:
                          f"{', '.join(sorted(keys))}")
 
 
+# bool is an int, and numpy's float64 a float: the checks below take the plain types and their numeric
+# subclasses (converted to plain values), never a bool where a number is expected or a number for a bool
+
+
 def state_bool(state, key: str) -> bool:
     value = _field(state, key)
     if type(value) is not bool:
@@ -91,19 +95,23 @@ def state_bool(state, key: str) -> bool:
     return value
 
 
+def _as_int(key, value) -> int:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return int(value)
+    raise ValueError(f"state field {key!r} must be an int, got {type(value).__name__}")
+
+
 def state_int(state, key: str, lo: int = 0, hi: int = STATE_INT_MAX) -> int:
-    value = _field(state, key)
-    if type(value) is not int:
-        raise ValueError(f"state field {key!r} must be an int, got {type(value).__name__}")
+    value = _as_int(key, _field(state, key))
     if not lo <= value <= hi:
         raise ValueError(f"state field {key!r} = {value} is out of range; allowed range [{lo}, {hi}]")
     return value
 
 
 def _as_float(key, value) -> float:
-    if type(value) is float:
-        return value
-    if type(value) is int:
+    if isinstance(value, float):
+        return float(value)
+    if isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     raise ValueError(f"state field {key!r} must be a float, got {type(value).__name__}")
 
@@ -147,9 +155,9 @@ def state_ints(state, key: str, *, lo: int, hi: int, max_len: int) -> list[int]:
     if not isinstance(value, (list, tuple)) or len(value) > max_len:
         raise ValueError(f"state field {key!r} must be a list of at most {max_len} ints")
     for i, v in enumerate(value):
-        if type(v) is not int or not lo <= v <= hi:
+        if not isinstance(v, int) or isinstance(v, bool) or not lo <= v <= hi:
             raise ValueError(f"state field {key!r}[{i}] = {v!r} must be an int in [{lo}, {hi}]")
-    return list(value)
+    return [int(v) for v in value]
 
 
 def state_str(state, key: str, expected: str | None = None) -> str:

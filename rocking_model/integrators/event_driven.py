@@ -27,8 +27,8 @@
   counted.
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
-- Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus events and raises
-  `WorkLimitError` when one call (or, with samples, the stretch between two samples) needs more than N.
+- Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus EVENT_WORK = 30 per event and
+  raises `WorkLimitError` when one call (or, with samples, the stretch between two samples) needs more than N.
 """
 from __future__ import annotations
 
@@ -44,6 +44,13 @@ from .dop853 import DOP853
 from .dopri5 import DOPRI5
 
 _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
+
+#: [steps] what one event counts in the work budget (``max_steps``): locating it (some 10 to 60 evaluations of
+#: the event functions on the dense output) and the impact and uplift LCPs cost about as much as 20 (rigid
+#: block) to 35 (flexible oscillator in flight) Runge-Kutta steps (measured: 0.7 ms and 1.9 ms per event
+#: against 20 and 55 us per step), so that the budget bounds the time of an event storm as of a long stretch
+#: of smooth steps
+EVENT_WORK = 30
 METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 
 
@@ -203,7 +210,9 @@ class EventDriven:
                 for i in range(0, len(flat), n)]
         _check_times(state, "impact_log", [r[0] for r in rows], t, impacts)
         q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
-        _check_configuration(model, state, "y", q, v, overturned, gap_tol=1e-6 * model.length_scale)
+        # a corner may sink in flight where the sticking law has no solution (bug 7, a documented model gap:
+        # 33 mm measured before an overturning): only junk, a corner a whole length scale down, is refused
+        _check_configuration(model, state, "y", q, v, overturned, gap_tol=model.length_scale)
         # all checked: assign
         self.t, self.impacts, self.overturned, self.n_steps = t, impacts, overturned, n_steps
         self._h = None if h != h else h
@@ -214,8 +223,11 @@ class EventDriven:
 
     def checkpoint(self):
         """A cheap snapshot before an `advance` (`rollback` restores it exactly, `commit` drops it): the
-        attributes are replaced, never mutated in place, except the two logs, which are held untrimmed."""
-        return dict(self.__dict__), self.impact_times.hold(), self.impact_log.hold()
+        attributes are replaced, never mutated in place, except the two logs, which are held untrimmed
+        (`BoundedLog.held`; written out here: this runs once per co-simulation step)."""
+        times, log = self.impact_times, self.impact_log
+        times.held = log.held = True
+        return self.__dict__.copy(), len(times), len(log)
 
     def rollback(self, snap) -> None:
         d, n_times, n_log = snap
@@ -226,8 +238,12 @@ class EventDriven:
         self._live = None             # it has moved on; a restart from (t, y, _h) is bit-identical
 
     def commit(self, snap) -> None:
-        self.impact_times.release()
-        self.impact_log.release()
+        times, log = self.impact_times, self.impact_log
+        if len(times) == snap[1] and len(log) == snap[2]:
+            times.held = log.held = False             # nothing appended: nothing to trim
+        else:
+            times.release()
+            log.release()
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -257,12 +273,13 @@ class EventDriven:
 
         samples: increasing times in (t, t_end] at which to record the motion; returns the list of
         (mode, y, impacts, overturned) there (None when no samples are asked for).
-        max_steps: work budget (None: unlimited): Runge-Kutta steps plus events of this call or, with
-        samples, between two consecutive samples; exceeding it raises `WorkLimitError` (the state is then
-        partly advanced: `Simulator.advance` restores it)."""
+        max_steps: work budget (None: unlimited): Runge-Kutta steps plus EVENT_WORK per event, of this call
+        or, with samples, between two consecutive samples; exceeding it raises `WorkLimitError` (the state is
+        then partly advanced: `Simulator.advance` restores it)."""
         self._max_work = max_steps
         self._work_end = math.inf if max_steps is None else self.n_steps + max_steps
         self._span = (self.t, t_end)
+        self._impacts0 = self.impacts
         out = None if samples is None else []
         pending = deque(float(s) for s in samples) if samples is not None else None
         if t_end <= self.t or self.overturned:
@@ -286,7 +303,7 @@ class EventDriven:
                 self._live = None
                 kink = False
                 n_events += 1
-                self._work_end -= 1            # an event costs about one step (LCPs, root finding)
+                self._work_end -= EVENT_WORK
                 if n_events > self.max_events:
                     raise WorkLimitError(f"event_driven: more than {self.max_events} events in one advance "
                                          f"at t = {self.t:.17g} s; the motion does not settle; the step was "
@@ -460,7 +477,8 @@ class EventDriven:
         omega = getattr(model, "omega", None)
         stiff = f", column omega = {omega:.6g} rad/s" if omega is not None else ""
         return (f"event_driven: advancing from t = {t0:.17g} s by {t_end - t0:.6g} s needs more than "
-                f"max_steps = {self._max_work} internal steps (Runge-Kutta steps plus events); stopped at "
+                f"max_steps = {self._max_work} internal steps (Runge-Kutta steps, each event counting "
+                f"{EVENT_WORK}); {self.impacts - self._impacts0} impacts so far in this step; stopped at "
                 f"t = {stepper.t:.17g} s in mode {self.mode.name} with steps of {stepper.h_abs:.3g} s "
                 f"(tolerance = {self.tolerance:g}, dt_max = {self.dt_max:g} s, method {self.method}"
                 f"{stiff}, time scale 1/p = {model.time_scale:.3g} s); the step was refused and the state kept. "

@@ -205,7 +205,8 @@ class MoreauJean:
 
     def checkpoint(self):
         """A cheap snapshot before an `advance` (see `EventDriven.checkpoint`)."""
-        return dict(self.__dict__), self.impact_times.hold()
+        self.impact_times.held = True
+        return self.__dict__.copy(), len(self.impact_times)
 
     def rollback(self, snap) -> None:
         d, n_times = snap
@@ -214,7 +215,10 @@ class MoreauJean:
         self.__dict__.update(d)
 
     def commit(self, snap) -> None:
-        self.impact_times.release()
+        if len(self.impact_times) == snap[1]:
+            self.impact_times.held = False
+        else:
+            self.impact_times.release()
 
     def outputs(self) -> dict:
         """The model's outputs at the current time."""

@@ -46,7 +46,8 @@ class FlexibleOscillator(RockingModel):
 
     Parameters (SI units): m top mass [kg] (> 0), m_c column mass [kg] (>= 0), m_b base mass [kg] (>= 0),
     rho radius of gyration of the base [m] (>= 0), h column height [m] (> 0), b base half-width [m] (> 0),
-    EI flexural rigidity [N m2] (> 0, and omega = sqrt(3 EI/(h^3 m_tilde)) <= OMEGA_MAX = 1e4 rad/s), zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
+    EI flexural rigidity [N m2] (> 0, and omega = sqrt(3 EI/(h^3 m_tilde)) <= OMEGA_MAX = 1e4 rad/s),
+    zeta damping ratio of u [1] (>= 0), e_N coefficient of restitution
     [1] in [0, 1], g gravity [m/s2] (> 0), impact_rule 0 (LCP with Newton's law, default) or 1 (classical
     rule of the earlier literature: angular momentum about the impacting corner conserved, u_dot continuous,
     rocking on about the new corner; `rocking_model.post_impact.classical_impact`). The mass matrix must be non-singular, which needs rotary inertia
@@ -380,14 +381,44 @@ class FlexibleOscillator(RockingModel):
         return self.M_t * self.g
 
     def mode_functions(self, mode, ag):
-        """Closed forms of `RockingModel.mode_functions` in full contact and rocking (flight: generic)."""
-        if mode == Mode.FLIGHT:
-            return super().mode_functions(mode, ag)
+        """Closed forms of `RockingModel.mode_functions` in full contact, rocking and flight."""
         const = ag.constant
         a0 = ag.value if const else 0.0
         mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
         A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
         W = Mt * g
+        if mode == Mode.FLIGHT:
+            # M(q) v_dot = f(q, v, ag) on floats: M_xx = M_yy = M_t and M_xy = 0, so x and y are condensed out
+            # (Schur complement) and the 2x2 system in (u, phi) is solved by Cramer's rule; about ten times
+            # cheaper than the generic numpy solve, which made a flight step the costliest unit of work
+            L = self.length_scale
+            a11 = mt - D * D / Mt
+
+            def rhs(t, y):
+                u, x, yc, phi, ud, xd, yd, w = y
+                a = a0 if const else ag(t)
+                sp, cp = math.sin(phi), math.cos(phi)
+                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+                ww = w * w
+                f_u = -c * ud - kt * u + mt * u * ww - D * cp * a - D * sp * g
+                f_x = Myp * ww + 2.0 * D * sp * ud * w - Mt * a
+                f_y = -Mxp * ww - 2.0 * D * cp * ud * w - Mt * g
+                f_p = -2.0 * mt * u * ud * w - Mxp * a - g * Myp
+                a12 = -C - D * (cp * Mxp + sp * Myp) / Mt
+                a22 = J0 + mt * u * u - (Mxp * Mxp + Myp * Myp) / Mt
+                r1 = f_u - D * (cp * f_x + sp * f_y) / Mt
+                r2 = f_p - (Mxp * f_x + Myp * f_y) / Mt
+                det = a11 * a22 - a12 * a12
+                udd = (a22 * r1 - a12 * r2) / det
+                wd = (a11 * r2 - a12 * r1) / det
+                return [ud, xd, yd, w, udd, (f_x - D * cp * udd - Mxp * wd) / Mt,
+                        (f_y - D * sp * udd - Myp * wd) / Mt, wd]
+
+            def monitors(t, y):
+                yc, phi = y[2], y[3]
+                bs = b * math.sin(phi)
+                return [(yc - bs) / L, (yc + bs) / L, phi]
+            return rhs, monitors
         if mode == Mode.FULL:
             def rhs(t, y):
                 u, ud = y

@@ -26,6 +26,7 @@ a_floor = ag (the value held over the last step).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Dict, Tuple
 
 import numpy as np
@@ -151,9 +152,11 @@ class StoreySimulator:
 
     def set_state(self, state) -> None:
         """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
-        check_state_keys(state, self.STATE_KEYS)
+        if not isinstance(state, Mapping):
+            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
         state_int(state, "version", 1, 1)
         state_str(state, "model", "LinearStorey")
+        check_state_keys(state, self.STATE_KEYS)
         t = state_float(state, "t")
         x = np.array(state_floats(state, "x", length=2))
         ag = state_float(state, "ag")
