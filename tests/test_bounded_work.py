@@ -97,6 +97,15 @@ def test_moreau_jean_huge_step_is_refused_before_any_work(model):
     assert snapshot(sim) == before
 
 
+def test_moreau_jean_step_count_beyond_any_integer_is_a_work_limit():
+    # 1e308 s / 1e-3 s overflows to inf steps: still the work limit, with its message, not an OverflowError
+    sim = advanced(RigidBlock(), "moreau_jean", phi_0=0.05)
+    before = snapshot(sim)
+    with pytest.raises(WorkLimitError, match=r"needs inf steps .* Way out"):
+        sim.advance(1e308, 0.0)
+    assert snapshot(sim) == before
+
+
 def test_moreau_jean_names_the_column_when_it_sets_the_step():
     model = FlexibleOscillator(EI=FlexibleOscillator().EI * 100.0)      # omega = 407 rad/s: dt = 0.25/omega
     sim = Simulator(model, "moreau_jean")

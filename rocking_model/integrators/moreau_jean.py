@@ -81,7 +81,7 @@ class MoreauJean:
         limit = model.step_limit
         why = (f"dt = min(dt_max, 0.25/omega) = {self.dt_max:.6g} s (the column's omega = "
                f"{0.25 / limit:.6g} rad/s)" if limit <= self.dt_max else f"dt_max = {self.dt_max:.6g} s")
-        return (f"moreau_jean: advancing from t = {self.t:.17g} s by {span:.6g} s needs {math.ceil(steps):.6g} "
+        return (f"moreau_jean: advancing from t = {self.t:.17g} s by {span:.6g} s needs {math.ceil(steps) if math.isfinite(steps) else steps:.6g} "
                 f"steps of {why}, more than max_steps = {max_steps} per advance; the step was refused and "
                 f"the state kept. Way out: communication steps of at most {max_steps * self.dt_max:.6g} s, a "
                 f"larger dt_max, or max_steps=None (unlimited, for trusted batch runs)")
