@@ -38,6 +38,10 @@ class RigidRockingBlock(RockingSlave):
                         "event-driven uncapped)"),
         Var("tolerance", "parameter", 1e-8, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
+        Var("max_steps", "parameter", 10000, type="Integer", min=1, max=1000000000,
+            description="Work budget of one communication step: internal steps (Moreau-Jean steps, or "
+                        "Runge-Kutta steps with each event counting 30); a step that needs more is refused "
+                        "(fmi2Discard, state unchanged, message naming the cause)"),
         # input
         Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
             description="Horizontal ground acceleration (held constant over each communication step), "
@@ -67,5 +71,5 @@ class RigidRockingBlock(RockingSlave):
 
         model = RigidBlock(b=p["b"], h=p["h"], m=p["m"], g=p["g"], e_N=p["e_N"])
         return Simulator(model, scheme=p["scheme"], dt_max=p["dt_max"], tolerance=p["tolerance"], t0=t0,
-                         impact_log_size=0,
+                         impact_log_size=0, max_steps=p["max_steps"],
                          phi_0=p["phi_0"], phi_dot_0=p["phi_dot_0"])

@@ -22,8 +22,6 @@ fmpy has no multi-FMU master; libcosimpy is optional (``pip install rocking-mode
 from __future__ import annotations
 
 import csv
-import math
-import shutil
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -128,13 +126,9 @@ class MotionSource:
 
     def set_state(self, state) -> None:
         """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
-        from .validation import check_state_keys, state_float, state_int, state_str
+        from .validation import check_state_header, state_float
 
-        if not isinstance(state, Mapping):
-            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
-        state_int(state, "version", 1, 1)
-        state_str(state, "model", "MotionSource")
-        check_state_keys(state, self.STATE_KEYS)
+        check_state_header(state, "MotionSource", self.STATE_KEYS)
         t = state_float(state, "t")
         value = self._value(t)
         self.t, self._ag = t, value

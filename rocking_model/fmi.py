@@ -84,7 +84,7 @@ import math
 import os
 import sys
 from dataclasses import dataclass
-from typing import Any, ClassVar, Dict, Iterable, List, Optional, Sequence
+from typing import Any, ClassVar, Dict, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability

@@ -84,6 +84,18 @@ def check_state_keys(state, keys) -> None:
                          f"{', '.join(sorted(keys))}")
 
 
+def check_state_header(state, model: str, keys, version: int = 1) -> None:
+    """The common head of a component's state dict: a Mapping with exactly ``keys``, the format
+    ``version`` and the component's ``model`` name; ValueError naming the first field that is wrong."""
+    from collections.abc import Mapping
+
+    if not isinstance(state, Mapping):
+        raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
+    state_int(state, "version", version, version)
+    state_str(state, "model", model)
+    check_state_keys(state, keys)
+
+
 # bool is an int, and numpy's float64 a float: the checks below take the plain types and their numeric
 # subclasses (converted to plain values), never a bool where a number is expected or a number for a bool
 

@@ -201,6 +201,21 @@ def kernel_env(base: dict | None = None) -> dict:
     return env
 
 
+def kernel_rerun_fixture(keys):
+    """A module-scoped pytest fixture ``kernel_rerun``: the scenes ``keys`` re-run in a subprocess under other
+    arithmetic kernels, in the background (started by the first test that asks for it, collected by the
+    module's test_same_verdicts_under_other_kernels)."""
+    import pytest
+
+    @pytest.fixture(scope="module")
+    def kernel_rerun():
+        rerun = Rerun(sorted(keys))
+        yield rerun
+        rerun.close()
+
+    return kernel_rerun
+
+
 class Rerun:
     """Scenes run in a subprocess (by default under `kernel_env`), started at construction so that the
     re-run uses the second core while the suite goes on; `results` waits for them."""

@@ -85,13 +85,7 @@ def nominal(key: str):
     return roundoff.run_scene(key)
 
 
-@pytest.fixture(scope="module")
-def kernel_rerun():
-    """The scenes of this module re-run in a subprocess under other arithmetic kernels, in the background
-    (started by the first test that asks for it, collected by test_same_verdicts_under_other_kernels)."""
-    rerun = roundoff.Rerun(sorted(VERDICTS))
-    yield rerun
-    rerun.close()
+kernel_rerun = roundoff.kernel_rerun_fixture(VERDICTS)
 
 
 @pytest.mark.parametrize("scheme", ["ED", "MJ"])

@@ -107,8 +107,8 @@ def test_model_description_units_variability_structure(fmu):
         if typ.tag == "Real":
             assert typ.get("unit") in units, sv.get("name")
     assert {n: v[2].get("unit") for n, v in variables.items() if v[2].tag == "Real"} == expected_units
-    assert set(variables) == set(expected_units) | {"scheme", "contact", "impacts", "overturned"}
-    for name in ("b", "h", "m", "g", "e_N", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance"):
+    assert set(variables) == set(expected_units) | {"scheme", "max_steps", "contact", "impacts", "overturned"}
+    for name in ("b", "h", "m", "g", "e_N", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance", "max_steps"):
         sv = variables[name][1]
         assert (sv.get("causality"), sv.get("variability"), sv.get("initial")) == ("parameter", "fixed", "exact")
         assert variables[name][2].get("start") is not None
@@ -255,3 +255,14 @@ def test_slave_api_directly():
     # the bad references make the next step fail once (not silent with logging off), then it goes on
     assert slave.do_step(1.03, 0.01) is False
     assert slave.do_step(1.03, 0.01) is True
+
+
+def test_max_steps_parameter_bounds_the_work_of_a_step(fmu):
+    # Moreau-Jean at dt_max = 1e-3 s: a 0.5 s communication step needs 500 internal steps
+    with pytest.raises(FMUError, match=r"more than max_steps = 100 per advance.*Way out"):
+        run_fmu(fmu, stop_time=1.0, output_interval=0.5, start_values={"scheme": 0, "max_steps": 100})
+    res = run_fmu(fmu, stop_time=1.0, output_interval=0.5, start_values={"scheme": 0, "max_steps": 500,
+                                                                        "phi_0": 0.01})
+    assert math.isclose(res["time"][-1], 1.0) and res["impacts"][-1] >= 1
+    with pytest.raises(FMUError, match=r"max_steps = 0 is out of range"):
+        run_fmu(fmu, stop_time=1.0, output_interval=0.5, start_values={"max_steps": 0})

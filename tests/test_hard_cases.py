@@ -289,13 +289,7 @@ def settle_run(model_name, scheme_name):
     return tr, tr.k_rest
 
 
-@pytest.fixture(scope="module")
-def kernel_rerun():
-    """The re-run scenes of this module in a subprocess under other arithmetic kernels, in the background
-    (started by the first test that asks for it, collected by test_same_verdicts_under_other_kernels)."""
-    rerun = roundoff.Rerun(sorted(VERDICTS))
-    yield rerun
-    rerun.close()
+kernel_rerun = roundoff.kernel_rerun_fixture(VERDICTS)
 
 
 @pytest.mark.parametrize("scheme", ["ED", "MJ"])

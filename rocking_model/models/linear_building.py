@@ -26,13 +26,11 @@ a_floor = ag (the value held over the last step).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Dict, Tuple
 
 import numpy as np
 
-from ..validation import (check_ag, check_real, check_state_keys, state_float, state_floats, state_int,
-                          state_str)
+from ..validation import check_ag, check_real, check_state_header, state_float, state_floats
 
 __all__ = ["LinearStorey", "StoreySimulator"]
 
@@ -152,11 +150,7 @@ class StoreySimulator:
 
     def set_state(self, state) -> None:
         """Load a `get_state` dict: every field checked (ValueError naming it, nothing changed on error)."""
-        if not isinstance(state, Mapping):
-            raise ValueError(f"state must be a mapping (dict) of plain values, got {type(state).__name__}")
-        state_int(state, "version", 1, 1)
-        state_str(state, "model", "LinearStorey")
-        check_state_keys(state, self.STATE_KEYS)
+        check_state_header(state, "LinearStorey", self.STATE_KEYS)
         t = state_float(state, "t")
         x = np.array(state_floats(state, "x", length=2))
         ag = state_float(state, "ag")
