@@ -45,9 +45,10 @@ Error handling under the pythonfmu 0.7 C wrapper, which can return fmi2OK, fmi2D
 returns False) or -- for a Python exception -- fmi2Fatal, and nothing else:
 
 * invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range)
-  or an invalid ``fmi2SetupExperiment`` start time: ``exit_initialization_mode`` raises, so
+  or an invalid ``fmi2SetupExperiment`` start time: under fmpy ``exit_initialization_mode`` raises, so
   ``fmi2ExitInitializationMode`` returns fmi2Fatal and fmpy raises ``FMICallException``; the message goes to
-  the importer's logger (as the fatal message) and to stderr. The instance is kept alive for the wrapper
+  the importer's logger (as the fatal message) and to stderr. Other importers (libcosim terminates the
+  process on fmi2Fatal there) get fmi2OK with the error logged, and every step is refused. The instance is kept alive for the wrapper
   (`_raise_fatal`), so fmi2Terminate, fmi2FreeInstance, fmi2Reset and any other later call are safe; every
   ``do_step`` logs the message again and returns False until fmi2Reset;
 * an invalid input (non-finite, or outside the declared ``min``/``max``), a step size that is not
@@ -550,7 +551,9 @@ class RockingSlave(Fmi2Slave):
 
     def _raise_fatal(self, msg: str) -> None:
         """Make fmi2ExitInitializationMode fail loudly: pythonfmu 0.7 turns a Python exception into fmi2Fatal
-        (fmpy raises FMICallException), the only non-OK status it can return there.
+        (fmpy raises FMICallException), the only non-OK status it can return there. Only for importers known
+        to survive it (`_caller_handles_fatal`: fmpy); the others get the error log, fmi2OK, and every
+        ``do_step`` refused with the message (libcosim reports the failed step).
 
         The C wrapper then drops one reference to this object, to its log queue and to its class, while it
         keeps the pointers and calls them again (fmi2Terminate, fmi2FreeInstance, fmi2Reset): one extra
@@ -559,6 +562,11 @@ class RockingSlave(Fmi2Slave):
         because the wrapper forwards log messages only when the importer turned logging on."""
         if not self._under_c_wrapper:
             self.log(msg, Fmi2Status.error)
+        elif not _caller_handles_fatal():
+            # libcosim ends the process on fmi2Fatal here (an exception escapes its worker thread: measured);
+            # every importer not known to handle it gets the error log and a refusal of every step instead
+            self.log(msg, Fmi2Status.error)
+            return
         else:
             # The wrapper flushes the log queue while the exception is pending, calling the importer's logger
             # (Python code, in fmpy) with an exception set, which corrupts the interpreter: the queue is
@@ -796,6 +804,23 @@ def adopt_slave_class(namespace: dict, cls: type) -> None:
         ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
     except Exception:  # pragma: no cover - ctypes without the Python C API: nothing better to do
         pass
+
+
+def _caller_handles_fatal() -> bool:
+    """Whether the importer calling fmi2ExitInitializationMode is known to survive fmi2Fatal there: fmpy
+    (Python frames of fmpy on the stack: it raises FMICallException and the process goes on). libcosim (OSP)
+    calls from a worker thread, and an fmi2Fatal (or fmi2Error) there terminates the host process, so it and
+    any importer not recognised get fmi2OK with the error logged and every step refused (fmi2Discard)."""
+    try:
+        frame = sys._getframe(1)
+    except Exception:  # pragma: no cover - not CPython
+        return False
+    while frame is not None:
+        name = frame.f_globals.get("__name__") or ""
+        if name == "fmpy" or name.startswith("fmpy."):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _forget_resources_path(resources) -> None:

@@ -101,3 +101,32 @@ def test_source_fmu_drives_block_in_libcosim(fmus, tmp_path):
     direct = run_libcosim(System([Component("block", fmus["RigidRockingBlock"], start_values={"scheme": 1})], [],
                                  step_size=0.01), 2.0, ["block.phi"], inputs={"block.ag": motion})
     np.testing.assert_array_equal(cosim["block.phi"], direct["block.phi"])
+
+
+def test_invalid_parameter_fails_the_run_and_the_process_survives(fmus, tmp_path):
+    """libcosim terminates its process when fmi2ExitInitializationMode returns fmi2Fatal (an exception escapes
+    its worker thread), so under libcosim the FMU answers fmi2OK, logs the error and refuses every step:
+    libcosim reports the failed step, and the process goes on (checked in a subprocess, where an abort
+    would show as a signal)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent(f"""
+        from rocking_model.cosim import Component, System, run_libcosim
+        fmu = {str(fmus["RigidRockingBlock"])!r}
+        try:
+            run_libcosim(System([Component("m", fmu, start_values={{"b": -0.2}})], [], step_size=0.01), 0.1,
+                         ["m.phi"])
+            print("NOT REFUSED")
+        except RuntimeError as exc:
+            print("REFUSED", "failed" in str(exc))
+        out = run_libcosim(System([Component("m", fmu, start_values={{"phi_0": 0.01}})], [], step_size=0.01),
+                           0.1, ["m.phi"])
+        print("ROWS", len(out))
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "REFUSED True" in proc.stdout and "ROWS 10" in proc.stdout, proc.stdout
+    assert "b = -0.2 is out of range; allowed range [1e-06, 1000]" in proc.stderr + proc.stdout
