@@ -4,7 +4,7 @@ Thin wrapper: the equations are in `rocking_model.models.linear_building`, the F
 `rocking_model.fmi`. Input: ground acceleration ag; output: the absolute floor acceleration a_floor, to drive
 equipment (a rocking block) standing on the floor.
 """
-from rocking_model.fmi import AG_MAX, DefaultExperiment, RockingSlave, Var
+from rocking_model.fmi import AG_INPUT, DefaultExperiment, RockingSlave, Var
 
 
 class LinearBuildingStorey(RockingSlave):
@@ -23,9 +23,7 @@ class LinearBuildingStorey(RockingSlave):
         Var("zeta", "parameter", 0.05, unit="1", min=0.0, description="Damping ratio (>= 0)"),
         Var("u_0", "parameter", 0.0, unit="m", description="Initial floor displacement relative to the ground"),
         Var("u_dot_0", "parameter", 0.0, unit="m/s", description="Initial floor velocity relative to the ground"),
-        Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
-            description="Horizontal ground acceleration (held constant over each communication step), "
-                        "|ag| <= 1000 m/s2 (about 100 g)"),
+        AG_INPUT,
         Var("u", "output", unit="m", description="Floor displacement relative to the ground"),
         Var("u_dot", "output", unit="m/s", description="Floor velocity relative to the ground"),
         Var("a_floor", "output", unit="m/s2", description="Absolute horizontal acceleration of the floor"),

@@ -4,7 +4,7 @@ Thin wrapper: the FMI plumbing lives in `rocking_model.fmi`, the physics in `roc
 ``python build_fmu.py`` (writes dist/RigidRockingBlock.fmu). The module name is unique on purpose: two FMUs
 whose scripts share a module name cannot be loaded in the same process.
 """
-from rocking_model.fmi import AG_MAX, DefaultExperiment, RockingSlave, Var
+from rocking_model.fmi import AG_INPUT, DefaultExperiment, MAX_STEPS_PARAMETER, RockingSlave, Var
 
 
 class RigidRockingBlock(RockingSlave):
@@ -38,14 +38,9 @@ class RigidRockingBlock(RockingSlave):
                         "event-driven uncapped)"),
         Var("tolerance", "parameter", 1e-8, unit="1",
             description="Relative tolerance of the event-driven scheme, in [1e-14, 1e-2]"),
-        Var("max_steps", "parameter", 10000, type="Integer", min=1, max=1000000000,
-            description="Work budget of one communication step: internal steps (Moreau-Jean steps, or "
-                        "Runge-Kutta steps with each event counting 30); a step that needs more is refused "
-                        "(fmi2Discard, state unchanged, message naming the cause)"),
+        MAX_STEPS_PARAMETER,
         # input
-        Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
-            description="Horizontal ground acceleration (held constant over each communication step), "
-                        "|ag| <= 1000 m/s2 (about 100 g)"),
+        AG_INPUT,
         # outputs
         Var("phi", "output", unit="rad", description="Rotation of the block"),
         Var("phi_dot", "output", unit="rad/s", description="Angular velocity of the block"),

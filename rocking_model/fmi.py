@@ -94,9 +94,9 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from .fmi_state import decode_state, encode_state
-from .validation import AG_MAX, WorkLimitError, check_real
+from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real
 
-__all__ = ["AG_MAX", "UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
+__all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
            "adopt_slave_class"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
@@ -194,6 +194,18 @@ class Var:
         lo = "-inf" if self.min is None else f"{self.min:g}"
         hi = "inf" if self.max is None else f"{self.max:g}"
         return f"[{lo}, {hi}]"
+
+
+#: the ground acceleration input of every FMU that takes one (the bound of `rocking_model.validation.AG_MAX`)
+AG_INPUT = Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
+               description="Horizontal ground acceleration (held constant over each communication step), "
+                           f"|ag| <= {AG_MAX:g} m/s2 (about 100 g)")
+#: the work budget of one communication step, a parameter of every FMU that runs a `Simulator`
+MAX_STEPS_PARAMETER = Var("max_steps", "parameter", MAX_STEPS, type="Integer", min=1, max=1000000000,
+                          description="Work budget of one communication step: internal steps (Moreau-Jean "
+                                      "steps, or Runge-Kutta steps with each event counting 30); a step that "
+                                      "needs more is refused (fmi2Discard, state unchanged, message naming "
+                                      "the cause)")
 
 
 # ----------------------------------------------------------------------------------------------------

@@ -12,7 +12,7 @@ from .integrators.event_driven import EventDriven
 from .integrators.moreau_jean import MoreauJean
 from .models.base import RockingModel
 from .modes import Mode
-from .validation import WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
+from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
 
@@ -22,12 +22,6 @@ SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "even
 #: second of a typical block (1/p ~ 0.2-0.5 s) cost minutes. The same bound holds for the event-driven cap.
 DT_MIN_REL = 1e-6
 
-#: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
-#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us: numpy, an LCP
-#: per step); 10000 of them take a few seconds at most (the longest advance measured over the declared ranges:
-#: docs/robustness_library.md), while they cover 10 s of motion at the Moreau-Jean default dt_max = 1e-3 s and
-#: over 300 impacts in one event-driven step.
-MAX_STEPS = 10_000
 
 #: version of the `Simulator.get_state` dict
 STATE_VERSION = 1

@@ -42,6 +42,13 @@ def check_choice(name: str, value, allowed: dict):
 #: the step with a ValueError naming ag (the state is kept).
 AG_MAX = 1000.0
 
+#: default work budget of one `Simulator.advance` [internal steps]: Moreau-Jean steps, or Runge-Kutta steps
+#: plus `EVENT_WORK` (30) per event. The costliest unit is a Moreau-Jean step (150 to 350 us: numpy, an LCP
+#: per step); 10000 of them take a few seconds at most (the longest advance measured over the declared ranges:
+#: docs/robustness_library.md), while they cover 10 s of motion at the Moreau-Jean default dt_max = 1e-3 s and
+#: over 300 impacts in one event-driven step.
+MAX_STEPS = 10_000
+
 
 def check_ag(value, name: str = "ag") -> float:
     """``value`` as a float in [-AG_MAX, AG_MAX] [m/s2] or ValueError naming ``name``."""

@@ -281,6 +281,26 @@ def check_bounds(figures: dict, bounds: dict, label: str = "") -> None:
             f"{label} {name} = {x!r} outside the documented margin [{lo}, {hi}]"
 
 
+_FINGERPRINT = None
+
+
+def assert_kernel_rerun(key: str, rerun: "Rerun", ref: dict, bounds: dict) -> None:
+    """The verdict of scene ``key`` re-run under other kernels (``rerun``) equals the nominal one (``ref``,
+    the summary of `run_scene`) and its figures stay within ``bounds``; skipped when the other kernels compute
+    the same numbers as this machine's defaults (then the re-run proves nothing)."""
+    global _FINGERPRINT
+    import pytest
+
+    res = rerun.results()
+    if _FINGERPRINT is None:
+        _FINGERPRINT = fingerprint()
+    if res["fingerprint"] == _FINGERPRINT:
+        pytest.skip("the generic kernels compute the same numbers as this machine's defaults")
+    got = res[key]
+    assert got["verdict"] == ref["verdict"], describe_mismatch(got["verdict"], ref["verdict"])
+    check_bounds(got["figures"], bounds, f"{key} (other kernels)")
+
+
 if __name__ == "__main__":
     # run as the module ``roundoff`` (the one the scenes register in), not as __main__
     sys.exit(importlib.import_module("roundoff").main())

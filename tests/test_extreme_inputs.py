@@ -221,18 +221,8 @@ def test_same_verdicts_one_ulp_off(key):
 def test_same_verdicts_under_other_kernels(key, kernel_rerun):
     """The scene re-run in a subprocess under `roundoff.kernel_env` (libm's SSE2 variants, OpenBLAS
     Prescott kernels, numpy without its dispatched SIMD targets): the same verdicts, the margins hold."""
-    res = kernel_rerun.results()
-    if res["fingerprint"] == roundoff_fingerprint():
-        pytest.skip("the generic kernels compute the same numbers as this machine's defaults")
-    _, ref = nominal(key)
-    got = res[key]
-    assert got["verdict"] == ref["verdict"], describe_mismatch(got["verdict"], ref["verdict"])
-    check_bounds(got["figures"], BOUNDS[key], f"{key} (other kernels)")
+    roundoff.assert_kernel_rerun(key, kernel_rerun, nominal(key)[1], BOUNDS[key])
 
-
-@functools.lru_cache(maxsize=None)
-def roundoff_fingerprint():
-    return roundoff.fingerprint()
 
 
 def nonuniform_record(seed=3):
