@@ -94,7 +94,7 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from .fmi_state import decode_state, encode_state
-from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real
+from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
 
 __all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
            "adopt_slave_class"]
@@ -521,10 +521,8 @@ class RockingSlave(Fmi2Slave):
         if not self._frozen:
             try:
                 self.advance(self._sim, max(t_end, self._sim.t), inputs)
-            except WorkLimitError as exc:
-                # the simulator is back where the step started: the master may retry with shorter steps
-                return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
-            except ValueError as exc:
+            except (WorkLimitError, ValueError) as exc:
+                # the simulator is back where the step started: the master may retry (shorter steps, other input)
                 return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
             except Exception as exc:
                 self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(exc)}"
@@ -586,12 +584,8 @@ class RockingSlave(Fmi2Slave):
             earlier = [str(m.msg) for m in self.log_queue]
             self.log_queue.clear()
             msg = "\n".join(earlier + [msg])
-            try:
-                import ctypes
-                for obj in (self, self.log_queue, type(self)):
-                    ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
-            except Exception:  # no way to keep the instance alive: stay on fmi2OK + discarded steps
-                return
+            if not _add_reference(self, self.log_queue, type(self)):
+                return  # no way to keep the instance alive: stay on fmi2OK + discarded steps
             try:
                 sys.stderr.write(f"{type(self).__name__} {self.instance_name!r}: {msg}\n")
                 sys.stderr.flush()
@@ -649,16 +643,14 @@ class RockingSlave(Fmi2Slave):
     def _restore(self, doc: Dict[str, Any]) -> None:
         """Check every field of a decoded state document, rebuild the simulator from its parameter values
         and set its state; nothing of the instance changes unless all of it is valid."""
-        _check_keys("state", doc, {"fmu", "signature", "slave", "simulator"})
+        check_state_keys(doc, ("fmu", "signature", "slave", "simulator"))
         if doc["fmu"] != type(self).__name__ or doc["signature"] != self._state_signature():
             raise ValueError(f"the state belongs to FMU {str(doc['fmu'])[:64]!r} (or to another version of its "
                              f"variables), not to {type(self).__name__!r}")
         slave = doc["slave"]
-        _check_keys("slave", slave, {"initialized", "terminated", "frozen", "t", "t0", "error", "pending",
-                                     "values"})
+        check_state_keys(slave, ("initialized", "terminated", "frozen", "t", "t0", "error", "pending", "values"))
         for key in ("initialized", "terminated", "frozen"):
-            if not isinstance(slave[key], bool):
-                raise ValueError(f"state field slave.{key} = {slave[key]!r} is not a Boolean")
+            state_bool(slave, key)
         for key in ("t", "t0"):
             if isinstance(slave[key], bool) or not isinstance(slave[key], (int, float)) \
                     or not math.isfinite(slave[key]):
@@ -668,7 +660,7 @@ class RockingSlave(Fmi2Slave):
                 raise ValueError(f"state field slave.{key} is not null or a text of at most {_MAX_TEXT} "
                                  f"characters")
         values = slave["values"]
-        _check_keys("slave.values", values, set(self._specs))
+        check_state_keys(values, tuple(self._specs))
         for name, spec in self._specs.items():
             values[name] = _check_value(name, spec.type, values[name])
         sim = None
@@ -811,11 +803,19 @@ def adopt_slave_class(namespace: dict, cls: type) -> None:
       borrowed ``PyModule_GetDict``): one reference is added here, or the namespace would be freed under the
       functions that use it after a few instantiations and the host would crash in its garbage collector."""
     namespace[cls.__name__] = cls
+    _add_reference(namespace)
+
+
+def _add_reference(*objects) -> bool:
+    """One more reference to each object, owned by no Python name: for references that the pythonfmu 0.7
+    wrapper releases without having taken them. False when the Python C API is out of reach (ctypes)."""
     try:
         import ctypes
-        ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
-    except Exception:  # pragma: no cover - ctypes without the Python C API: nothing better to do
-        pass
+        for obj in objects:
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
+        return True
+    except Exception:  # pragma: no cover - ctypes without the Python C API
+        return False
 
 
 def _caller_handles_fatal() -> bool:
@@ -881,16 +881,6 @@ def _var_type(var) -> str:
 _MAX_TEXT = 4096
 #: FMI 2.0 fmi2Integer is a 32-bit int
 _INT32 = (-2**31, 2**31 - 1)
-
-
-def _check_keys(where: str, obj, keys) -> None:
-    if not isinstance(obj, dict):
-        raise ValueError(f"state field {where} is not an object")
-    missing, extra = set(keys) - set(obj), set(obj) - set(keys)
-    if missing or extra:
-        parts = ([f"missing {sorted(missing)}"] if missing else []) + \
-                ([f"unexpected {sorted(str(k)[:64] for k in extra)[:10]}"] if extra else [])
-        raise ValueError(f"state field {where}: " + ", ".join(parts))
 
 
 def _check_value(name: str, type_: str, value):

@@ -101,14 +101,14 @@ class FunctionMotion(GroundMotion):
         self._bp = np.sort(np.asarray(breakpoints, dtype=float))
 
     def __call__(self, t):
-        return _checked_value(self.fun, t)
+        return checked_value(self.fun, t)
 
     def next_breakpoint(self, t):
         i = np.searchsorted(self._bp, t, side="right")
         return float(self._bp[i]) if i < self._bp.size else math.inf
 
 
-def _checked_value(fun, t: float) -> float:
+def checked_value(fun, t: float) -> float:
     """fun(t) as a float in [-AG_MAX, AG_MAX] or ValueError naming ag and t."""
     try:
         value = float(fun(t))
@@ -125,7 +125,7 @@ def _checked_value(fun, t: float) -> float:
 
 
 class CheckedMotion(GroundMotion):
-    """A ground motion without a known peak bound, with every value checked (`_checked_value`): what the
+    """A ground motion without a known peak bound, with every value checked (`checked_value`): what the
     simulators run instead of a user's GroundMotion subclass, so that a value out of range stops the step
     with a ValueError naming ag instead of overflowing inside the integrator."""
 
@@ -136,7 +136,7 @@ class CheckedMotion(GroundMotion):
         self.support = motion.support
 
     def __call__(self, t):
-        return _checked_value(self.motion, t)
+        return checked_value(self.motion, t)
 
     def next_breakpoint(self, t):
         return self.motion.next_breakpoint(t)

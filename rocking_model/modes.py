@@ -81,10 +81,14 @@ class BoundedLog(list):
         return list(self) if self.maxlen is None else list(self[-self.maxlen:]) if self.maxlen else []
 
     def __reduce__(self):
-        return (_restore_log, (self.maxlen, list(self)))
+        return (bounded_log, (self.maxlen, list(self)))
 
 
-def _restore_log(maxlen, items):
+def bounded_log(maxlen, items) -> BoundedLog:
+    """A `BoundedLog` of ``maxlen`` holding ``items`` (trimmed as appending them one by one would)."""
     log = BoundedLog(maxlen)
     log.extend(items)
     return log
+
+
+_restore_log = bounded_log        # the name pickles of earlier versions refer to

@@ -38,10 +38,11 @@ from collections import deque
 import numpy as np
 
 from ..contact import closed_candidates, impact, inverse_mass, project_to_ground, uplift
-from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
+from ..modes import CLOSED, BoundedLog, Mode, bounded_log, mode_from_closed
 from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
+from .state import Checkpointed, check_configuration, check_times
 
 _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
 
@@ -100,7 +101,7 @@ def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float
     return b
 
 
-class EventDriven:
+class EventDriven(Checkpointed):
     """Event-driven integration of ``model`` with relative/absolute tolerance ``tolerance``.
 
     method: "DOP853" (order 8) or "DOPRI5" (order 5, cheaper at loose tolerances).
@@ -109,6 +110,7 @@ class EventDriven:
     """
 
     name = "event_driven"
+    LOGS = ("impact_times", "impact_log")
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
     _work_end = math.inf    #: value of n_steps at which the budget runs out
@@ -201,49 +203,29 @@ class EventDriven:
         overturned = state_bool(state, "overturned")
         n_steps = state_int(state, "n_steps")
         h = state_float(state, "h", lo=0.0, lo_open=True, nan_ok=True)
-        times = _check_times(state, "impact_times", state_floats(
+        times = check_times(state, "impact_times", state_floats(
             state, "impact_times", max_len=self.impact_times.maxlen), t, impacts)
         n = 1 + 2 * model.n_dof
         flat = state_floats(state, "impact_log", multiple=n,
                             max_len=None if self.impact_log.maxlen is None else n * self.impact_log.maxlen)
         rows = [(flat[i], np.array(flat[i + 1:i + 1 + model.n_dof]), np.array(flat[i + 1 + model.n_dof:i + n]))
                 for i in range(0, len(flat), n)]
-        _check_times(state, "impact_log", [r[0] for r in rows], t, impacts)
+        check_times(state, "impact_log", [r[0] for r in rows], t, impacts)
         q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
         # a corner may sink in flight where the sticking law has no solution (bug 7, a documented model gap:
         # 33 mm measured before an overturning): only junk, a corner a whole length scale down, is refused
-        _check_configuration(model, state, "y", q, v, overturned, gap_tol=model.length_scale)
+        check_configuration(model, state, "y", q, v, overturned, gap_tol=model.length_scale)
         # all checked: assign
         self.t, self.impacts, self.overturned, self.n_steps = t, impacts, overturned, n_steps
         self._h = None if h != h else h
         self.mode, self.k, self.y, self._full = mode, k, y, None
         self._live = None
-        self.impact_times = _log(self.impact_times.maxlen, times)
-        self.impact_log = _log(self.impact_log.maxlen, rows)
-
-    def checkpoint(self):
-        """A cheap snapshot before an `advance` (`rollback` restores it exactly, `commit` drops it): the
-        attributes are replaced, never mutated in place, except the two logs, which are held untrimmed
-        (`BoundedLog.held`; written out here: this runs once per co-simulation step)."""
-        times, log = self.impact_times, self.impact_log
-        times.held = log.held = True
-        return self.__dict__.copy(), len(times), len(log)
+        self.impact_times = bounded_log(self.impact_times.maxlen, times)
+        self.impact_log = bounded_log(self.impact_log.maxlen, rows)
 
     def rollback(self, snap) -> None:
-        d, n_times, n_log = snap
-        d["impact_times"].cut(n_times)
-        d["impact_log"].cut(n_log)
-        self.__dict__.clear()
-        self.__dict__.update(d)
+        super().rollback(snap)
         self._live = None             # it has moved on; a restart from (t, y, _h) is bit-identical
-
-    def commit(self, snap) -> None:
-        times, log = self.impact_times, self.impact_log
-        if len(times) == snap[1] and len(log) == snap[2]:
-            times.held = log.held = False             # nothing appended: nothing to trim
-        else:
-            times.release()
-            log.release()
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -611,39 +593,3 @@ class EventDriven:
 
     def _enter(self, q, v, ag_t):
         self._set_state(self._select_mode(q, v, ag_t), q, v)
-
-
-# ---------------------------------------------------------------------------------------------- state checks
-def _log(maxlen, items) -> BoundedLog:
-    log = BoundedLog(maxlen)
-    log.extend(items)
-    return log
-
-
-def _check_times(state, key, times, t, impacts) -> list:
-    """Impact times: at most ``impacts`` of them, non-decreasing, not after t (up to round-off)."""
-    if len(times) > impacts:
-        raise ValueError(f"state field {key!r} holds {len(times)} impacts, more than impacts = {impacts}")
-    t_max = t + 1e-12 * max(1.0, abs(t))
-    for i, ti in enumerate(times):
-        if ti > t_max or (i and ti < times[i - 1]):
-            raise ValueError(f"state field {key!r}: impact time {ti!r} is after t = {t!r} or out of order")
-    return times
-
-
-def _check_configuration(model, state, key, q, v, overturned, gap_tol) -> None:
-    """The full state (q, v) read from field ``key``: |phi| < pi/2 unless overturned, corners not below the
-    ground by more than gap_tol [m], and the outputs finite."""
-    phi = float(q[model.phi_index])
-    if not overturned and not abs(phi) < 0.5 * math.pi:
-        raise ValueError(f"state field {key!r}: |phi| = {abs(phi):g} rad reaches pi/2 but 'overturned' is "
-                         "False; allowed range (-pi/2, pi/2)")
-    gaps = model.gaps(q)
-    if not overturned and min(gaps) < -gap_tol:
-        raise ValueError(f"state field {key!r}: a base corner is {-min(gaps):g} m below the ground; allowed at "
-                         f"most {gap_tol:g} m")
-    out = model.outputs(q, v)
-    bad = [name for name, value in out.items() if not math.isfinite(value)]
-    if bad:
-        raise ValueError(f"state field {key!r} gives non-finite outputs ({', '.join(bad)}); the values are too "
-                         "large for the model")

@@ -23,16 +23,17 @@ import numpy as np
 
 from ..contact import inverse_mass, project_to_ground
 from ..lcp import solve_contact_lcp
-from ..modes import CLOSED, BoundedLog, Mode, mode_from_closed
+from ..modes import CLOSED, BoundedLog, Mode, bounded_log, mode_from_closed
 from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int, state_ints
-from .event_driven import _check_configuration, _check_times, _log
+from .state import Checkpointed, check_configuration, check_times
 
 
-class MoreauJean:
+class MoreauJean(Checkpointed):
     """LCP time-stepper on the full coordinates of ``model``; steps of at most ``dt_max`` [s] and at most
     ``model.step_limit`` (0.25/omega for the flexible oscillator)."""
 
     name = "moreau_jean"
+    LOGS = ("impact_times",)
 
     def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
                  dt_max: float = 1e-3, theta: float = 0.5, impact_log_size: int | None = None):
@@ -194,33 +195,15 @@ class MoreauJean:
         impacts = state_int(state, "impacts")
         overturned = state_bool(state, "overturned")
         n_steps = state_int(state, "n_steps")
-        times = _check_times(state, "impact_times", state_floats(
+        times = check_times(state, "impact_times", state_floats(
             state, "impact_times", max_len=self.impact_times.maxlen), t, impacts)
         # the time-stepper lets corners sink by O(dt |v|) before the impulse stops them: only junk (a corner a
         # whole length scale below the ground) is refused
-        _check_configuration(model, state, "q", q, v, overturned, gap_tol=model.length_scale)
+        check_configuration(model, state, "q", q, v, overturned, gap_tol=model.length_scale)
         self.t, self.q, self.v, self.mode, self._closed = t, q, v, mode, set(closed)
         self.impacts, self.overturned, self.n_steps = impacts, overturned, n_steps
-        self.impact_times = _log(self.impact_times.maxlen, times)
-
-    def checkpoint(self):
-        """A cheap snapshot before an `advance` (see `EventDriven.checkpoint`)."""
-        self.impact_times.held = True
-        return self.__dict__.copy(), len(self.impact_times)
-
-    def rollback(self, snap) -> None:
-        d, n_times = snap
-        d["impact_times"].cut(n_times)
-        self.__dict__.clear()
-        self.__dict__.update(d)
-
-    def commit(self, snap) -> None:
-        if len(self.impact_times) == snap[1]:
-            self.impact_times.held = False
-        else:
-            self.impact_times.release()
+        self.impact_times = bounded_log(self.impact_times.maxlen, times)
 
     def outputs(self) -> dict:
         """The model's outputs at the current time."""
         return self.model.outputs(self.q, self.v)
-
