@@ -27,12 +27,18 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import math
+import os
 import platform
 import re
 import shutil
+import site
+import subprocess
 import sys
+import sysconfig
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +46,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent
 FMU_SRC = ROOT / "fmu_src"
 PACKAGE = ROOT / "rocking_model"
+FMI_BINARY = ROOT / "fmi_binary"
+#: the Python side of the binary and its configuration, in every FMU's resources
+PYHOST = "fmi2_pyhost.py"
+PYHOST_CONFIG = "fmi2_pyhost.json"
 
 _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", "*.egg-info", ".pytest_cache")
 
@@ -76,30 +86,138 @@ _IMPORT = re.compile(r"^(\s*)(from|import)(\s+)rocking_model\b", re.MULTILINE)
 
 
 def bundled_script(script: Path, alias: str, folder: Path) -> Path:
-    """The FMU's copy of ``script``: its imports of rocking_model point at the bundled copy ``alias``, and
-    the class is published as a module attribute when the wrapper re-executes the file.
+    """The FMU's copy of ``script``: its imports of rocking_model point at the bundled copy ``alias``.
 
     Why: every FMU loaded into one process shares sys.modules. Under its own name the bundled package of one
     FMU would serve all of them (the first one imported wins, whatever version the others bundle); under the
-    digest of its sources each FMU imports exactly the code it was built with. The pythonfmu 0.7 wrapper
-    imports the slave module by name (a second FMU with the same name gets the cached module), re-executes
-    the file's text in that module's namespace and then takes the class from the module: the last line makes
-    that the class of this file, so each FMU runs its own version."""
+    digest of its sources each FMU imports exactly the code it was built with. The binary imports the script
+    itself under a name unique to its contents (fmi_binary/fmi2_pyhost.py)."""
     text = script.read_text()
     text, n = _IMPORT.subn(lambda m: f"{m.group(1)}{m.group(2)}{m.group(3)}{alias}", text)
     if n == 0:
         raise ValueError(f"{script.name}: no import of rocking_model found")
-    text += (f"\n\n# added by build_fmu.py (see rocking_model.fmi.adopt_slave_class): when the FMU wrapper\n"
-             f"# re-executes this file, its class becomes the module's class\n"
-             f"if locals() is not globals():\n"
-             f"    from {alias}.fmi import adopt_slave_class\n"
-             f"    adopt_slave_class(globals(), {script.stem})\n")
     out = folder / script.name
     out.write_text(text)
     return out
 
 
-def build_one(script: Path, dest: Path, package_copy: Path) -> Path:
+class BuildError(RuntimeError):
+    """The FMU binary cannot be built on this machine (no C compiler, no Python headers, ...)."""
+
+
+def _binary_platform() -> tuple:
+    """(FMI platform folder, shared-library suffix) of this machine."""
+    system = platform.system()
+    bits = 64 if sys.maxsize > 2**32 else 32
+    if system == "Linux":
+        return f"linux{bits}", ".so"
+    if system == "Darwin":
+        return f"darwin{bits}", ".dylib"
+    if system == "Windows":
+        return f"win{bits}", ".dll"
+    raise BuildError(f"no FMI platform name for {system}")
+
+
+def find_compiler() -> str:
+    """The C compiler: $CC, else cc, gcc or clang on PATH."""
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if not cc:
+        raise BuildError("no C compiler found: the FMUs carry a binary compiled from fmi_binary/; install one "
+                         "(Debian/Ubuntu: apt install gcc; Fedora: dnf install gcc; macOS: xcode-select "
+                         "--install) or set CC to its path")
+    return cc
+
+
+def fmi_headers() -> Path:
+    """The folder with fmi2Functions.h (fmpy ships the FMI 2.0 headers)."""
+    import fmpy
+
+    folder = Path(fmpy.__file__).parent / "c-code"
+    if not (folder / "fmi2Functions.h").is_file():
+        raise BuildError(f"the FMI 2.0 headers are not in {folder}; reinstall fmpy")
+    return folder
+
+
+def libpython() -> str:
+    """The shared libpython of this interpreter (recorded in the binary for hosts without Python), or ''."""
+    name = sysconfig.get_config_var("LDLIBRARY") or ""
+    candidates = [name, sysconfig.get_config_var("INSTSONAME") or ""]
+    for folder in (sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LIBPL"), sys.base_prefix):
+        for candidate in candidates:
+            if folder and candidate and (".so" in candidate or candidate.endswith((".dylib", ".dll"))):
+                path = Path(folder) / candidate
+                if path.is_file():
+                    return str(path)
+    return ""
+
+
+def site_packages() -> list:
+    """The folders of this environment that hold numpy and the other dependencies (a fallback sys.path for
+    an interpreter that the binary starts in a host without Python)."""
+    folders = []
+    candidates = [sysconfig.get_paths().get(k) for k in ("purelib", "platlib")] + list(site.getsitepackages())
+    for folder in candidates:
+        if folder and os.path.isdir(folder) and folder not in folders:
+            folders.append(folder)
+    return folders
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def compile_binary(out_dir: Path) -> Path:
+    """Compile fmi_binary/*.c into ``out_dir``/fmi2_python<suffix> with the system C compiler, against the FMI
+    2.0 headers and this Python's headers; raise `BuildError` naming what is missing."""
+    cc = find_compiler()
+    include = Path(sysconfig.get_paths()["include"])
+    if not (include / "Python.h").is_file():
+        raise BuildError(f"Python.h is not in {include}: install the Python development headers (Debian/Ubuntu: "
+                         f"apt install python3-dev, or the -dev package of your Python {sys.version_info.major}."
+                         f"{sys.version_info.minor})")
+    _, suffix = _binary_platform()
+    out = Path(out_dir) / f"fmi2_python{suffix}"
+    sources = sorted(str(p) for p in FMI_BINARY.glob("*.c"))
+    cmd = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-Wall", "-Wextra", "-fvisibility=hidden",
+           f"-I{fmi_headers()}", f"-I{include}", f"-I{FMI_BINARY}",
+           f"-DFMI_PYTHON_LIBRARY={_c_string(libpython())}", f"-DFMI_PYTHON_EXECUTABLE={_c_string(sys.executable)}",
+           *sources, "-o", str(out)]
+    if platform.system() == "Linux":
+        # every Python symbol goes through the run-time table (fmi_binary/pyapi.h): none may be left undefined
+        cmd += ["-Wl,--no-undefined", "-ldl", "-lpthread", "-lm"]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as exc:
+        raise BuildError(f"cannot run the C compiler {cc}: {exc}") from None
+    if proc.returncode != 0:
+        raise BuildError(f"compiling the FMU binary failed ({' '.join(cmd)}):\n{proc.stderr.strip()}")
+    return out
+
+
+def install_binary(fmu: Path, binary: Path, script: Path) -> None:
+    """Put the project's binary into ``fmu`` instead of pythonfmu's, with its Python side and configuration:
+    the binaries of other platforms (pythonfmu's) are dropped, the resources get fmi2_pyhost.py and
+    fmi2_pyhost.json (the GUID, the slave module and class, the site-packages fallback)."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu))
+    identifier = md.coSimulation.modelIdentifier
+    folder, suffix = _binary_platform()
+    config = {"guid": md.guid, "slave_module": script.stem, "slave_class": script.stem,
+              "site_packages": site_packages()}
+    tmp = fmu.with_suffix(".fmu.tmp")
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
+        for item in src.infolist():
+            if item.filename.startswith("binaries/"):
+                continue
+            dst.writestr(item, src.read(item.filename))
+        dst.write(binary, f"binaries/{folder}/{identifier}{suffix}")
+        dst.write(FMI_BINARY / PYHOST, f"resources/{PYHOST}")
+        dst.writestr(f"resources/{PYHOST_CONFIG}", json.dumps(config, indent=1) + "\n")
+    os.replace(tmp, fmu)
+
+
+def build_one(script: Path, dest: Path, package_copy: Path, binary: Path) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     # the builder imports the script by module name: a module of that name from an earlier build in this
@@ -111,6 +229,7 @@ def build_one(script: Path, dest: Path, package_copy: Path) -> Path:
     if fmu.resolve() != expected.resolve():
         raise ValueError(f"{script.name}: the FMU class must be named like the script ({script.stem}); "
                          f"pythonfmu produced {fmu.name}")
+    install_binary(fmu, binary, script)
     validate(fmu)
     return fmu
 
@@ -242,10 +361,12 @@ def build_all(dest="dist", names=None, cross_check=False) -> list[Path]:
         package_copy = Path(tmp) / alias
         shutil.copytree(PACKAGE, package_copy, ignore=_IGNORE)
         (Path(tmp) / "scripts").mkdir()
+        binary = compile_binary(Path(tmp))
         sys.path.insert(0, tmp)   # the builder imports the script, which imports the bundled copy
         try:
             for script in scripts:
-                built.append(build_one(bundled_script(script, alias, Path(tmp) / "scripts"), dest, package_copy))
+                built.append(build_one(bundled_script(script, alias, Path(tmp) / "scripts"), dest, package_copy,
+                                        binary))
         finally:
             sys.path.remove(tmp)
             for name in [m for m in sys.modules if m == alias or m.startswith(alias + ".")]:

@@ -41,49 +41,38 @@ What the base class provides:
 * ``fmi2Reset``: the pythonfmu 0.7 C wrapper re-creates the Python object (start values, not initialized);
   :meth:`RockingSlave.reset` does the same in place for direct use of the class.
 
-Error handling under the pythonfmu 0.7 C wrapper, which can return fmi2OK, fmi2Discard (``do_step``
-returns False) or -- for a Python exception -- fmi2Fatal, and nothing else:
+Status of every FMI call. The FMUs run the project's own binary (``fmi_binary/``, see its ``fmi2_cs.c``),
+which calls these pythonfmu methods directly: an exception is fmi2Error (its text goes to the importer's
+logger, the instance is in the error state until fmi2Reset or fmi2SetFMUstate), ``do_step`` returning False
+is fmi2Discard, a warning logged during the call is fmi2Warning. The binary checks the call sequence, NULL
+arguments, ``fmi2SetupExperiment``'s times and ``fmi2DoStep``'s step size and communication point itself;
+the same checks here serve direct users of the class. Hence:
 
-* invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range)
-  or an invalid ``fmi2SetupExperiment`` start time: under fmpy ``exit_initialization_mode`` raises, so
-  ``fmi2ExitInitializationMode`` returns fmi2Fatal and fmpy raises ``FMICallException``; the message goes to
-  the importer's logger (as the fatal message) and to stderr. Other importers (libcosim terminates the
-  process on fmi2Fatal there) get fmi2OK with the error logged, and every step is refused. The instance is kept alive for the wrapper
-  (`_raise_fatal`), so fmi2Terminate, fmi2FreeInstance, fmi2Reset and any other later call are safe; every
-  ``do_step`` logs the message again and returns False until fmi2Reset;
-* an invalid input (non-finite, or outside the declared ``min``/``max``), a step size that is not
-  positive and finite, or a ``current_time`` that does not match the FMU's time (after a rollback with
-  ``fmi2SetFMUstate`` the FMU's time is the restored one): error log, ``do_step`` returns False, the
-  state is unchanged (the step can be retried with a valid input);
+* invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range):
+  ``exit_initialization_mode`` raises, fmi2ExitInitializationMode is fmi2Error (fmpy raises
+  ``FMICallException``, the message is printed by its logger);
+* an invalid value reference (unknown, of another type, an output set), a value that cannot be converted, an
+  input outside its declared ``min``/``max`` or not finite, a ``fixed`` parameter changed after
+  initialization: the setter or getter raises and nothing of that call is set (fmi2Error);
 * a step whose internal work would exceed the simulator's budget (`WorkLimitError`) or that would leave the
   physical ranges (``ValueError`` from the simulator): error log naming the cause and the way out,
-  ``do_step`` returns False, the state is unchanged (the simulator restores itself);
-* any other exception inside the integrator: error log, the instance is marked failed, ``do_step`` returns
-  False from then on;
-* calls the wrapper can only answer with fmi2OK are refused by an error log and a discard of the next
-  ``do_step`` (so the mistake shows even with logging off): a value reference that is unknown, of another
-  type or an output set (the other references of the same call are served; a bad getter reference reads
-  NaN / 0 / False / ""), a ``fixed`` parameter changed after initialization (the old value is kept),
-  fmi2EnterInitializationMode / fmi2ExitInitializationMode / fmi2SetupExperiment after initialization
-  (the state is kept), and a rejected FMU state; ``do_step`` after fmi2Terminate is refused;
+  ``do_step`` returns False (fmi2Discard), the state is unchanged and the step can be retried;
+* any other exception inside the integrator: ``do_step`` raises (fmi2Error) and keeps refusing until reset;
+* a rejected FMU state (foreign, corrupted, of another FMU): ``_set_fmu_state`` raises, the instance keeps its
+  state (fmi2Error);
 * once the output named by ``freeze_output`` (``"overturned"``) is true the integration stops, the outputs
-  stay frozen and ``do_step`` keeps returning True.
+  stay frozen (a warning says so) and ``do_step`` keeps returning True.
 
-Messages are queued with `RockingSlave.log`, which doubles every ``%`` (the FMI logger treats the message as
-a printf format). They reach the importer only when it instantiates the FMU with ``loggingOn = fmi2True``
-(``fmpy.simulate_fmu(..., debug_logging=True)``), a property of the pythonfmu 0.7 C wrapper; the fatal
-message of invalid parameters also goes to stderr.
+Messages are queued with `RockingSlave.log`; the binary passes each one to the importer's logger as data
+(``"%s"``): errors and warnings always, the others only with logging on.
 
 Each FMU bundles the package under the digest of its sources (``build_fmu.py``), so FMUs built from other
-versions and a host's own ``rocking_model`` can live in one process; `adopt_slave_class` and
-`_forget_resources_path` work around the wrapper's handling of the slave module and of ``sys.path``.
+versions and a host's own ``rocking_model`` can live in one process.
 """
 from __future__ import annotations
 
 import hashlib
 import math
-import os
-import sys
 from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
@@ -96,8 +85,8 @@ from pythonfmu.variables import Boolean, Integer, Real, String
 from .fmi_state import decode_state, encode_state
 from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
 
-__all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment", "Fmi2Status", "FMUError", "run_fmu",
-           "adopt_slave_class"]
+__all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment",
+           "Fmi2Status", "FMUError", "run_fmu"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
 UNITS: Dict[str, Dict[str, int]] = {
@@ -296,12 +285,6 @@ class RockingSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        # the pythonfmu 0.7 C wrapper passes its logger's address; then an exception raised here becomes
-        # fmi2Fatal and the wrapper drops its references (see _raise_fatal)
-        self._under_c_wrapper = "logger" in kwargs
-        if self._under_c_wrapper:
-            _forget_resources_path(kwargs.get("resources"))
-            _rebase_package(kwargs.get("resources"))
         self._specs: Dict[str, Var] = {}
         self._values: Dict[str, Any] = {}
         self._clear_state()
@@ -326,9 +309,7 @@ class RockingSlave(Fmi2Slave):
         self._sim = None
         self._initialized = False
         self._terminated = False
-        self._setup_error: Optional[str] = None  # invalid fmi2SetupExperiment arguments, refused at init
-        self._error: Optional[str] = None        # permanent failure (bad parameters, integrator crash)
-        self._pending: Optional[str] = None      # one-shot failure of the next do_step
+        self._error: Optional[str] = None        # permanent failure (an integrator crash), until reset
         self._frozen = False
         self._t = 0.0                            # current communication point [s]
         self._t0 = 0.0
@@ -336,14 +317,11 @@ class RockingSlave(Fmi2Slave):
     def reset(self) -> None:
         """fmi2Reset in place: start values, not initialized, no error (the log queue is kept).
 
-        The pythonfmu 0.7 C wrapper implements fmi2Reset by creating a new Python object, which has the
-        same effect; this method serves direct users of the class (and later pythonfmu versions)."""
-        try:
-            self._clear_state()
-            for name, spec in self._specs.items():
-                self._values[name] = spec.default
-        except Exception as exc:  # pragma: no cover - never raise into the C wrapper
-            self.log(f"reset failed: {_describe(exc)}", Fmi2Status.error)
+        The binary implements fmi2Reset by creating a new slave, which has the same effect; this method
+        serves direct users of the class."""
+        self._clear_state()
+        for name, spec in self._specs.items():
+            self._values[name] = spec.default
 
     # ------------------------------------------------------------------ variable registration
     def _make_variable(self, spec: Var):
@@ -366,11 +344,13 @@ class RockingSlave(Fmi2Slave):
         return lambda: self._values[name]
 
     def _setter(self, spec: Var):
-        # pythonfmu's own path to a variable (the importer's calls go through _set, which reports problems)
+        # pythonfmu's own path to a variable (the importer's calls go through _set)
         def setter(value):
-            problem = self._assign(self.vars[self._vr_of[spec.name]], value)
+            var = self.vars[self._vr_of[spec.name]]
+            problem, value = self._check_assignment(var, value)
             if problem is not None:
-                self._refuse(problem)
+                raise ValueError(problem)
+            self._values[spec.name] = value
 
         return setter
 
@@ -438,78 +418,59 @@ class RockingSlave(Fmi2Slave):
     # ------------------------------------------------------------------ FMI life cycle
     def setup_experiment(self, start_time: float, stop_time: Optional[float] = None,
                          tolerance: Optional[float] = None):
+        if self._initialized:
+            raise ValueError("fmi2SetupExperiment called after initialization (call fmi2Reset first to start a "
+                             "new experiment)")
         try:
-            if self._initialized:
-                self._refuse("fmi2SetupExperiment called after initialization; ignored (call fmi2Reset first "
-                             "to start a new experiment)")
-                return
-            try:
-                t0 = float(start_time)
-            except (TypeError, ValueError):
-                t0 = math.nan
-            if not math.isfinite(t0):
-                self._setup_error = (f"fmi2SetupExperiment: startTime = {start_time!r} is invalid; allowed "
-                                     f"range: finite values")
-                self.log(self._setup_error, Fmi2Status.error)
-                return
-            self._setup_error = None
-            self._t0 = t0
-        except Exception as exc:  # never raise into the C wrapper
-            self.log(f"fmi2SetupExperiment failed: {_describe(exc)}", Fmi2Status.error)
+            t0 = float(start_time)
+        except (TypeError, ValueError):
+            t0 = math.nan
+        if not math.isfinite(t0):
+            raise ValueError(f"fmi2SetupExperiment: startTime = {start_time!r} is invalid; allowed range: finite "
+                             f"values")
+        self._t0 = t0
 
     def enter_initialization_mode(self):
         if self._initialized:
-            self._refuse("fmi2EnterInitializationMode called after initialization; ignored, the instance keeps "
-                         "its state (call fmi2Reset first to initialize again)")
+            raise ValueError("fmi2EnterInitializationMode called after initialization (call fmi2Reset first to "
+                             "initialize again)")
 
     def exit_initialization_mode(self):
         if self._initialized:
-            self._refuse("fmi2ExitInitializationMode called after initialization; ignored, the instance keeps "
-                         "its state (call fmi2Reset first to initialize again)")
-            return
+            raise ValueError("fmi2ExitInitializationMode called after initialization (call fmi2Reset first to "
+                             "initialize again)")
         try:
-            if self._setup_error is not None:
-                raise ValueError(self._setup_error)
-            self._initialized = True
-            self._t = self._t0
-            self._sim = self.create_simulator(self.parameter_values, self._t0)
-            self._update_outputs()
+            sim = self.create_simulator(self.parameter_values, self._t0)
         except Exception as exc:
-            self._sim = None
-            self._error = f"invalid parameters: {_describe(exc)}"
-            self._raise_fatal(self._error)
+            raise ValueError(f"invalid parameters: {_describe(exc)}") from None
+        self._sim = sim
+        self._initialized = True
+        self._t = self._t0
+        self._update_outputs()
 
     def terminate(self):
         self._terminated = True
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        try:
-            return self._do_step(float(current_time), float(step_size))
-        except Exception as exc:  # last resort: never raise into the C wrapper
-            self._error = f"do_step failed at t = {current_time!r}: {_describe(exc)}"
-            self.log(self._error, Fmi2Status.error)
-            return False
-
-    def _do_step(self, t: float, dt: float) -> bool:
+        """Advance to ``current_time + step_size``; False (fmi2Discard) when the step is refused with the state
+        unchanged; raises ValueError on an invalid call (fmi2Error)."""
+        t, dt = float(current_time), float(step_size)
         if self._terminated:
-            return self._fail("fmi2DoStep called after fmi2Terminate; refused (call fmi2Reset to start again)")
+            raise ValueError("fmi2DoStep called after fmi2Terminate (call fmi2Reset to start again)")
         if not self._initialized:
-            return self._fail("fmi2DoStep called before initialization (fmi2ExitInitializationMode); refused")
+            raise ValueError("fmi2DoStep called before initialization (fmi2ExitInitializationMode)")
         if self._error is not None:
-            return self._fail(self._error)
-        if self._pending is not None:
-            msg, self._pending = self._pending, None
-            return self._fail(f"step refused because of an earlier error: {msg}")
+            raise RuntimeError(f"step refused after an earlier failure (call fmi2Reset): {self._error}")
         if not math.isfinite(dt) or dt <= 0.0:
-            return self._fail(f"fmi2DoStep: communicationStepSize = {dt!r} is invalid; allowed range (0, inf)")
+            raise ValueError(f"fmi2DoStep: communicationStepSize = {dt!r} is invalid; allowed range (0, inf)")
         if not math.isfinite(t) or abs(t - self._t) > self.time_tolerance * max(1.0, abs(self._t)):
-            return self._fail(f"fmi2DoStep: currentCommunicationPoint = {t!r} does not match the FMU time "
-                              f"{self._t!r}; allowed value {self._t!r}: each step starts where the last one "
-                              f"ended (to go back, restore a state saved with fmi2GetFMUstate)")
+            raise ValueError(f"fmi2DoStep: currentCommunicationPoint = {t!r} does not match the FMU time "
+                             f"{self._t!r}; allowed value {self._t!r}: each step starts where the last one "
+                             f"ended (to go back, restore a state saved with fmi2GetFMUstate)")
         t_end = t + dt
         if not math.isfinite(t_end):
-            return self._fail(f"fmi2DoStep: currentCommunicationPoint + communicationStepSize = {t_end!r} is "
-                              f"not finite; allowed: a finite end time")
+            raise ValueError(f"fmi2DoStep: currentCommunicationPoint + communicationStepSize = {t_end!r} is "
+                             f"not finite; allowed: a finite end time")
         values = self._values
         inputs = {}
         for name, lo, hi in self._inputs:
@@ -526,7 +487,7 @@ class RockingSlave(Fmi2Slave):
                 return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
             except Exception as exc:
                 self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(exc)}"
-                return self._fail(self._error)
+                raise RuntimeError(self._error) from None
             self._update_outputs()
         self._t = t_end
         return True
@@ -547,86 +508,30 @@ class RockingSlave(Fmi2Slave):
         self.log(msg, Fmi2Status.error)
         return False
 
-    def _refuse(self, msg: str) -> None:
-        """A call that pythonfmu 0.7 can only answer with fmi2OK was refused: log it and discard the next
-        fmi2DoStep, so that the mistake is not silent."""
-        self.log(msg, Fmi2Status.error)
-        if self._pending is None:
-            self._pending = msg
-
-    def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category: Optional[str] = None, debug=None):
-        """Queue a message for the importer's logger. The FMI 2.0 logger takes the message as a printf format
-        string, so every '%' is doubled: a message (a file name, a value) is always printed as it is."""
-        super().log(str(msg).replace("%", "%%"), status, category)
-
-    def _raise_fatal(self, msg: str) -> None:
-        """Make fmi2ExitInitializationMode fail loudly: pythonfmu 0.7 turns a Python exception into fmi2Fatal
-        (fmpy raises FMICallException), the only non-OK status it can return there. Only for importers known
-        to survive it (`_caller_handles_fatal`: fmpy); the others get the error log, fmi2OK, and every
-        ``do_step`` refused with the message (libcosim reports the failed step).
-
-        The C wrapper then drops one reference to this object, to its log queue and to its class, while it
-        keeps the pointers and calls them again (fmi2Terminate, fmi2FreeInstance, fmi2Reset): one extra
-        reference to each is taken first, so that every later call still finds live objects and the
-        reference counts balance when the wrapper releases the instance. The message also goes to stderr,
-        because the wrapper forwards log messages only when the importer turned logging on."""
-        if not self._under_c_wrapper:
-            self.log(msg, Fmi2Status.error)
-        elif not _caller_handles_fatal():
-            # libcosim ends the process on fmi2Fatal here (an exception escapes its worker thread: measured);
-            # every importer not known to handle it gets the error log and a refusal of every step instead
-            self.log(msg, Fmi2Status.error)
-            return
-        else:
-            # The wrapper flushes the log queue while the exception is pending, calling the importer's logger
-            # (Python code, in fmpy) with an exception set, which corrupts the interpreter: the queue is
-            # emptied here and its messages travel in the exception, which the wrapper logs as fmi2Fatal.
-            earlier = [str(m.msg) for m in self.log_queue]
-            self.log_queue.clear()
-            msg = "\n".join(earlier + [msg])
-            if not _add_reference(self, self.log_queue, type(self)):
-                return  # no way to keep the instance alive: stay on fmi2OK + discarded steps
-            try:
-                sys.stderr.write(f"{type(self).__name__} {self.instance_name!r}: {msg}\n")
-                sys.stderr.flush()
-            except Exception:
-                pass
-        raise FMUInitializationError(msg.replace("%", "%%"))
-
     # ------------------------------------------------------------------ FMU state
-    # pythonfmu 0.7 calls _get_fmu_state / _set_fmu_state on the instance and _fmu_state_to_bytes /
-    # _fmu_state_from_bytes on the class; the C wrapper keeps the returned object as the fmi2FMUstate and
-    # releases it in fmi2FreeFMUstate. None of them may raise (an exception there is fmi2Fatal). The state
-    # object is the serialized byte string itself (rocking_model.fmi_state): immutable, small, data only, and
-    # checked field by field when it is set.
+    # The binary calls _get_fmu_state / _set_fmu_state on the instance and _fmu_state_to_bytes /
+    # _fmu_state_from_bytes on it too, keeps the returned object as the fmi2FMUstate and releases it in
+    # fmi2FreeFMUstate; an exception is fmi2Error. The state object is the serialized byte string itself
+    # (rocking_model.fmi_state): immutable, small, data only, and checked field by field when it is set.
     def _get_fmu_state(self) -> bytes:
-        try:
-            return encode_state(self._state_document())
-        except Exception as exc:
-            msg = f"fmi2GetFMUstate failed: {_describe(exc)}"
-            self.log(msg, Fmi2Status.error)
-            return b""
+        return encode_state(self._state_document())
 
     def _set_fmu_state(self, state) -> None:
         try:
             self._restore(decode_state(state))
-            return
         except Exception as exc:
-            problem = _describe(exc)
-        msg = f"fmi2SetFMUstate: state rejected, the instance keeps its current state: {problem}"
-        self.log(msg, Fmi2Status.error)
-        self._pending = msg
+            raise ValueError(f"fmi2SetFMUstate: state rejected, the instance keeps its current state: "
+                             f"{_describe(exc)}") from None
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
-        return state if isinstance(state, bytes) else b""
+        if not isinstance(state, bytes):
+            raise ValueError("the FMU state is not a state of this FMU")
+        return state
 
     @staticmethod
     def _fmu_state_from_bytes(data) -> bytes:
-        try:
-            return bytes(data)  # checked when it is set (a static method cannot log)
-        except Exception:
-            return b""
+        return bytes(data)  # checked field by field when it is set
 
     def _state_signature(self) -> str:
         table = [(s.name, s.causality, s.type) for s in self.variables]
@@ -637,7 +542,7 @@ class RockingSlave(Fmi2Slave):
         return {"fmu": type(self).__name__, "signature": self._state_signature(),
                 "slave": {"initialized": self._initialized, "terminated": self._terminated,
                           "frozen": self._frozen, "t": self._t, "t0": self._t0, "error": self._error,
-                          "pending": self._pending, "values": values},
+                          "values": values},
                 "simulator": None if self._sim is None else self._sim.get_state()}
 
     def _restore(self, doc: Dict[str, Any]) -> None:
@@ -648,17 +553,15 @@ class RockingSlave(Fmi2Slave):
             raise ValueError(f"the state belongs to FMU {str(doc['fmu'])[:64]!r} (or to another version of its "
                              f"variables), not to {type(self).__name__!r}")
         slave = doc["slave"]
-        check_state_keys(slave, ("initialized", "terminated", "frozen", "t", "t0", "error", "pending", "values"))
+        check_state_keys(slave, ("initialized", "terminated", "frozen", "t", "t0", "error", "values"))
         for key in ("initialized", "terminated", "frozen"):
             state_bool(slave, key)
         for key in ("t", "t0"):
             if isinstance(slave[key], bool) or not isinstance(slave[key], (int, float)) \
                     or not math.isfinite(slave[key]):
                 raise ValueError(f"state field slave.{key} = {slave[key]!r} is invalid; allowed: a finite time")
-        for key in ("error", "pending"):
-            if slave[key] is not None and (not isinstance(slave[key], str) or len(slave[key]) > _MAX_TEXT):
-                raise ValueError(f"state field slave.{key} is not null or a text of at most {_MAX_TEXT} "
-                                 f"characters")
+        if slave["error"] is not None and (not isinstance(slave["error"], str) or len(slave["error"]) > _MAX_TEXT):
+            raise ValueError(f"state field slave.error is not null or a text of at most {_MAX_TEXT} characters")
         values = slave["values"]
         check_state_keys(values, tuple(self._specs))
         for name, spec in self._specs.items():
@@ -679,14 +582,12 @@ class RockingSlave(Fmi2Slave):
         self._initialized, self._terminated, self._frozen = (slave["initialized"], slave["terminated"],
                                                              slave["frozen"])
         self._t, self._t0 = float(slave["t"]), float(slave["t0"])
-        self._error, self._pending = slave["error"], slave["pending"]
-        self._setup_error = None
+        self._error = slave["error"]
 
     # ------------------------------------------------------------------ value references
-    # Every reference of a call is served on its own: a bad one (unknown, of another type, an output set, a
-    # fixed parameter changed after initialization) is logged with its number and name, gets a neutral value
-    # (getters), and the next fmi2DoStep is discarded once, so the mistake is not silent even with logging
-    # off. pythonfmu 0.7 answers fmi2OK to the call itself.
+    # A call with a bad reference (unknown, of another type, an output set), a value that cannot be converted,
+    # an input outside its declared range or a fixed parameter changed after initialization raises with every
+    # problem named (fmi2Error); a setter then sets nothing.
     def _lookup(self, vr, type_name: str):
         """(variable, problem): the variable of reference ``vr`` if it has type ``type_name``."""
         try:
@@ -700,75 +601,74 @@ class RockingSlave(Fmi2Slave):
             return None, f"value reference {vr} is {var.name!r}, a {actual} variable, not {type_name}"
         return var, None
 
-    def _get(self, vrs, type_name: str, fallback):
+    def _get(self, vrs, type_name: str):
         out, problems = [], []
         for vr in vrs:
             var, problem = self._lookup(vr, type_name)
             if var is None:
                 problems.append(problem)
-                out.append(fallback)
                 continue
-            try:
-                out.append(var.getter())
-            except Exception as exc:
-                problems.append(f"{var.name}: {_describe(exc)}")
-                out.append(fallback)
+            out.append(var.getter())
         if problems:
-            self._refuse(f"fmi2Get{type_name}: " + "; ".join(problems))
+            raise ValueError(f"fmi2Get{type_name}: " + "; ".join(problems))
         return out
 
     def _set(self, vrs, values, type_name: str) -> None:
-        problems = []
-        try:
-            pairs = list(zip(vrs, values))
-        except Exception as exc:
-            pairs, problems = [], [_describe(exc)]
-        for vr, value in pairs:
+        checked, problems = [], []
+        vrs, values = list(vrs), list(values)
+        if len(vrs) != len(values):
+            raise ValueError(f"fmi2Set{type_name}: {len(vrs)} value references but {len(values)} values")
+        for vr, value in zip(vrs, values):
             var, problem = self._lookup(vr, type_name)
             if var is None:
                 problems.append(problem)
                 continue
-            try:
-                problem = self._assign(var, value)
-            except Exception as exc:
-                problem = f"{var.name}: {_describe(exc)}"
+            problem, value = self._check_assignment(var, value)
             if problem is not None:
                 problems.append(problem)
+            else:
+                checked.append((var.name, value))
         if problems:
-            self._refuse(f"fmi2Set{type_name}: " + "; ".join(problems) + " (the other values were set)")
+            raise ValueError(f"fmi2Set{type_name}: " + "; ".join(problems) + " (nothing was set)")
+        for name, value in checked:
+            self._values[name] = value
 
-    def _assign(self, var, value) -> Optional[str]:
-        """Set one variable; return the reason it was refused, or None."""
+    def _check_assignment(self, var, value):
+        """(problem, converted value): why ``value`` cannot be assigned to ``var``, or None."""
         name = var.name
         if var.causality == Fmi2Causality.output:
-            return f"{name} is an output and cannot be set; value ignored"
+            return f"{name} is an output and cannot be set", None
         spec = self._specs.get(name)
         if spec is None:
-            return f"{name} is not a variable of the table of {type(self).__name__}; value ignored"
+            return f"{name} is not a variable of the table of {type(self).__name__}", None
         try:
             value = _PY_TYPES[spec.type](value)
         except Exception:
-            return f"{name}: cannot convert {str(value)[:64]!r} to {spec.type}; value ignored"
+            return f"{name}: cannot convert {str(value)[:64]!r} to {spec.type}", None
         if spec.type == "String" and len(value) > _MAX_TEXT:
-            return f"{name}: a text of {len(value)} characters is too long; at most {_MAX_TEXT}; value ignored"
+            return f"{name}: a text of {len(value)} characters is too long; at most {_MAX_TEXT}", None
+        if spec.causality == "input" and spec.type == "Real":
+            try:  # the same check and message as the Python API (rocking_model.validation)
+                check_real(name, value, lo=spec.min, hi=spec.max)
+            except ValueError as exc:
+                return f"input {exc}", None
         if (spec.causality == "parameter" and self._initialized and spec.resolved_variability == "fixed"
                 and not _same(value, self._values[name])):
             return (f"parameter {name} is 'fixed' and cannot be changed after initialization (requested "
-                    f"{value!r}, keeping {self._values[name]!r}); call fmi2Reset first to change it")
-        self._values[name] = value
-        return None
+                    f"{value!r}, keeping {self._values[name]!r}); call fmi2Reset first to change it"), None
+        return None, value
 
     def get_real(self, vrs):
-        return self._get(vrs, "Real", math.nan)
+        return self._get(vrs, "Real")
 
     def get_integer(self, vrs):
-        return self._get(vrs, "Integer", 0)
+        return self._get(vrs, "Integer")
 
     def get_boolean(self, vrs):
-        return self._get(vrs, "Boolean", False)
+        return self._get(vrs, "Boolean")
 
     def get_string(self, vrs):
-        return self._get(vrs, "String", "")
+        return self._get(vrs, "String")
 
     def set_real(self, vrs, values):
         self._set(vrs, values, "Real")
@@ -790,83 +690,6 @@ def _same(a, b) -> bool:
 def _describe(exc: BaseException) -> str:
     text = str(exc)
     return text if isinstance(exc, ValueError) and text else f"{type(exc).__name__}: {text}"
-
-
-def adopt_slave_class(namespace: dict, cls: type) -> None:
-    """Called at the end of an FMU's slave script when the pythonfmu 0.7 wrapper re-executes it (at every
-    instantiation it executes the file's text in the namespace of the module of that name, with separate
-    locals, then takes the class from the module).
-
-    * The class of this file becomes the module's class, so an FMU whose module name was first loaded by
-      another FMU (another version of the package) still runs its own class.
-    * The wrapper releases one reference to the module's namespace that it never took (``Py_DECREF`` of the
-      borrowed ``PyModule_GetDict``): one reference is added here, or the namespace would be freed under the
-      functions that use it after a few instantiations and the host would crash in its garbage collector."""
-    namespace[cls.__name__] = cls
-    _add_reference(namespace)
-
-
-def _add_reference(*objects) -> bool:
-    """One more reference to each object, owned by no Python name: for references that the pythonfmu 0.7
-    wrapper releases without having taken them. False when the Python C API is out of reach (ctypes)."""
-    try:
-        import ctypes
-        for obj in objects:
-            ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
-        return True
-    except Exception:  # pragma: no cover - ctypes without the Python C API
-        return False
-
-
-def _caller_handles_fatal() -> bool:
-    """Whether the importer calling fmi2ExitInitializationMode is known to survive fmi2Fatal there: fmpy
-    (Python frames of fmpy on the stack: it raises FMICallException and the process goes on). libcosim (OSP)
-    calls from a worker thread, and an fmi2Fatal (or fmi2Error) there terminates the host process, so it and
-    any importer not recognised get fmi2OK with the error logged and every step refused (fmi2Discard)."""
-    try:
-        frame = sys._getframe(1)
-    except Exception:  # pragma: no cover - not CPython
-        return False
-    while frame is not None:
-        name = frame.f_globals.get("__name__") or ""
-        if name == "fmpy" or name.startswith("fmpy."):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def _forget_resources_path(resources) -> None:
-    """The pythonfmu 0.7 C wrapper inserts the resources folder at the front of sys.path at every
-    instantiation, only to import the slave module. Once it is imported (this runs in the slave's
-    constructor) the entries are dropped, so sys.path does not grow with instances and an FMU's folder does
-    not shadow the host's modules; the bundled package is found through its own __path__ from then on."""
-    if not resources:
-        return
-    try:
-        while resources in sys.path:
-            sys.path.remove(resources)
-    except Exception:  # pragma: no cover - never raise into the C wrapper
-        pass
-
-
-def _rebase_package(resources) -> None:
-    """Point the bundled package (and its subpackages) at this FMU's resources when the folder it was first
-    imported from is gone: FMUs with the same package digest share the imported modules, and an importer may
-    delete an FMU's extraction folder (fmpy.simulate_fmu does) while another instance of that digest lives on
-    and still imports submodules lazily. The digest guarantees the code is the same."""
-    if not resources:
-        return
-    try:
-        package = __name__.rpartition(".")[0]
-        root = os.path.join(resources, package)
-        module = sys.modules.get(package)
-        if module is None or not os.path.isdir(root) or all(os.path.isdir(p) for p in module.__path__):
-            return
-        for name, mod in list(sys.modules.items()):
-            if (name == package or name.startswith(package + ".")) and getattr(mod, "__path__", None) is not None:
-                mod.__path__[:] = [os.path.join(root, *name.split(".")[1:])]
-    except Exception:  # pragma: no cover - never raise into the C wrapper
-        pass
 
 
 def _var_type(var) -> str:
@@ -902,10 +725,6 @@ def _check_value(name: str, type_: str, value):
     return value
 
 
-class FMUInitializationError(RuntimeError):
-    """Raised out of exit_initialization_mode on invalid parameters (pythonfmu 0.7: fmi2Fatal)."""
-
-
 # ----------------------------------------------------------------------------------------------------
 # importer side
 class FMUError(RuntimeError):
@@ -919,14 +738,11 @@ class FMUError(RuntimeError):
 
 def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: float = 0.0,
             start_values: Optional[Dict[str, Any]] = None, input=None, output=None, **kwargs):
-    """``fmpy.simulate_fmu`` that fails loudly: raise :class:`FMUError` if the FMU logged an error or the
-    run ended before ``stop_time``.
-
-    pythonfmu 0.7 turns a ``do_step`` that returns False into ``fmi2Discard`` with ``fmi2Terminated``
-    true, which fmpy treats as a regular early end of the simulation (no exception). This wrapper turns on
-    the FMU's debug logging, collects its messages and raises with them. ``output_interval`` is the
-    co-simulation step (always pass it: fmpy coarsens the default one). Returns the fmpy result
-    (structured array with a 'time' column).
+    """``fmpy.simulate_fmu`` that fails loudly: raise :class:`FMUError` with the FMU's messages if a call
+    fails (fmi2Error: invalid parameters, inputs, ...), the FMU logged an error, or the run ended before
+    ``stop_time`` (a refused step: fmi2Discard with fmi2Terminated, which fmpy treats as an early end).
+    ``output_interval`` is the co-simulation step (always pass it: fmpy coarsens the default one). Returns
+    the fmpy result (structured array with a 'time' column).
     """
     import fmpy
 
@@ -940,9 +756,8 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
     try:
         result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
                                    output_interval=output_interval, start_values=dict(start_values or {}),
-                                   input=input, output=output, debug_logging=True, logger=logger, **kwargs)
+                                   input=input, output=output, logger=logger, **kwargs)
     except FMICallException as exc:
-        # invalid parameters: fmi2ExitInitializationMode fails (fmi2Fatal with pythonfmu 0.7)
         errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
         raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
     errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]

@@ -1,0 +1,1080 @@
+/* FMI 2.0 co-simulation binary that hosts a Python slave (a pythonfmu `Fmi2Slave` subclass).
+ *
+ * This file is the FMI plumbing: the state machine, the argument checks, the status of every call, the
+ * messages, the FMU states. It knows nothing of the model. The Python side (`fmi2_pyhost.py`, in the FMU's
+ * resources) loads the slave class and creates the slave; every FMI call then goes straight to the slave's
+ * pythonfmu methods (get_real, set_real, do_step, ...).
+ *
+ * Status of a call (FMI 2.0, section 2.1.3):
+ *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when the slave logged a warning meanwhile);
+ *   fmi2Discard           do_step returned False: the step was refused, the slave is where it was
+ *                         (fmi2Terminated is true until a later step succeeds, fmi2LastSuccessfulTime is the
+ *                         slave's time); the master may change inputs, restore a state and retry;
+ *   fmi2Error             an invalid argument, value or call sequence, or an exception in the slave: the
+ *                         message goes to the logger, the instance enters the error state, where only the
+ *                         getters, fmi2SetFMUstate, fmi2Reset, fmi2Terminate and fmi2FreeInstance are allowed;
+ *   fmi2Fatal             only when the Python interpreter cannot be used at all.
+ * Messages: fmi2Warning and worse always reach the logger; the others only with logging on (and their
+ * category enabled by fmi2SetDebugLogging). Every message is passed as data ("%s"), never as a format. */
+#include "pyapi.h" /* Python.h first */
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "platform.h"
+#include "uri.h"
+
+#define PYHOST_FILE "fmi2_pyhost.py"
+
+/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
+ * master's time is a sum of step sizes and may differ from ours by round-off */
+#define TIME_TOLERANCE 1e-9
+
+enum {
+    INSTANTIATED = 1 << 0,
+    INITIALIZATION_MODE = 1 << 1,
+    STEP_COMPLETE = 1 << 2,
+    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
+    TERMINATED = 1 << 4,
+    ERROR_STATE = 1 << 5,
+    FATAL_STATE = 1 << 6,
+};
+#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
+#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
+
+/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
+#define MASK_SetupExperiment INSTANTIATED
+#define MASK_EnterInitializationMode INSTANTIATED
+#define MASK_ExitInitializationMode INITIALIZATION_MODE
+#define MASK_Terminate (SIMULATING | ERROR_STATE)
+#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
+#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
+#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
+#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
+#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
+#define MASK_FreeFMUstate ANY_STATE
+#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
+#define MASK_DoStep SIMULATING
+#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
+
+static const char *state_name(int state) {
+    switch (state) {
+    case INSTANTIATED: return "instantiated";
+    case INITIALIZATION_MODE: return "in initialization mode";
+    case STEP_COMPLETE: return "simulating (step complete)";
+    case STEP_FAILED: return "simulating (last step discarded)";
+    case TERMINATED: return "terminated";
+    case ERROR_STATE: return "in the error state (call fmi2Reset or fmi2FreeInstance)";
+    default: return "in the fatal state (only fmi2FreeInstance is allowed)";
+    }
+}
+
+/* the slave's methods, bound once per slave */
+enum { M_SETUP, M_ENTER, M_EXIT, M_TERMINATE, M_DO_STEP, M_GET_REAL, M_GET_INTEGER, M_GET_BOOLEAN, M_GET_STRING,
+       M_SET_REAL, M_SET_INTEGER, M_SET_BOOLEAN, M_SET_STRING, M_GET_STATE, M_SET_STATE, M_STATE_TO_BYTES,
+       M_STATE_FROM_BYTES, M_SET_INPUT_DERIVATIVES, N_METHODS };
+static const char *method_names[N_METHODS] = {
+    "setup_experiment", "enter_initialization_mode", "exit_initialization_mode", "terminate", "do_step",
+    "get_real", "get_integer", "get_boolean", "get_string", "set_real", "set_integer", "set_boolean",
+    "set_string", "_get_fmu_state", "_set_fmu_state", "_fmu_state_to_bytes", "_fmu_state_from_bytes",
+    "set_real_input_derivatives"};
+
+#define INSTANCE_MAGIC 0x46d12a7bu
+#define STATE_MAGIC 0x5d7e0c19u
+
+typedef struct {
+    unsigned magic;
+    int state;
+    char *name;
+    fmi2CallbackLogger logger;
+    fmi2ComponentEnvironment env;
+    int logging_on;
+    char **categories; /* enabled debug categories; none listed: all */
+    size_t n_categories;
+    PyObject *host;    /* the fmi2_pyhost.Host */
+    PyObject *slave;
+    PyObject *methods[N_METHODS]; /* NULL where the slave lacks the method */
+    PyObject *strings; /* the last fmi2GetString result: keeps the returned UTF-8 buffers alive */
+    double time;       /* [s] the slave's communication point */
+    int terminated_flag;
+    fmi2Status last_step_status;
+} Instance;
+
+typedef struct {
+    unsigned magic;
+    PyObject *state;   /* the slave's state object */
+    int instance_state;
+    double time;
+    int terminated_flag;
+    fmi2Status last_step_status;
+} SavedState;
+
+/* serialized FMU state: this header, then the slave's bytes */
+#define SERIAL_MAGIC "rocking FMI2 state v1\n"
+#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
+#define SERIAL_HEADER_SIZE (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+
+/* ------------------------------------------------------------------------------------------ messages */
+static int category_enabled(const Instance *S, const char *category) {
+    if (S->n_categories == 0) return 1;
+    for (size_t i = 0; i < S->n_categories; i++)
+        if (category && strcmp(S->categories[i], category) == 0) return 1;
+    return 0;
+}
+
+static void emit(const Instance *S, fmi2Status status, const char *category, const char *text) {
+    if (!S->logger) return;
+    if (status == fmi2OK && !(S->logging_on && category_enabled(S, category))) return;
+    S->logger(S->env, S->name, status, category ? category : "logAll", "%s", text ? text : "");
+}
+
+static void logf_(const Instance *S, fmi2Status status, const char *category, const char *format, ...) {
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    emit(S, status, category, text);
+}
+#define log_error(S, ...) logf_(S, fmi2Error, "logStatusError", __VA_ARGS__)
+
+/* Forward the slave's queued messages (pythonfmu LogMsg: status, category, msg); return the worst status
+ * among them, capped at fmi2Warning (a slave reports failures by raising or by do_step returning False). */
+static fmi2Status drain_log(Instance *S) {
+    if (!S->slave) return fmi2OK;
+    PyObject *queue = py.Object_GetAttrString(S->slave, "log_queue");
+    if (!queue) {
+        py.Err_Clear();
+        return fmi2OK;
+    }
+    fmi2Status worst = fmi2OK;
+    Py_ssize_t n = py.List_Size(queue);
+    if (n < 0) {
+        py.Err_Clear();
+        n = 0;
+    }
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *item = py.List_GetItem(queue, i); /* borrowed */
+        PyObject *status = item ? py.Object_GetAttrString(item, "status") : NULL;
+        PyObject *category = item ? py.Object_GetAttrString(item, "category") : NULL;
+        PyObject *msg = item ? py.Object_GetAttrString(item, "msg") : NULL;
+        PyObject *text = msg ? py.Object_Str(msg) : NULL;
+        long s = status ? py.Long_AsLong(status) : (long)fmi2Error;
+        const char *c = category ? py.Unicode_AsUTF8(category) : NULL;
+        const char *t = text ? py.Unicode_AsUTF8(text) : NULL;
+        if (py.Err_Occurred()) py.Err_Clear();
+        if (s < fmi2OK || s > fmi2Fatal) s = fmi2Error;
+        emit(S, (fmi2Status)s, c, t ? t : "(a message that is not text)");
+        if (s > worst) worst = (fmi2Status)s;
+        if (status) py.DecRef(status);
+        if (category) py.DecRef(category);
+        if (msg) py.DecRef(msg);
+        if (text) py.DecRef(text);
+    }
+    if (n > 0 && py.List_SetSlice(queue, 0, n, NULL) < 0) py.Err_Clear();
+    py.DecRef(queue);
+    return worst > fmi2Warning ? fmi2Warning : worst;
+}
+
+/* Log the pending Python exception as an error of `function` and clear it. */
+static void log_exception(Instance *S, const char *function) {
+    PyObject *type = NULL, *value = NULL, *traceback = NULL;
+    py.Err_Fetch(&type, &value, &traceback);
+    py.Err_NormalizeException(&type, &value, &traceback);
+    PyObject *text = value ? py.Object_Str(value) : NULL;
+    PyObject *tname = type ? py.Object_GetAttrString(type, "__name__") : NULL;
+    const char *t = text ? py.Unicode_AsUTF8(text) : NULL;
+    const char *n = tname ? py.Unicode_AsUTF8(tname) : NULL;
+    if (py.Err_Occurred()) py.Err_Clear();
+    if (n && strcmp(n, "ValueError") == 0 && t && strncmp(t, function, strlen(function)) == 0)
+        log_error(S, "%s", t); /* the message names the call already */
+    else if (n && strcmp(n, "ValueError") == 0 && t && t[0])
+        log_error(S, "%s: %s", function, t);
+    else
+        log_error(S, "%s: %s: %s", function, n ? n : "exception", t ? t : "");
+    if (text) py.DecRef(text);
+    if (tname) py.DecRef(tname);
+    if (type) py.DecRef(type);
+    if (value) py.DecRef(value);
+    if (traceback) py.DecRef(traceback);
+}
+
+/* ------------------------------------------------------------------------------------------ helpers */
+static int valid(const Instance *S) { return S && S->magic == INSTANCE_MAGIC; }
+
+static fmi2Status illegal(Instance *S, const char *function) {
+    log_error(S, "%s: illegal call sequence: the instance is %s", function, state_name(S->state));
+    if (S->state != FATAL_STATE) S->state = ERROR_STATE;
+    return fmi2Error;
+}
+
+static fmi2Status fail(Instance *S, fmi2Status status) {
+    if (status == fmi2Error) S->state = ERROR_STATE;
+    if (status == fmi2Fatal) S->state = FATAL_STATE;
+    return status;
+}
+
+#define BEGIN(F)                                                                  \
+    Instance *S = (Instance *)c;                                                  \
+    if (!valid(S)) return fmi2Error;                                              \
+    if (!(S->state & MASK_##F)) return illegal(S, "fmi2" #F)
+
+#define NOT_NULL(F, p)                                                            \
+    if (!(p)) {                                                                   \
+        log_error(S, "fmi2" #F ": argument " #p " is NULL");                      \
+        return fail(S, fmi2Error);                                                \
+    }
+
+static void release_slave(Instance *S) {
+    for (int i = 0; i < N_METHODS; i++) {
+        if (S->methods[i]) py.DecRef(S->methods[i]);
+        S->methods[i] = NULL;
+    }
+    if (S->strings) py.DecRef(S->strings);
+    S->strings = NULL;
+    if (S->slave) py.DecRef(S->slave);
+    S->slave = NULL;
+}
+
+/* Take the host's current slave and bind its methods; -1 with the exception pending on failure. */
+static int bind_slave(Instance *S) {
+    release_slave(S);
+    S->slave = py.Object_GetAttrString(S->host, "slave");
+    if (!S->slave) return -1;
+    for (int i = 0; i < N_METHODS; i++) {
+        if (py.Object_HasAttrString(S->slave, method_names[i])) {
+            S->methods[i] = py.Object_GetAttrString(S->slave, method_names[i]);
+            if (!S->methods[i]) return -1;
+        }
+    }
+    return 0;
+}
+
+/* Call slave method `m` with the arguments (NULL-terminated); a new reference, or NULL with the exception
+ * logged as an error of `function`. */
+#define CALL_SLAVE(S, function, m, ...) call_slave(S, function, m, __VA_ARGS__, NULL)
+static PyObject *call_slave(Instance *S, const char *function, int m, ...) {
+    if (!S->methods[m]) {
+        log_error(S, "%s: the slave %s has no method %s", function, S->name, method_names[m]);
+        return NULL;
+    }
+    PyObject *args[4] = {NULL, NULL, NULL, NULL};
+    va_list ap;
+    va_start(ap, m);
+    for (int i = 0; i < 4; i++) {
+        args[i] = va_arg(ap, PyObject *);
+        if (!args[i]) break;
+    }
+    va_end(ap);
+    PyObject *result = py.Object_CallFunctionObjArgs(S->methods[m], args[0], args[1], args[2], args[3], NULL);
+    if (!result) log_exception(S, function);
+    return result;
+}
+
+static PyObject *vr_list(const fmi2ValueReference vr[], size_t nvr) {
+    PyObject *list = py.List_New((Py_ssize_t)nvr);
+    if (!list) return NULL;
+    for (size_t i = 0; i < nvr; i++) {
+        PyObject *v = py.Long_FromUnsignedLong(vr[i]);
+        if (!v) {
+            py.DecRef(list);
+            return NULL;
+        }
+        py.List_SetItem(list, (Py_ssize_t)i, v);
+    }
+    return list;
+}
+
+/* the slave's answer to a getter: a list of nvr items */
+static int check_list(Instance *S, const char *function, PyObject *list, size_t nvr) {
+    Py_ssize_t n = py.List_Size(list);
+    if (n < 0) py.Err_Clear();
+    if (n != (Py_ssize_t)nvr) {
+        log_error(S, "%s: the slave returned %zd values for %zu value references", function, n, nvr);
+        return -1;
+    }
+    return 0;
+}
+
+#define GIL_BEGIN PyGILState_STATE gil_ = py.GILState_Ensure()
+#define GIL_END py.GILState_Release(gil_)
+
+/* ------------------------------------------------------------------------------------------ life cycle */
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
+    if (!functions || !functions->logger) return;
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s",
+                      text);
+}
+
+static const char BOOTSTRAP[] =
+    "import hashlib, importlib.util, os, sys\n"
+    "def load_host(resources):\n"
+    "    path = os.path.join(resources, '" PYHOST_FILE "')\n"
+    "    with open(path, 'rb') as f:\n"
+    "        name = '_fmi2_pyhost_' + hashlib.sha256(f.read()).hexdigest()[:16]\n"
+    "    module = sys.modules.get(name)\n"
+    "    if module is None:\n"
+    "        spec = importlib.util.spec_from_file_location(name, path)\n"
+    "        module = importlib.util.module_from_spec(spec)\n"
+    "        sys.modules[name] = module\n"
+    "        try:\n"
+    "            spec.loader.exec_module(module)\n"
+    "        except BaseException:\n"
+    "            del sys.modules[name]\n"
+    "            raise\n"
+    "    return module\n";
+
+static PyObject *bootstrap_globals = NULL; /* lives as long as this binary is loaded (under the load lock) */
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    if (!instanceName || !instanceName[0]) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
+        return NULL;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
+                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
+                          (int)fmi2CoSimulation);
+        return NULL;
+    }
+    if (!fmuGUID) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
+        return NULL;
+    }
+    char resources[4096], why[2048];
+    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        return NULL;
+    }
+    char pyhost[4200];
+    snprintf(pyhost, sizeof pyhost, "%s/%s", resources, PYHOST_FILE);
+    if (!is_directory(resources) || !is_file(pyhost)) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                          "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
+                          is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
+                                                  : "does not exist or is not a folder");
+        return NULL;
+    }
+    int started = 0;
+    if (python_load(why, sizeof why, &started) != 0) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        return NULL;
+    }
+    Instance *S = (Instance *)calloc(1, sizeof(Instance));
+    if (!S) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    S->magic = INSTANCE_MAGIC;
+    S->state = INSTANTIATED;
+    S->name = (char *)malloc(strlen(instanceName) + 1);
+    if (S->name) strcpy(S->name, instanceName);
+    S->logger = functions ? functions->logger : NULL;
+    S->env = functions ? functions->componentEnvironment : NULL;
+    S->logging_on = loggingOn ? 1 : 0;
+    S->last_step_status = fmi2OK;
+    if (!S->name) {
+        free(S);
+        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+
+    GIL_BEGIN;
+    int ok = 0;
+    PyObject *module = NULL, *host_class = NULL, *args[5] = {NULL};
+    once_lock();
+    if (!bootstrap_globals) {
+        PyObject *g = py.Dict_New();
+        if (g && py.Dict_SetItemString(g, "__builtins__", py.Eval_GetBuiltins()) == 0) {
+            PyObject *r = py.Run_String(BOOTSTRAP, Py_file_input, g, g);
+            if (r) {
+                py.DecRef(r);
+                bootstrap_globals = g;
+                g = NULL;
+            }
+        }
+        if (g) py.DecRef(g);
+    }
+    once_unlock();
+    PyObject *load_host = bootstrap_globals ? py.Dict_GetItemString(bootstrap_globals, "load_host") : NULL;
+    if (load_host) {
+        args[0] = py.Unicode_DecodeUTF8(resources, (Py_ssize_t)strlen(resources), "surrogateescape");
+        if (args[0]) module = py.Object_CallFunctionObjArgs(load_host, args[0], NULL);
+    }
+    if (module) host_class = py.Object_GetAttrString(module, "Host");
+    if (host_class) {
+        args[1] = py.Unicode_DecodeUTF8(instanceName, (Py_ssize_t)strlen(instanceName), "replace");
+        args[2] = py.Unicode_DecodeUTF8(fmuGUID, (Py_ssize_t)strlen(fmuGUID), "replace");
+        args[3] = py.Bool_FromLong(visible);
+        args[4] = py.Bool_FromLong(started);
+        if (args[1] && args[2] && args[3] && args[4])
+            S->host = py.Object_CallFunctionObjArgs(host_class, args[0], args[1], args[2], args[3], args[4], NULL);
+    }
+    if (S->host && bind_slave(S) == 0) ok = 1;
+    if (!ok) {
+        if (py.Err_Occurred()) log_exception(S, "fmi2Instantiate");
+        else log_error(S, "fmi2Instantiate: the Python host could not be set up");
+    } else {
+        drain_log(S);
+    }
+    for (int i = 0; i < 5; i++)
+        if (args[i]) py.DecRef(args[i]);
+    if (host_class) py.DecRef(host_class);
+    if (module) py.DecRef(module);
+    if (!ok) {
+        release_slave(S);
+        if (S->host) py.DecRef(S->host);
+        S->host = NULL;
+    }
+    GIL_END;
+    if (!ok) {
+        S->magic = 0;
+        free(S->name);
+        free(S);
+        return NULL;
+    }
+    return S;
+}
+
+static void free_categories(Instance *S) {
+    for (size_t i = 0; i < S->n_categories; i++) free(S->categories[i]);
+    free(S->categories);
+    S->categories = NULL;
+    S->n_categories = 0;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return;
+    GIL_BEGIN;
+    release_slave(S);
+    if (S->host) {
+        PyObject *r = py.Object_GetAttrString(S->host, "free");
+        PyObject *done = r ? py.Object_CallFunctionObjArgs(r, NULL) : NULL;
+        if (!done) py.Err_Clear();
+        if (done) py.DecRef(done);
+        if (r) py.DecRef(r);
+        py.DecRef(S->host);
+        S->host = NULL;
+    }
+    GIL_END;
+    free_categories(S);
+    S->magic = 0;
+    free(S->name);
+    free(S);
+}
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    BEGIN(SetDebugLogging);
+    if (nCategories > 0) NOT_NULL(SetDebugLogging, categories);
+    for (size_t i = 0; i < nCategories; i++) NOT_NULL(SetDebugLogging, categories[i]);
+    free_categories(S);
+    if (nCategories > 0) {
+        S->categories = (char **)calloc(nCategories, sizeof(char *));
+        if (!S->categories) return fail(S, fmi2Error);
+        for (size_t i = 0; i < nCategories; i++) {
+            S->categories[i] = (char *)malloc(strlen(categories[i]) + 1);
+            if (!S->categories[i]) {
+                S->n_categories = i;
+                return fail(S, fmi2Error);
+            }
+            strcpy(S->categories[i], categories[i]);
+        }
+    }
+    S->n_categories = nCategories;
+    S->logging_on = loggingOn ? 1 : 0;
+    return fmi2OK;
+}
+
+/* a call of one slave method without results: status from the call and the messages it logged */
+static fmi2Status simple_call(Instance *S, PyObject *result) {
+    fmi2Status logged = drain_log(S);
+    if (!result) return fail(S, fmi2Error);
+    py.DecRef(result);
+    return logged;
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    BEGIN(SetupExperiment);
+    if (!isfinite(startTime)) {
+        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
+        return fail(S, fmi2Error);
+    }
+    if (stopTimeDefined && !(stopTime >= startTime)) {
+        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
+                  stopTime, startTime);
+        return fail(S, fmi2Error);
+    }
+    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
+        return fail(S, fmi2Error);
+    }
+    GIL_BEGIN;
+    PyObject *a = py.Float_FromDouble(startTime);
+    PyObject *b = stopTimeDefined ? py.Float_FromDouble(stopTime) : (py.IncRef(py.None), py.None);
+    PyObject *t = toleranceDefined ? py.Float_FromDouble(tolerance) : (py.IncRef(py.None), py.None);
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetupExperiment", M_SETUP, a, b, t));
+    py.DecRef(a);
+    py.DecRef(b);
+    py.DecRef(t);
+    GIL_END;
+    if (status <= fmi2Warning) {
+        S->time = startTime;
+    }
+    return status;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    BEGIN(EnterInitializationMode);
+    GIL_BEGIN;
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2EnterInitializationMode", M_ENTER, NULL));
+    GIL_END;
+    if (status <= fmi2Warning) S->state = INITIALIZATION_MODE;
+    return status;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    BEGIN(ExitInitializationMode);
+    GIL_BEGIN;
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2ExitInitializationMode", M_EXIT, NULL));
+    GIL_END;
+    if (status <= fmi2Warning) {
+        S->state = STEP_COMPLETE;
+        S->terminated_flag = 0;
+        S->last_step_status = fmi2OK;
+    }
+    return status;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    BEGIN(Terminate);
+    if (S->state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
+    GIL_BEGIN;
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2Terminate", M_TERMINATE, NULL));
+    GIL_END;
+    if (status <= fmi2Warning) S->state = TERMINATED;
+    return status;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    BEGIN(Reset);
+    GIL_BEGIN;
+    /* a new slave from the class: start values, not initialized (as fmi2Instantiate left it) */
+    PyObject *renew = py.Object_GetAttrString(S->host, "new_slave");
+    PyObject *r = renew ? py.Object_CallFunctionObjArgs(renew, NULL) : NULL;
+    fmi2Status status = fmi2OK;
+    if (!r || bind_slave(S) != 0) {
+        log_exception(S, "fmi2Reset");
+        status = fmi2Error;
+    } else {
+        status = drain_log(S);
+    }
+    if (r) py.DecRef(r);
+    if (renew) py.DecRef(renew);
+    GIL_END;
+    if (status == fmi2Error) return fail(S, fmi2Error);
+    S->state = INSTANTIATED;
+    S->time = 0.0;
+    S->terminated_flag = 0;
+    S->last_step_status = fmi2OK;
+    return status;
+}
+
+/* ------------------------------------------------------------------------------------------ values */
+static fmi2Status get_values(Instance *S, const char *function, int m, const fmi2ValueReference vr[], size_t nvr,
+                             PyObject **out) {
+    *out = NULL;
+    PyObject *vrs = vr_list(vr, nvr);
+    PyObject *result = vrs ? CALL_SLAVE(S, function, m, vrs) : NULL;
+    if (vrs) py.DecRef(vrs);
+    fmi2Status logged = drain_log(S);
+    if (!result) return fmi2Error;
+    if (check_list(S, function, result, nvr) != 0) {
+        py.DecRef(result);
+        return fmi2Error;
+    }
+    *out = result;
+    return logged;
+}
+
+#define GETTER(F, M, TYPE, CONVERT)                                                                         \
+    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
+        BEGIN(Get);                                                                                         \
+        if (nvr == 0) return fmi2OK;                                                                        \
+        NOT_NULL(F, vr);                                                                                    \
+        NOT_NULL(F, value);                                                                                 \
+        GIL_BEGIN;                                                                                          \
+        PyObject *list = NULL;                                                                              \
+        fmi2Status status = get_values(S, "fmi2" #F, M, vr, nvr, &list);                                    \
+        if (list) {                                                                                         \
+            for (size_t i = 0; i < nvr; i++) {                                                              \
+                PyObject *item = py.List_GetItem(list, (Py_ssize_t)i);                                      \
+                CONVERT;                                                                                    \
+            }                                                                                               \
+            if (py.Err_Occurred()) {                                                                        \
+                log_exception(S, "fmi2" #F);                                                                \
+                status = fmi2Error;                                                                         \
+            }                                                                                               \
+            py.DecRef(list);                                                                                \
+        }                                                                                                   \
+        GIL_END;                                                                                            \
+        return status == fmi2Error ? fail(S, status) : status;                                             \
+    }
+
+GETTER(GetReal, M_GET_REAL, fmi2Real, value[i] = py.Float_AsDouble(item))
+GETTER(GetInteger, M_GET_INTEGER, fmi2Integer, {
+    long v = py.Long_AsLong(item);
+    if (v < -2147483647L - 1 || v > 2147483647L) {
+        if (!py.Err_Occurred()) log_error(S, "fmi2GetInteger: value %ld of reference %u is not a 32-bit integer", v, vr[i]);
+        status = fmi2Error;
+    }
+    value[i] = (fmi2Integer)v;
+})
+GETTER(GetBoolean, M_GET_BOOLEAN, fmi2Boolean, {
+    int v = py.Object_IsTrue(item);
+    value[i] = v > 0 ? fmi2True : fmi2False;
+})
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    BEGIN(Get);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(GetString, vr);
+    NOT_NULL(GetString, value);
+    GIL_BEGIN;
+    PyObject *list = NULL;
+    fmi2Status status = get_values(S, "fmi2GetString", M_GET_STRING, vr, nvr, &list);
+    if (list) {
+        for (size_t i = 0; i < nvr && status != fmi2Error; i++) {
+            const char *s = py.Unicode_AsUTF8(py.List_GetItem(list, (Py_ssize_t)i));
+            if (!s) {
+                log_exception(S, "fmi2GetString");
+                status = fmi2Error;
+            }
+            value[i] = s;
+        }
+        /* the buffers live as long as the list: until the next fmi2GetString */
+        if (S->strings) py.DecRef(S->strings);
+        S->strings = list;
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
+
+static fmi2Status set_values(Instance *S, const char *function, int m, const fmi2ValueReference vr[], size_t nvr,
+                             PyObject *values) {
+    PyObject *vrs = vr_list(vr, nvr);
+    PyObject *result = (vrs && values) ? CALL_SLAVE(S, function, m, vrs, values) : NULL;
+    if (!vrs || !values) {
+        if (py.Err_Occurred()) log_exception(S, function);
+        else log_error(S, "%s: invalid value", function);
+    }
+    if (vrs) py.DecRef(vrs);
+    if (values) py.DecRef(values);
+    return simple_call(S, result);
+}
+
+#define SETTER(F, M, TYPE, MAKE)                                                                            \
+    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
+        BEGIN(Set);                                                                                         \
+        if (nvr == 0) return fmi2OK;                                                                        \
+        NOT_NULL(F, vr);                                                                                    \
+        NOT_NULL(F, value);                                                                                 \
+        GIL_BEGIN;                                                                                          \
+        PyObject *list = py.List_New((Py_ssize_t)nvr);                                                      \
+        for (size_t i = 0; list && i < nvr; i++) {                                                          \
+            PyObject *item = MAKE;                                                                          \
+            if (!item) {                                                                                    \
+                py.DecRef(list);                                                                            \
+                list = NULL;                                                                                \
+                break;                                                                                      \
+            }                                                                                               \
+            py.List_SetItem(list, (Py_ssize_t)i, item);                                                     \
+        }                                                                                                   \
+        fmi2Status status = set_values(S, "fmi2" #F, M, vr, nvr, list);                                     \
+        GIL_END;                                                                                            \
+        return status;                                                                                      \
+    }
+
+SETTER(SetReal, M_SET_REAL, fmi2Real, py.Float_FromDouble(value[i]))
+SETTER(SetInteger, M_SET_INTEGER, fmi2Integer, py.Long_FromLong(value[i]))
+SETTER(SetBoolean, M_SET_BOOLEAN, fmi2Boolean, py.Bool_FromLong(value[i] != fmi2False))
+/* strict UTF-8: a string that is not UTF-8 is an invalid value (fmi2Error), never a crash */
+SETTER(SetString, M_SET_STRING, fmi2String,
+       value[i] ? py.Unicode_DecodeUTF8(value[i], (Py_ssize_t)strlen(value[i]), "strict") : NULL)
+
+/* ------------------------------------------------------------------------------------------ stepping */
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    BEGIN(DoStep);
+    const double t = currentCommunicationPoint, h = communicationStepSize;
+    if (!(h > 0.0) || !isfinite(h)) {
+        log_error(S, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
+        return fail(S, fmi2Error);
+    }
+    if (!isfinite(t) || fabs(t - S->time) > TIME_TOLERANCE * fmax(1.0, fabs(S->time))) {
+        log_error(S, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the time of the instance, "
+                  "%.17g; each step starts where the last one ended (to go back, restore a state saved with "
+                  "fmi2GetFMUstate)", t, S->time);
+        return fail(S, fmi2Error);
+    }
+    if (!isfinite(t + h)) {
+        log_error(S, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %g is not finite", t + h);
+        return fail(S, fmi2Error);
+    }
+    GIL_BEGIN;
+    PyObject *a = py.Float_FromDouble(S->time), *b = py.Float_FromDouble(h);
+    PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
+    int accepted = result ? py.Object_IsTrue(result) : -1;
+    if (accepted < 0 && result) log_exception(S, "fmi2DoStep");
+    fmi2Status logged = drain_log(S);
+    if (a) py.DecRef(a);
+    if (b) py.DecRef(b);
+    if (result) py.DecRef(result);
+    GIL_END;
+    fmi2Status status;
+    if (accepted < 0) {
+        status = fail(S, fmi2Error);
+    } else if (accepted == 0) {
+        /* refused: the slave stayed at S->time; the master may retry, or end at the last successful time */
+        status = fmi2Discard;
+        S->state = STEP_FAILED;
+        S->terminated_flag = 1;
+    } else {
+        status = logged;
+        S->state = STEP_COMPLETE;
+        S->terminated_flag = 0;
+        S->time = t + h;
+    }
+    S->last_step_status = status;
+    return status;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return fmi2Error;
+    log_error(S, "fmi2CancelStep: no step is in progress (fmi2DoStep never returns fmi2Pending)");
+    return fail(S, fmi2Error);
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    BEGIN(SetRealInputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(SetRealInputDerivatives, vr);
+    NOT_NULL(SetRealInputDerivatives, order);
+    NOT_NULL(SetRealInputDerivatives, value);
+    GIL_BEGIN;
+    fmi2Status status;
+    if (!S->methods[M_SET_INPUT_DERIVATIVES]) {
+        log_error(S, "fmi2SetRealInputDerivatives: the slave cannot interpolate inputs (canInterpolateInputs "
+                  "= false)");
+        status = fmi2Error;
+    } else {
+        PyObject *vrs = vr_list(vr, nvr), *orders = py.List_New((Py_ssize_t)nvr),
+                 *values = py.List_New((Py_ssize_t)nvr);
+        int ok = vrs && orders && values;
+        for (size_t i = 0; ok && i < nvr; i++) {
+            PyObject *o = py.Long_FromLong(order[i]), *v = py.Float_FromDouble(value[i]);
+            if (o) py.List_SetItem(orders, (Py_ssize_t)i, o);
+            if (v) py.List_SetItem(values, (Py_ssize_t)i, v);
+            ok = o && v;
+        }
+        PyObject *result = ok ? CALL_SLAVE(S, "fmi2SetRealInputDerivatives", M_SET_INPUT_DERIVATIVES, vrs,
+                                           orders, values) : NULL;
+        if (!ok && py.Err_Occurred()) log_exception(S, "fmi2SetRealInputDerivatives");
+        if (vrs) py.DecRef(vrs);
+        if (orders) py.DecRef(orders);
+        if (values) py.DecRef(values);
+        status = simple_call(S, result);
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    (void)vr; (void)order; (void)value;
+    BEGIN(GetRealOutputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    log_error(S, "fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder "
+              "= 0)");
+    return fail(S, fmi2Error);
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return fmi2Error;
+    log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
+    return fail(S, fmi2Error);
+}
+
+/* ------------------------------------------------------------------------------------------ status */
+static fmi2Status unavailable(Instance *S, const char *function, int kind) {
+    logf_(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function, kind);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    BEGIN(Status);
+    NOT_NULL(GetStatus, value);
+    if (s != fmi2DoStepStatus) return unavailable(S, "fmi2GetStatus", (int)s);
+    *value = S->last_step_status;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    BEGIN(Status);
+    NOT_NULL(GetRealStatus, value);
+    if (s != fmi2LastSuccessfulTime) return unavailable(S, "fmi2GetRealStatus", (int)s);
+    *value = S->time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    BEGIN(Status);
+    NOT_NULL(GetIntegerStatus, value);
+    return unavailable(S, "fmi2GetIntegerStatus", (int)s);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    BEGIN(Status);
+    NOT_NULL(GetBooleanStatus, value);
+    if (s != fmi2Terminated) return unavailable(S, "fmi2GetBooleanStatus", (int)s);
+    *value = S->terminated_flag ? fmi2True : fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    BEGIN(Status);
+    NOT_NULL(GetStringStatus, value);
+    return unavailable(S, "fmi2GetStringStatus", (int)s);
+}
+
+/* ------------------------------------------------------------------------------------------ FMU state */
+static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
+    SavedState *st = (SavedState *)p;
+    if (!st || st->magic != STATE_MAGIC || !st->state) {
+        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
+        return NULL;
+    }
+    return st;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    BEGIN(GetFMUstate);
+    NOT_NULL(GetFMUstate, FMUstate);
+    SavedState *st = NULL;
+    if (*FMUstate) { /* FMI 2.0: a non-NULL state is overwritten */
+        st = saved(S, "fmi2GetFMUstate", *FMUstate);
+        if (!st) return fail(S, fmi2Error);
+    }
+    GIL_BEGIN;
+    PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
+    fmi2Status status = drain_log(S);
+    if (!state) {
+        status = fmi2Error;
+    } else {
+        if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
+        if (!st) {
+            log_error(S, "fmi2GetFMUstate: out of memory");
+            py.DecRef(state);
+            status = fmi2Error;
+        } else {
+            if (st->state) py.DecRef(st->state);
+            st->magic = STATE_MAGIC;
+            st->state = state;
+            st->instance_state = S->state;
+            st->time = S->time;
+            st->terminated_flag = S->terminated_flag;
+            st->last_step_status = S->last_step_status;
+            *FMUstate = st;
+        }
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    BEGIN(SetFMUstate);
+    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    GIL_BEGIN;
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetFMUstate", M_SET_STATE, st->state));
+    GIL_END;
+    if (status == fmi2Error) return status; /* rejected: the slave kept its state; the instance is in error */
+    S->state = st->instance_state;
+    S->time = st->time;
+    S->terminated_flag = st->terminated_flag;
+    S->last_step_status = st->last_step_status;
+    return status;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    BEGIN(FreeFMUstate);
+    if (!FMUstate || !*FMUstate) return fmi2OK;
+    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    GIL_BEGIN;
+    py.DecRef(st->state);
+    GIL_END;
+    st->state = NULL;
+    st->magic = 0;
+    free(st);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+/* the serialized form of a state: a new bytes object, or NULL with the error logged */
+static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
+    PyObject *data = CALL_SLAVE(S, function, M_STATE_TO_BYTES, st->state);
+    if (!data) return NULL;
+    char *bytes = NULL;
+    Py_ssize_t n = 0;
+    if (py.Bytes_AsStringAndSize(data, &bytes, &n) != 0) {
+        log_exception(S, function);
+        py.DecRef(data);
+        return NULL;
+    }
+    PyObject *out = py.Bytes_FromStringAndSize(NULL, (Py_ssize_t)SERIAL_HEADER_SIZE + n);
+    char *p = NULL;
+    Py_ssize_t m = 0;
+    if (!out || py.Bytes_AsStringAndSize(out, &p, &m) != 0) {
+        if (py.Err_Occurred()) log_exception(S, function);
+        py.DecRef(data);
+        if (out) py.DecRef(out);
+        return NULL;
+    }
+    int32_t fields[3] = {st->instance_state, st->terminated_flag, (int32_t)st->last_step_status};
+    memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
+    memcpy(p + SERIAL_MAGIC_SIZE, &st->time, 8);
+    memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
+    memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
+    py.DecRef(data);
+    return out;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(SerializedFMUstateSize, size);
+    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    GIL_BEGIN;
+    PyObject *out = serialize(S, "fmi2SerializedFMUstateSize", st);
+    fmi2Status status = drain_log(S);
+    if (out) {
+        char *p;
+        Py_ssize_t n = 0;
+        py.Bytes_AsStringAndSize(out, &p, &n);
+        *size = (size_t)n;
+        py.DecRef(out);
+    } else {
+        status = fmi2Error;
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(SerializeFMUstate, serializedState);
+    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    GIL_BEGIN;
+    PyObject *out = serialize(S, "fmi2SerializeFMUstate", st);
+    fmi2Status status = drain_log(S);
+    if (out) {
+        char *p;
+        Py_ssize_t n = 0;
+        py.Bytes_AsStringAndSize(out, &p, &n);
+        if ((size_t)n != size) {
+            log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zd (from "
+                      "fmi2SerializedFMUstateSize)", size, n);
+            status = fmi2Error;
+        } else {
+            memcpy(serializedState, p, size);
+        }
+        py.DecRef(out);
+    } else {
+        status = fmi2Error;
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(DeSerializeFMUstate, serializedState);
+    NOT_NULL(DeSerializeFMUstate, FMUstate);
+    int32_t fields[3];
+    double time;
+    if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
+        log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
+        return fail(S, fmi2Error);
+    }
+    memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);
+    memcpy(fields, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof fields);
+    const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
+    int single_state = fields[0] > 0 && (fields[0] & (fields[0] - 1)) == 0;
+    if (!isfinite(time) || !single_state || !(fields[0] & allowed) || (fields[1] != 0 && fields[1] != 1) ||
+        fields[2] < fmi2OK || fields[2] > fmi2Discard) {
+        log_error(S, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
+        return fail(S, fmi2Error);
+    }
+    SavedState *st = NULL;
+    if (*FMUstate) {
+        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
+        if (!st) return fail(S, fmi2Error);
+    }
+    GIL_BEGIN;
+    fmi2Status status = fmi2OK;
+    PyObject *data = py.Bytes_FromStringAndSize(serializedState + SERIAL_HEADER_SIZE,
+                                                (Py_ssize_t)(size - SERIAL_HEADER_SIZE));
+    PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
+    if (data) py.DecRef(data);
+    fmi2Status logged = drain_log(S);
+    if (!state) {
+        status = fmi2Error;
+    } else {
+        if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
+        if (!st) {
+            log_error(S, "fmi2DeSerializeFMUstate: out of memory");
+            py.DecRef(state);
+            status = fmi2Error;
+        } else {
+            if (st->state) py.DecRef(st->state);
+            st->magic = STATE_MAGIC;
+            st->state = state;
+            st->instance_state = fields[0];
+            st->time = time;
+            st->terminated_flag = fields[1];
+            st->last_step_status = (fmi2Status)fields[2];
+            *FMUstate = st;
+            status = logged;
+        }
+    }
+    GIL_END;
+    return status == fmi2Error ? fail(S, status) : status;
+}
