@@ -54,23 +54,36 @@ def _add_site_packages(config: dict) -> None:
             site.addsitedir(folder)
 
 
-def _rebase_packages(resources: str) -> None:
-    """Repoint the packages this FMU bundles when the folder they were first imported from is gone.
+def _bundled_packages(resources: str) -> list:
+    """The packages the FMU bundles next to its script (folders of the resources with an __init__.py)."""
+    return sorted(entry for entry in os.listdir(resources)
+                  if os.path.isfile(os.path.join(resources, entry, "__init__.py")) and entry.isidentifier())
+
+
+def _import_bundled(resources: str, packages: list) -> bool:
+    """Import the bundled packages (resources on sys.path for this only) or, when they are imported already,
+    repoint them at this FMU's resources if the folder they came from is gone.
 
     FMUs that bundle a package under the same (content-hashed) name share the imported modules; an importer
     may delete the extraction folder of one of them (fmpy.simulate_fmu does) while another instance lives on
-    and imports submodules lazily through the package's __path__."""
-    for entry in os.listdir(resources):
-        root = os.path.join(resources, entry)
-        module = sys.modules.get(entry)
-        if module is None or not os.path.isfile(os.path.join(root, "__init__.py")):
+    and imports submodules lazily through the package's __path__. A host may also drop the modules from
+    sys.modules (a build in the same process does): then they are imported again from here, and True is
+    returned (the slave script must then be executed again, against the new modules)."""
+    fresh = False
+    for package in packages:
+        module = sys.modules.get(package)
+        root = os.path.join(resources, package)
+        if module is None:
+            importlib.import_module(package)
+            fresh = True
             continue
         path = getattr(module, "__path__", None)
         if path is None or all(os.path.isdir(p) for p in path):
             continue
         for name, mod in list(sys.modules.items()):
-            if (name == entry or name.startswith(entry + ".")) and getattr(mod, "__path__", None) is not None:
+            if (name == package or name.startswith(package + ".")) and getattr(mod, "__path__", None) is not None:
                 mod.__path__[:] = [os.path.join(root, *name.split(".")[1:])]
+    return fresh
 
 
 def _load_slave_class(resources: str, config: dict):
@@ -79,11 +92,12 @@ def _load_slave_class(resources: str, config: dict):
     with open(script, "rb") as f:
         digest = hashlib.sha256(f.read()).hexdigest()[:16]
     name = f"{config['slave_module']}_{digest}"
-    module = sys.modules.get(name)
-    if module is None:
-        # the script imports what the FMU bundles next to it: resources on sys.path for the import only
-        sys.path.insert(0, resources)
-        try:
+    # the script imports what the FMU bundles next to it: resources on sys.path for the imports only
+    sys.path.insert(0, resources)
+    try:
+        fresh = _import_bundled(resources, _bundled_packages(resources))
+        module = None if fresh else sys.modules.get(name)
+        if module is None:
             spec = importlib.util.spec_from_file_location(name, script)
             module = importlib.util.module_from_spec(spec)
             sys.modules[name] = module
@@ -92,11 +106,11 @@ def _load_slave_class(resources: str, config: dict):
             except BaseException:
                 del sys.modules[name]
                 raise
-        finally:
-            try:
-                sys.path.remove(resources)
-            except ValueError:
-                pass
+    finally:
+        try:
+            sys.path.remove(resources)
+        except ValueError:
+            pass
     cls = getattr(module, config["slave_class"], None)
     if not isinstance(cls, type):
         raise ValueError(f"{script} defines no class {config['slave_class']!r}")
@@ -113,7 +127,6 @@ class Host:
                              f"modelDescription.xml of another FMU or of another build?)")
         if started_interpreter:
             _add_site_packages(config)
-        _rebase_packages(resources)
         self.resources = resources
         self.instance_name = instance_name
         self.visible = bool(visible)
