@@ -345,9 +345,11 @@ class FmpyMaster:
                 for c, _ in list(extra) + list(overrides) + probes:
                     if c not in slaves:
                         raise KeyError(f"no component {c!r}")
+                from .fmi import fmpy_callbacks
+
                 for s in slaves.values():
                     s.start_values.update({v: x for (c, v), x in extra.items() if c == s.name})
-                    s.fmu.instantiate()
+                    s.fmu.instantiate(callbacks=fmpy_callbacks())
                     s.fmu.setupExperiment(startTime=t0 / NS)
                     s.fmu.enterInitializationMode()
                     for name, value in s.start_values.items():
@@ -404,6 +406,43 @@ def run_fmpy(system, stop_time: float, outputs: Sequence[str], **kwargs) -> np.n
 
 # ------------------------------------------------------------------------------------------------------
 # libcosim (Open Simulation Platform) through libcosimpy
+def check_initialization(system: System, start_values: Optional[Mapping[str, Any]] = None) -> None:
+    """Instantiate and initialize every component of ``system`` once, through fmpy, with its start values
+    (and the "component.variable" overrides of ``start_values``); raise ValueError naming the component and
+    the FMU's message if one fails (invalid parameters: fmi2ExitInitializationMode returns fmi2Error).
+
+    Why: libcosim (0.10) ends its process when an FMU answers fmi2Error during initialization (the exception
+    escapes its worker thread), so `run_libcosim` checks the initialization here first, where an error is an
+    exception."""
+    from fmpy.fmi1 import FMICallException
+
+    from .fmi import collect_fmu_messages, fmpy_callbacks
+
+    extra = {tuple(k.split(".", 1)): v for k, v in (start_values or {}).items()}
+    base, t0 = _ticks(system.step_size), _ticks(system.start_time)
+    with tempfile.TemporaryDirectory(prefix="rocking_check_") as tmp:
+        for comp in system.components:
+            slave = _Slave(comp, base, Path(tmp))
+            slave.start_values.update({v: x for (c, v), x in extra.items() if c == comp.name})
+            with collect_fmu_messages() as messages:
+                try:
+                    slave.fmu.instantiate(callbacks=fmpy_callbacks())
+                except Exception as exc:
+                    raise ValueError(f"component {comp.name}: fmi2Instantiate failed: "
+                                     f"{'; '.join(m for _, _, m in messages) or exc}") from None
+                try:
+                    slave.fmu.setupExperiment(startTime=t0 / NS)
+                    slave.fmu.enterInitializationMode()
+                    for name, value in slave.start_values.items():
+                        slave.set(name, value)
+                    slave.fmu.exitInitializationMode()
+                except FMICallException as exc:
+                    text = "; ".join(m for _, _, m in messages) or "no message"
+                    raise ValueError(f"component {comp.name}: {exc}: {text}") from None
+                finally:
+                    slave.fmu.freeInstance()
+
+
 def run_libcosim(system, stop_time: float, outputs: Sequence[str],
                  inputs: Optional[Mapping[str, Callable]] = None,
                  start_values: Optional[Mapping[str, Any]] = None) -> np.ndarray:
@@ -411,7 +450,9 @@ def run_libcosim(system, stop_time: float, outputs: Sequence[str],
     return the same structured array as `FmpyMaster.run` without its first row (libcosim's observers have
     values only from the first step on: the rows are t0 + h, t0 + 2h, ...). ``inputs``
     ("component.variable" -> f(t)) are applied with an override manipulator before each step;
-    ``start_values`` ("component.variable" -> value) override the initial values."""
+    ``start_values`` ("component.variable" -> value) override the initial values. Every component is
+    initialized once through fmpy first (`check_initialization`): invalid parameters raise ValueError here
+    instead of ending the process inside libcosim."""
     if isinstance(system, System):
         with tempfile.TemporaryDirectory(prefix="rocking_osp_") as tmp:
             osp = write_osp_system_structure(system, Path(tmp) / "OspSystemStructure.xml")
@@ -425,6 +466,7 @@ def run_libcosim(system, stop_time: float, outputs: Sequence[str],
 
     osp_file = Path(system).resolve()
     system = read_osp_system_structure(osp_file)
+    check_initialization(system, start_values)
     execution = CosimExecution.from_osp_config_file(str(osp_file))
     return _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
                            CosimManipulator, CosimObserver)

@@ -73,6 +73,8 @@ from __future__ import annotations
 
 import hashlib
 import math
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
@@ -86,7 +88,7 @@ from .fmi_state import decode_state, encode_state
 from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
 
 __all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment",
-           "Fmi2Status", "FMUError", "run_fmu"]
+           "Fmi2Status", "FMUError", "run_fmu", "fmpy_callbacks", "collect_fmu_messages"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
 UNITS: Dict[str, Dict[str, int]] = {
@@ -700,6 +702,8 @@ def _var_type(var) -> str:
     return type(var).__name__
 
 
+_FMPY_LOCK = threading.Lock()
+
 #: [characters] longest text kept in a state or accepted for a String variable (a file path, a message)
 _MAX_TEXT = 4096
 #: FMI 2.0 fmi2Integer is a 32-bit int
@@ -736,6 +740,71 @@ class FMUError(RuntimeError):
         self.result = result
 
 
+class _FmpyLog:
+    """The logger of every FMU this package instantiates through fmpy, alive as long as the process.
+
+    fmpy formats the variadic FMI message in a C proxy (``fmpy.logging.addLoggerProxy``) that forwards to ONE
+    process-wide Python logger, the last one registered: after ``fmpy.simulate_fmu(logger=f)`` returns, the
+    proxy points at a ctypes closure that is freed with the run, and the next message of any FMU crashes the
+    process. `fmpy_callbacks` registers this logger again (re-pointing the proxy at a live closure) and
+    routes the messages to the sink of `collect_fmu_messages` or, outside one, to fmpy's printer."""
+
+    callbacks = None
+    raw_logger = None
+    local = threading.local()
+
+    @staticmethod
+    def dispatch(env, instance, status, category, message):
+        sink = getattr(_FmpyLog.local, "sink", None)
+        if sink is not None:
+            sink.append((int(status), _text(category), _text(message)))
+            return
+        from fmpy.fmi2 import printLogMessage
+
+        printLogMessage(env, instance, status, category, message)
+
+
+def fmpy_callbacks():
+    """The process-wide ``fmi2CallbackFunctions`` for fmpy (pass as ``FMU2Slave.instantiate(callbacks=...)``),
+    with fmpy's logger proxy pointed at it again (see `_FmpyLog`)."""
+    from ctypes import byref
+
+    from fmpy.fmi2 import (calloc, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, free)
+
+    with _FMPY_LOCK:
+        if _FmpyLog.callbacks is None:
+            _FmpyLog.raw_logger = fmi2CallbackLoggerTYPE(_FmpyLog.dispatch)
+            callbacks = fmi2CallbackFunctions()
+            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            _FmpyLog.callbacks = callbacks
+        callbacks = _FmpyLog.callbacks
+        # the proxy replaces callbacks.logger by itself: start from the raw logger every time
+        callbacks.logger = _FmpyLog.raw_logger
+        try:
+            from fmpy.logging import addLoggerProxy
+            addLoggerProxy(byref(callbacks))
+        except Exception:  # pragma: no cover - fmpy without its logging library: the raw format arrives
+            pass
+        return callbacks
+
+
+@contextmanager
+def collect_fmu_messages():
+    """Collect the messages of the FMUs run through fmpy in this thread into a list of
+    (status, category, text), yielded; fmpy's default callbacks and `fmpy_callbacks` both end here."""
+    fmpy_callbacks()
+    previous = getattr(_FmpyLog.local, "sink", None)
+    messages: List[tuple] = []
+    _FmpyLog.local.sink = messages
+    try:
+        yield messages
+    finally:
+        _FmpyLog.local.sink = previous
+        fmpy_callbacks()
+
+
 def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: float = 0.0,
             start_values: Optional[Dict[str, Any]] = None, input=None, output=None, **kwargs):
     """``fmpy.simulate_fmu`` that fails loudly: raise :class:`FMUError` with the FMU's messages if a call
@@ -745,21 +814,16 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
     the fmpy result (structured array with a 'time' column).
     """
     import fmpy
-
-    messages: List[tuple] = []
-
-    def logger(env, instance, status, category, message):
-        messages.append((int(status), _text(category), _text(message)))
-
     from fmpy.fmi1 import FMICallException
 
-    try:
-        result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
-                                   output_interval=output_interval, start_values=dict(start_values or {}),
-                                   input=input, output=output, logger=logger, **kwargs)
-    except FMICallException as exc:
-        errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
-        raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
+    with collect_fmu_messages() as messages:
+        try:
+            result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
+                                       output_interval=output_interval, start_values=dict(start_values or {}),
+                                       input=input, output=output, **kwargs)
+        except FMICallException as exc:
+            errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
+            raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
     errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
     t_last = float(result["time"][-1])
     early = t_last < stop_time and not math.isclose(t_last, stop_time, rel_tol=1e-9, abs_tol=1e-12)

@@ -104,10 +104,10 @@ def test_source_fmu_drives_block_in_libcosim(fmus, tmp_path):
 
 
 def test_invalid_parameter_fails_the_run_and_the_process_survives(fmus, tmp_path):
-    """libcosim terminates its process when fmi2ExitInitializationMode returns fmi2Fatal (an exception escapes
-    its worker thread), so under libcosim the FMU answers fmi2OK, logs the error and refuses every step:
-    libcosim reports the failed step, and the process goes on (checked in a subprocess, where an abort
-    would show as a signal)."""
+    """With invalid parameters the FMU answers fmi2Error in fmi2ExitInitializationMode. libcosim ends its process
+    on an error during initialization (an exception escapes its worker thread), so run_libcosim initializes
+    every component through fmpy first and raises ValueError with the FMU's message; the process goes on and
+    the next run works (checked in a subprocess, where an abort would show as a signal)."""
     import subprocess
     import sys
     import textwrap
@@ -119,8 +119,14 @@ def test_invalid_parameter_fails_the_run_and_the_process_survives(fmus, tmp_path
             run_libcosim(System([Component("m", fmu, start_values={{"b": -0.2}})], [], step_size=0.01), 0.1,
                          ["m.phi"])
             print("NOT REFUSED")
-        except RuntimeError as exc:
-            print("REFUSED", "failed" in str(exc))
+        except ValueError as exc:
+            print("REFUSED", exc)
+        try:
+            run_libcosim(System([Component("m", fmu)], [], step_size=0.01), 0.1, ["m.phi"],
+                         start_values={{"m.e_N": 1.5}})
+            print("NOT REFUSED")
+        except ValueError as exc:
+            print("REFUSED", exc)
         out = run_libcosim(System([Component("m", fmu, start_values={{"phi_0": 0.01}})], [], step_size=0.01),
                            0.1, ["m.phi"])
         print("ROWS", len(out))
@@ -128,5 +134,7 @@ def test_invalid_parameter_fails_the_run_and_the_process_survives(fmus, tmp_path
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                           cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "REFUSED True" in proc.stdout and "ROWS 10" in proc.stdout, proc.stdout
-    assert "b = -0.2 is out of range; allowed range [1e-06, 1000]" in proc.stderr + proc.stdout
+    assert "NOT REFUSED" not in proc.stdout and "ROWS 10" in proc.stdout, proc.stdout
+    assert "REFUSED component m: " in proc.stdout, proc.stdout
+    assert "b = -0.2 is out of range; allowed range [1e-06, 1000]" in proc.stdout
+    assert "e_N = 1.5 is out of range; allowed range [0, 1]" in proc.stdout
