@@ -338,7 +338,7 @@ static const char BOOTSTRAP[] =
     "            raise\n"
     "    return module\n";
 
-static PyObject *bootstrap_globals = NULL; /* lives as long as this binary is loaded (under the load lock) */
+static PyObject *bootstrap_globals = NULL; /* lives as long as this binary is loaded (set under the GIL) */
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
@@ -398,20 +398,23 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     GIL_BEGIN;
     int ok = 0;
     PyObject *module = NULL, *host_class = NULL, *args[5] = {NULL};
-    once_lock();
+    /* under the GIL only: a second lock here could deadlock with a thread that holds it while Python code
+     * releases the GIL. Two threads may both run the bootstrap; the first result is kept (the check and the
+     * assignment run without a Python call between them, so under the GIL). */
     if (!bootstrap_globals) {
         PyObject *g = py.Dict_New();
         if (g && py.Dict_SetItemString(g, "__builtins__", py.Eval_GetBuiltins()) == 0) {
             PyObject *r = py.Run_String(BOOTSTRAP, Py_file_input, g, g);
             if (r) {
                 py.DecRef(r);
-                bootstrap_globals = g;
-                g = NULL;
+                if (!bootstrap_globals) {
+                    bootstrap_globals = g;
+                    g = NULL;
+                }
             }
         }
         if (g) py.DecRef(g);
     }
-    once_unlock();
     PyObject *load_host = bootstrap_globals ? py.Dict_GetItemString(bootstrap_globals, "load_host") : NULL;
     if (load_host) {
         args[0] = py.Unicode_DecodeUTF8(resources, (Py_ssize_t)strlen(resources), "surrogateescape");
