@@ -885,6 +885,25 @@ static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
     return st;
 }
 
+/* Put the slave's `state` (a new reference, or NULL after a logged failure) with the FMI fields into `st`
+ * (a new SavedState when NULL) and hand it out through `out`; fmi2Error when there is nothing to keep. */
+static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, PyObject *state,
+                             const SavedState *fields, fmi2FMUstate *out) {
+    if (!state) return fmi2Error;
+    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
+    if (!st) {
+        log_error(S, "%s: out of memory", function);
+        py.DecRef(state);
+        return fmi2Error;
+    }
+    if (st->state) py.DecRef(st->state);
+    *st = *fields;
+    st->magic = STATE_MAGIC;
+    st->state = state;
+    *out = st;
+    return fmi2OK;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     BEGIN(GetFMUstate);
     NOT_NULL(GetFMUstate, FMUstate);
@@ -896,25 +915,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GIL_BEGIN;
     PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
     fmi2Status status = drain_log(S);
-    if (!state) {
-        status = fmi2Error;
-    } else {
-        if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-        if (!st) {
-            log_error(S, "fmi2GetFMUstate: out of memory");
-            py.DecRef(state);
-            status = fmi2Error;
-        } else {
-            if (st->state) py.DecRef(st->state);
-            st->magic = STATE_MAGIC;
-            st->state = state;
-            st->instance_state = S->state;
-            st->time = S->time;
-            st->terminated_flag = S->terminated_flag;
-            st->last_step_status = S->last_step_status;
-            *FMUstate = st;
-        }
-    }
+    const SavedState fields = {0, NULL, S->state, S->time, S->terminated_flag, S->last_step_status};
+    if (keep_state(S, "fmi2GetFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;
 }
@@ -1031,18 +1033,18 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     BEGIN(SetFMUstate);
     NOT_NULL(DeSerializeFMUstate, serializedState);
     NOT_NULL(DeSerializeFMUstate, FMUstate);
-    int32_t fields[3];
+    int32_t header[3];
     double time;
     if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
         log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
         return fail(S, fmi2Error);
     }
     memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);
-    memcpy(fields, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof fields);
+    memcpy(header, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof header);
     const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
-    int single_state = fields[0] > 0 && (fields[0] & (fields[0] - 1)) == 0;
-    if (!isfinite(time) || !single_state || !(fields[0] & allowed) || (fields[1] != 0 && fields[1] != 1) ||
-        fields[2] < fmi2OK || fields[2] > fmi2Discard) {
+    int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
+    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
+        header[2] < fmi2OK || header[2] > fmi2Discard) {
         log_error(S, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
         return fail(S, fmi2Error);
     }
@@ -1052,32 +1054,13 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         if (!st) return fail(S, fmi2Error);
     }
     GIL_BEGIN;
-    fmi2Status status = fmi2OK;
     PyObject *data = py.Bytes_FromStringAndSize(serializedState + SERIAL_HEADER_SIZE,
                                                 (Py_ssize_t)(size - SERIAL_HEADER_SIZE));
     PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
     if (data) py.DecRef(data);
-    fmi2Status logged = drain_log(S);
-    if (!state) {
-        status = fmi2Error;
-    } else {
-        if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-        if (!st) {
-            log_error(S, "fmi2DeSerializeFMUstate: out of memory");
-            py.DecRef(state);
-            status = fmi2Error;
-        } else {
-            if (st->state) py.DecRef(st->state);
-            st->magic = STATE_MAGIC;
-            st->state = state;
-            st->instance_state = fields[0];
-            st->time = time;
-            st->terminated_flag = fields[1];
-            st->last_step_status = (fmi2Status)fields[2];
-            *FMUstate = st;
-            status = logged;
-        }
-    }
+    fmi2Status status = drain_log(S);
+    const SavedState fields = {0, NULL, header[0], time, header[1], (fmi2Status)header[2]};
+    if (keep_state(S, "fmi2DeSerializeFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;
 }
