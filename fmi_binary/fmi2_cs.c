@@ -744,7 +744,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         return fail(S, fmi2Error);
     }
     GIL_BEGIN;
-    PyObject *a = py.Float_FromDouble(S->time), *b = py.Float_FromDouble(h);
+    PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
     PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
     int accepted = result ? py.Object_IsTrue(result) : -1;
     if (accepted < 0 && result) log_exception(S, "fmi2DoStep");

@@ -747,15 +747,19 @@ class _FmpyLog:
     process-wide Python logger, the last one registered: after ``fmpy.simulate_fmu(logger=f)`` returns, the
     proxy points at a ctypes closure that is freed with the run, and the next message of any FMU crashes the
     process. `fmpy_callbacks` registers this logger again (re-pointing the proxy at a live closure) and
-    routes the messages to the sink of `collect_fmu_messages` or, outside one, to fmpy's printer."""
+    routes the messages: to the sink given to `fmpy_callbacks` (through the componentEnvironment of its
+    callbacks), else to the sink of `collect_fmu_messages` in this thread, else to fmpy's printer."""
 
     callbacks = None
     raw_logger = None
     local = threading.local()
+    sinks: Dict[int, list] = {}   # componentEnvironment -> list of (status, category, text)
 
     @staticmethod
     def dispatch(env, instance, status, category, message):
-        sink = getattr(_FmpyLog.local, "sink", None)
+        sink = _FmpyLog.sinks.get(env) if env else None
+        if sink is None:
+            sink = getattr(_FmpyLog.local, "sink", None)
         if sink is not None:
             sink.append((int(status), _text(category), _text(message)))
             return
@@ -764,9 +768,10 @@ class _FmpyLog:
         printLogMessage(env, instance, status, category, message)
 
 
-def fmpy_callbacks():
-    """The process-wide ``fmi2CallbackFunctions`` for fmpy (pass as ``FMU2Slave.instantiate(callbacks=...)``),
-    with fmpy's logger proxy pointed at it again (see `_FmpyLog`)."""
+def fmpy_callbacks(sink: Optional[list] = None):
+    """``fmi2CallbackFunctions`` for fmpy (pass as ``FMU2Slave.instantiate(callbacks=...)``), with fmpy's
+    logger proxy pointed at the process-wide logger again (see `_FmpyLog`). With ``sink``, new callbacks
+    whose messages are appended to it as (status, category, text); keep them alive with the instance."""
     from ctypes import byref
 
     from fmpy.fmi2 import (calloc, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
@@ -787,7 +792,16 @@ def fmpy_callbacks():
             addLoggerProxy(byref(callbacks))
         except Exception:  # pragma: no cover - fmpy without its logging library: the raw format arrives
             pass
-        return callbacks
+        if sink is None:
+            return callbacks
+        own = fmi2CallbackFunctions()
+        own.logger = callbacks.logger   # the proxy, which formats and calls `dispatch`
+        own.allocateMemory = callbacks.allocateMemory
+        own.freeMemory = callbacks.freeMemory
+        token = len(_FmpyLog.sinks) + 1
+        own.componentEnvironment = token
+        _FmpyLog.sinks[token] = sink
+        return own
 
 
 @contextmanager

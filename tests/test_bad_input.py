@@ -1,6 +1,7 @@
 """Bad input (issue 5): every case through the Python API (ValueError naming the variable and its allowed
-range) and through the FMUs driven by fmpy's FMU2Slave (error log with the same message, fmi2Discard of the
-step; nothing crashes, the instance can be reset or freed and other instances keep working)."""
+range) and through the FMUs driven by fmpy's FMU2Slave (issue 13: fmi2Error with the same message, which
+reaches the logger with logging off; nothing crashes, the instance can be reset, restored or freed and other
+instances keep working)."""
 from __future__ import annotations
 
 import dataclasses
@@ -14,14 +15,12 @@ import pytest
 fmpy = pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
 from fmpy import extract, read_model_description  # noqa: E402
-from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,  # noqa: E402
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
+from fmu_instance import Instance  # noqa: E402
 from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-FMI2_ERROR, FMI2_DISCARD, FMI2_FATAL = 3, 2, 4
+FMI2_ERROR, FMI2_DISCARD = 3, 2
 RIGID, FLEX = "RigidRockingBlock", "FlexibleRockingOscillator"
 
 
@@ -34,83 +33,6 @@ def fmus(tmp_path_factory):
     dest = tmp_path_factory.mktemp("fmus")
     paths = build.build_all(dest, names=[RIGID, FLEX])
     return {p.stem: (p, read_model_description(str(p)), extract(str(p))) for p in paths}
-
-
-class Instance:
-    """One FMU2Slave instance with a logger that records (status, message)."""
-
-    def __init__(self, fmu, name="instance"):
-        path, md, unzip = fmu
-        self.vars = {v.name: v for v in md.modelVariables}
-        self.messages: list[tuple[int, str]] = []
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(self._log)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        # no fmpy.logging.addLoggerProxy: its proxy forwards to one process-wide Python logger (the last one
-        # registered), so the messages of several instances would end up in one list. pythonfmu passes the
-        # message itself as the format string, so the plain callback gets the text.
-        self._cb = cb  # keep the callbacks alive
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=True, callbacks=cb)
-        self.t = 0.0
-
-    def _log(self, env, instance, status, category, message):
-        self.messages.append((int(status), message.decode("utf-8", "replace")))
-
-    def set(self, **values):
-        for name, value in values.items():
-            var = self.vars[name]
-            if var.type == "Real":
-                self.fmu.setReal([var.valueReference], [float(value)])
-            elif var.type == "Integer":
-                self.fmu.setInteger([var.valueReference], [int(value)])
-            else:
-                self.fmu.setBoolean([var.valueReference], [bool(value)])
-
-    def get(self, *names):
-        out = []
-        for name in names:
-            var = self.vars[name]
-            getter = {"Real": self.fmu.getReal, "Integer": self.fmu.getInteger,
-                      "Boolean": self.fmu.getBoolean}[var.type]
-            out.append(getter([var.valueReference])[0])
-        return out
-
-    def init(self, t0=0.0, **params):
-        self.fmu.setupExperiment(startTime=t0)
-        self.fmu.enterInitializationMode()
-        self.set(**params)
-        self.fmu.exitInitializationMode()
-        self.t = t0
-
-    def step(self, dt=0.01, t=None):
-        """doStep; return the status (0 OK, 2 discard) and advance self.t on success."""
-        t = self.t if t is None else t
-        try:
-            self.fmu.doStep(t, dt)
-        except FMICallException as exc:
-            return exc.status
-        self.t = t + dt
-        return 0
-
-    def errors(self):
-        return [m for s, m in self.messages if s == FMI2_ERROR]
-
-    def fatal_init(self, **params):
-        """init() with invalid parameters: pythonfmu 0.7 can only report fmi2Fatal from
-        fmi2ExitInitializationMode; returns the fatal message (it carries the error text)."""
-        with pytest.raises(FMICallException) as info:
-            self.init(**params)
-        assert info.value.status == FMI2_FATAL
-        fatal = [m for s, m in self.messages if s == FMI2_FATAL]
-        assert len(fatal) == 1, self.messages
-        return fatal[0]
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def python_simulator(kind, params):
@@ -192,12 +114,12 @@ def test_bad_parameter_python_api(kind, params, name, allowed):
 def test_bad_parameter_fmu(fmus, kind, params, name, allowed):
     py_msg = python_error(kind, params)
     inst = Instance(fmus[kind])
-    fatal = inst.fatal_init(**params)  # fmi2ExitInitializationMode fails: fmpy raises
-    assert f"invalid parameters: {py_msg}" in fatal
-    # the instance stays safe to call: every step is discarded with the same message
-    for _ in range(2):
-        assert inst.step() == FMI2_DISCARD
-    assert inst.errors()[-1] == f"invalid parameters: {py_msg}"
+    msg = inst.error_init(**params)  # fmi2ExitInitializationMode fails: fmpy raises
+    assert msg == f"fmi2ExitInitializationMode: invalid parameters: {py_msg}"
+    # the instance is in the error state: a step is an illegal call, answered with fmi2Error and a message
+    assert inst.step() == FMI2_ERROR
+    assert "fmi2DoStep: illegal call sequence" in inst.errors()[-1]
+    assert inst.get("phi") == [0.0]  # getters still serve
     # the instance can be reset and used with valid parameters
     inst.fmu.reset()
     inst.init(phi_0=0.05)
@@ -235,11 +157,14 @@ def test_bad_step_size(fmus, kind, dt):
     inst = Instance(fmus[kind])
     inst.init(phi_0=0.02)
     assert inst.step() == 0
+    saved = inst.state()
     before = inst.get("phi", "phi_dot", "energy")
-    assert inst.step(dt) == FMI2_DISCARD
-    assert inst.errors() == [f"fmi2DoStep: communicationStepSize = {dt!r} is invalid; allowed range (0, inf)"]
+    assert inst.step(dt) == FMI2_ERROR  # an invalid argument
+    assert inst.errors() == [f"fmi2DoStep: communicationStepSize = {dt:g} is invalid; allowed range (0, inf)"]
     assert inst.get("phi", "phi_dot", "energy") == before  # the state is unchanged
-    assert inst.step() == 0  # the step can be retried
+    inst.fmu.setFMUState(saved)  # out of the error state through a saved state
+    assert inst.step() == 0
+    inst.fmu.freeFMUState(saved)
     inst.free()
 
 
@@ -265,13 +190,17 @@ def test_communication_point_must_follow_the_last_one(fmus, kind, offset):
     for _ in range(3):
         assert inst.step() == 0
     before = inst.get("phi", "phi_dot", "energy")
+    saved = inst.state()
     t_bad = inst.t + offset
-    assert inst.step(0.01, t=t_bad) == FMI2_DISCARD
+    assert inst.step(0.01, t=t_bad) == FMI2_ERROR
     (msg,) = inst.errors()
-    assert msg.startswith(f"fmi2DoStep: currentCommunicationPoint = {t_bad!r} does not match the FMU time "
-                          f"{inst.t!r}; allowed value {inst.t!r}")
+    assert msg.startswith("fmi2DoStep: currentCommunicationPoint = "), msg
+    assert math.isnan(offset) or float(msg.split(" = ")[1].split()[0]) == t_bad
+    assert f"does not match the time of the instance, {inst.t:.17g}" in msg
     assert inst.get("phi", "phi_dot", "energy") == before
+    inst.fmu.setFMUState(saved)
     assert inst.step() == 0
+    inst.fmu.freeFMUState(saved)
     inst.free()
 
 
@@ -287,13 +216,16 @@ def test_non_finite_ag(fmus, kind, ag):
     inst = Instance(fmus[kind])
     inst.init()
     assert inst.step() == 0
-    inst.set(ag=ag)
-    assert inst.step() == FMI2_DISCARD
+    saved = inst.state()
+    assert inst.try_set(ag=ag) == FMI2_ERROR  # an invalid value: refused where it is set
     # (the allowed range in the FMU's message is the input's declared min/max)
     (msg,) = inst.errors()
-    assert msg.startswith(f"input ag = {ag!r} at t = 0.01 is invalid: ag = {ag!r} is not finite; allowed range")
+    assert msg == f"fmi2SetReal: input {py_msg} (nothing was set)"
+    assert inst.get("ag") == [0.0]
+    inst.fmu.setFMUState(saved)
     inst.set(ag=0.0)  # a valid input: the step goes through
     assert inst.step() == 0 and math.isclose(inst.t, 0.02)
+    inst.fmu.freeFMUState(saved)
     inst.free()
 
 
@@ -305,13 +237,14 @@ def test_fixed_parameter_changed_after_initialization(fmus, kind, name, value):
     inst.init(phi_0=0.02)
     assert inst.step() == 0
     old = inst.get(name)[0]
-    inst.set(**{name: value})
+    assert inst.try_set(**{name: value}) == FMI2_ERROR
     assert inst.get(name) == [old]  # rejected, the old value is kept
     (msg,) = inst.errors()
     assert f"parameter {name} is 'fixed' and cannot be changed after initialization (requested {value!r}" in msg
-    assert inst.step() == FMI2_DISCARD  # the next step is discarded once, so the mistake is not silent
-    assert inst.errors()[-1].endswith(msg)
-    assert inst.step() == 0
+    assert inst.step() == FMI2_ERROR  # the error state: only fmi2Reset, a saved state or the getters
+    inst.fmu.reset()
+    inst.init(phi_0=0.02, **{name: value})  # a fixed parameter is changed by starting again
+    assert inst.get(name) == [value] and inst.step() == 0
     inst.free()
 
 
@@ -350,16 +283,16 @@ def test_errors_do_not_disturb_other_instances(fmus):
         good.init(phi_0=0.0)
         bad = [Instance(fmus[RIGID], "bad"), Instance(fmus[FLEX], "bad2")] if with_bad else []
         if with_bad:
-            bad[0].fatal_init(b=-1.0)
-            bad[1].fatal_init(EI=0.0)
+            bad[0].error_init(b=-1.0)
+            bad[1].error_init(EI=0.0)
         out = []
         for k, ag in enumerate(table):
             good.set(ag=ag)
             assert good.step() == 0
             out.append(good.get("phi", "phi_dot", "x", "y", "energy", "impacts"))
             for inst in bad:
-                inst.set(ag=NAN if k % 3 == 0 else ag)
-                assert inst.step(dt=0.0 if k % 2 else 0.01) == FMI2_DISCARD
+                assert inst.try_set(ag=NAN if k % 3 == 0 else ag) == FMI2_ERROR
+                assert inst.step(dt=0.0 if k % 2 else 0.01) == FMI2_ERROR
         for inst in bad:
             inst.free()  # freeing a failed instance is fine
         good.free()
@@ -370,12 +303,16 @@ def test_errors_do_not_disturb_other_instances(fmus):
 
 def test_reset_after_error_brings_back_the_start_values(fmus):
     inst = Instance(fmus[FLEX])
-    inst.fatal_init(zeta=-1.0)
-    assert inst.step() == FMI2_DISCARD
+    inst.error_init(zeta=-1.0)
+    assert inst.step() == FMI2_ERROR
     inst.fmu.reset()
+    inst.fmu.setupExperiment(startTime=0.0)
+    inst.fmu.enterInitializationMode()  # (FMI 2.0: no getters before initialization mode)
     assert inst.get("zeta") == [0.02]  # start value again
-    inst.init(phi_0=0.01)
-    assert inst.errors() == [m for m in inst.errors() if "zeta" in m]  # no new error
+    inst.set(phi_0=0.01)
+    inst.fmu.exitInitializationMode()
+    n_errors = len(inst.errors())
     for _ in range(5):
         assert inst.step() == 0
+    assert len(inst.errors()) == n_errors  # no new error
     inst.free()

@@ -1,9 +1,9 @@
 """A non-Python FMI host: tests/c/host.c dlopens the FMU binary, instantiates it with the resources of the
 unzipped FMU (file:// URI), sets ag, steps 1 s and prints phi; the result must equal fmpy's.
 
-pythonfmu's binary embeds Python without linking libpython, so the host runs with libpython in LD_PRELOAD and
-PYTHONPATH pointing at the site-packages that hold numpy and scipy (see the README, "Loading the FMUs in a
-non-Python host"). Skipped without a C compiler or a shared libpython.
+The FMU's binary loads libpython itself (the path recorded at build time, or ROCKING_FMU_LIBPYTHON) and
+finds numpy through the build environment's site-packages: the host runs with an empty environment (only
+PATH and HOME), without LD_PRELOAD or PYTHONPATH. Skipped without a C compiler or a shared libpython.
 """
 from __future__ import annotations
 
@@ -46,19 +46,6 @@ def libpython() -> Path | None:
     return None
 
 
-def python_path() -> str:
-    """Folders that hold numpy and scipy (the FMU's own package is in its resources)."""
-    import numpy
-    import scipy
-
-    folders = []
-    for module in (numpy, scipy):
-        folder = str(Path(module.__file__).resolve().parents[1])
-        if folder not in folders:
-            folders.append(folder)
-    return os.pathsep.join(folders)
-
-
 @pytest.fixture(scope="module")
 def host(tmp_path_factory) -> Path:
     headers = Path(fmpy.__file__).parent / "c-code"
@@ -79,19 +66,15 @@ def fmus(tmp_path_factory):
     return {p.stem: p for p in module.build_all(dest, names=["RigidRockingBlock", "FlexibleRockingOscillator"])}
 
 
-def run_host(host: Path, fmu: Path, tmp: Path, ag: float, t_end: float, dt: float, preload=True):
-    lib = libpython()
-    if lib is None:
+def run_host(host: Path, fmu: Path, tmp: Path, ag: float, t_end: float, dt: float, **env_extra):
+    if libpython() is None:
         pytest.skip("this Python has no shared libpython (built without --enable-shared)")
     unzip = tmp / fmu.stem
     with zipfile.ZipFile(fmu) as zf:
         zf.extractall(unzip)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "PYTHONHOME")}
-    env["PYTHONPATH"] = python_path()
-    if preload:
-        env["LD_PRELOAD"] = str(lib)
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": os.environ.get("HOME", "/"), **env_extra}
     return subprocess.run([str(host), str(unzip), md.coSimulation.modelIdentifier, md.guid, str(vr["ag"]),
                            str(vr["phi"]), repr(ag), repr(t_end), repr(dt)], env=env, capture_output=True,
                           text=True, timeout=120)
@@ -110,6 +93,15 @@ def test_c_host_matches_fmpy(host, fmus, tmp_path, name, ag):
     np.testing.assert_allclose(rows[:, 1], ref["phi"][1:], rtol=0, atol=1e-12)
 
 
-def test_without_libpython_preloaded_the_binary_does_not_load(host, fmus, tmp_path):
-    proc = run_host(host, fmus["RigidRockingBlock"], tmp_path, 3.0, 0.1, 0.01, preload=False)
-    assert proc.returncode == 2 and "undefined symbol" in proc.stderr
+def test_libpython_override(host, fmus, tmp_path):
+    """ROCKING_FMU_LIBPYTHON replaces the recorded libpython: a missing file is a clear fmi2Instantiate
+    failure (NULL, the message names the file and the variable); the real library works."""
+    missing = tmp_path / "no" / "libpython3.so"
+    proc = run_host(host, fmus["RigidRockingBlock"], tmp_path, 3.0, 0.1, 0.01, ROCKING_FMU_LIBPYTHON=str(missing))
+    assert proc.returncode == 3, proc.stderr
+    assert f"cannot load the Python library {missing}" in proc.stderr and "ROCKING_FMU_LIBPYTHON" in proc.stderr
+    assert "fmi2Instantiate failed" in proc.stderr
+    proc = run_host(host, fmus["RigidRockingBlock"], tmp_path / "ok", 3.0, 0.1, 0.01,
+                    ROCKING_FMU_LIBPYTHON=str(libpython()))
+    assert proc.returncode == 0, proc.stderr
+    assert len(proc.stdout.split()) == 10

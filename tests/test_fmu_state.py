@@ -13,8 +13,8 @@ fmpy = pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,  # noqa: E402
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+from fmu_instance import Instance  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 FMI2_ERROR, FMI2_DISCARD = 3, 2
@@ -30,74 +30,6 @@ def fmus(tmp_path_factory):
     dest = tmp_path_factory.mktemp("fmus")
     paths = build.build_all(dest, names=[RIGID, FLEX])
     return {p.stem: (p, read_model_description(str(p)), extract(str(p))) for p in paths}
-
-
-class Instance:
-    """One FMU2Slave instance with a logger that records (status, message)."""
-
-    def __init__(self, fmu, name="instance"):
-        path, md, unzip = fmu
-        self.vars = {v.name: v for v in md.modelVariables}
-        self.messages: list[tuple[int, str]] = []
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(self._log)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        # no fmpy.logging.addLoggerProxy: its proxy forwards to one process-wide Python logger (the last one
-        # registered), so the messages of several instances would end up in one list. pythonfmu passes the
-        # message itself as the format string, so the plain callback gets the text.
-        self._cb = cb  # keep the callbacks alive
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=True, callbacks=cb)
-        self.t = 0.0
-
-    def _log(self, env, instance, status, category, message):
-        self.messages.append((int(status), message.decode("utf-8", "replace")))
-
-    def set(self, **values):
-        for name, value in values.items():
-            var = self.vars[name]
-            if var.type == "Real":
-                self.fmu.setReal([var.valueReference], [float(value)])
-            elif var.type == "Integer":
-                self.fmu.setInteger([var.valueReference], [int(value)])
-            else:
-                self.fmu.setBoolean([var.valueReference], [bool(value)])
-
-    def get(self, *names):
-        out = []
-        for name in names:
-            var = self.vars[name]
-            getter = {"Real": self.fmu.getReal, "Integer": self.fmu.getInteger,
-                      "Boolean": self.fmu.getBoolean}[var.type]
-            out.append(getter([var.valueReference])[0])
-        return out
-
-    def init(self, t0=0.0, **params):
-        self.fmu.setupExperiment(startTime=t0)
-        self.fmu.enterInitializationMode()
-        self.set(**params)
-        self.fmu.exitInitializationMode()
-        self.t = t0
-
-    def step(self, dt=0.01, t=None):
-        """doStep; return the status (0 OK, 2 discard) and advance self.t on success."""
-        t = self.t if t is None else t
-        try:
-            self.fmu.doStep(t, dt)
-        except FMICallException as exc:
-            return exc.status
-        self.t = t + dt
-        return 0
-
-    def errors(self):
-        return [m for s, m in self.messages if s == FMI2_ERROR]
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
-
 
 
 OUT = {RIGID: ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"),
@@ -177,50 +109,50 @@ def test_save_step_restore_step_is_bit_identical(fmus, scene, scheme):
 
 
 def test_state_captures_status_flags_and_parameters(fmus):
-    """A state taken before a rejected late parameter change does not carry the pending error; one taken
-    after it does; the restored state brings back the parameter values and the communication time."""
+    """A state restores the parameter values, the communication time and the FMI state: one taken before a
+    refused late parameter change brings the instance out of the error state; a state restored into an
+    instance initialized at another time brings its own time along."""
     inst = Instance(fmus[RIGID])
     inst.init(phi_0=0.05, b=0.25)
     drive(inst, RIGID, 0, 5, 0.0)
     clean = inst.fmu.getFMUstate()
-    inst.set(b=0.3)  # rejected: error logged, next step discarded
-    pending = inst.fmu.getFMUstate()
+    assert inst.try_set(b=0.3) == FMI2_ERROR  # a fixed parameter: refused, the error state
+    assert inst.step() == FMI2_ERROR
     inst.fmu.setFMUstate(clean)
     assert inst.step() == 0
-    inst.fmu.setFMUstate(pending)
-    inst.t = 0.05
-    assert inst.step() == FMI2_DISCARD and inst.step() == 0
     assert inst.get("b") == [0.25]
-    # a state restored into an instance initialized at another time brings its own time along
     other = Instance(fmus[RIGID], "other")
     other.init(t0=3.0)
     other.fmu.setFMUstate(clean)
-    assert other.step(0.01, t=3.0) == FMI2_DISCARD  # the state is at t = 0.05
-    assert "does not match the FMU time 0.05" in other.errors()[-1]
+    assert other.step(0.01, t=3.0) == FMI2_ERROR  # the state is at t = 0.05
+    assert "does not match the time of the instance, 0.05" in other.errors()[-1]
+    other.fmu.setFMUstate(clean)
     assert other.step(0.01, t=0.05) == 0
-    for s in (clean, pending):
-        inst.fmu.freeFMUstate(s)
+    inst.fmu.freeFMUstate(clean)
     inst.free()
     other.free()
 
 
 def test_state_taken_before_initialization_and_after_an_error(fmus):
+    """A state of initialization mode restores that mode; no state can be taken in the error state (FMI 2.0),
+    but a good one can be set there."""
     inst = Instance(fmus[RIGID])
     inst.fmu.setupExperiment(startTime=0.0)
     inst.fmu.enterInitializationMode()
     fresh = inst.fmu.getFMUstate()
     inst.set(b=-1.0)
-    with pytest.raises(FMICallException):  # invalid parameters: fmi2Fatal (pythonfmu 0.7), instance kept
+    with pytest.raises(FMICallException) as info:  # invalid parameters: fmi2Error
         inst.fmu.exitInitializationMode()
-    assert inst.step() == FMI2_DISCARD
-    failed = inst.fmu.getFMUstate()
+    assert info.value.status == FMI2_ERROR and "invalid parameters: b = -1" in inst.errors()[-1]
+    assert inst.step() == FMI2_ERROR
+    with pytest.raises(FMICallException):
+        inst.fmu.getFMUstate()
     inst.fmu.setFMUstate(fresh)  # back to initialization mode with the start values
+    assert inst.get("b") == [0.2]
     inst.set(phi_0=0.02)
     inst.fmu.exitInitializationMode()
     assert inst.step() == 0
-    inst.fmu.setFMUstate(failed)
-    inst.t = 0.0
-    assert inst.step() == FMI2_DISCARD and "invalid parameters: b = -1" in inst.errors()[-1]
+    inst.fmu.freeFMUstate(fresh)
     inst.free()
 
 
@@ -232,19 +164,32 @@ def test_foreign_or_corrupted_state_is_rejected(fmus):
     drive(rigid, RIGID, 0, 3, 0.0)
     drive(flex, FLEX, 0, 3, 0.0)
     before = outputs(rigid, RIGID)
+    good = rigid.fmu.getFMUstate()
     blob = flex.fmu.serializeFMUstate(flex.fmu.getFMUstate())
+    n = len(blob)
     for bad, reason in ((blob, "belongs to FMU 'FlexibleRockingOscillator'"),
                         (blob[:-7], "truncated"),
-                        (blob[:40] + bytes([blob[40] ^ 1]) + blob[41:], "corrupted"),
-                        (b"not a state at all", "not a rocking_model FMU state")):
-        state = rigid.fmu.deSerializeFMUstate(bad)
-        rigid.fmu.setFMUstate(state)
+                        (blob[:n - 40] + bytes([blob[n - 40] ^ 1]) + blob[n - 39:], "corrupted"),
+                        (b"not a state at all", "not a serialized state of this FMU"),
+                        (blob[:30] + b"\xff" * 8 + blob[38:], "header of the serialized state is corrupt")):
+        try:
+            state = rigid.fmu.deSerializeFMUstate(bad)
+        except FMICallException as exc:  # the binary's own header
+            assert exc.status == FMI2_ERROR
+        else:
+            with pytest.raises(FMICallException) as info:
+                rigid.fmu.setFMUstate(state)
+            assert info.value.status == FMI2_ERROR
+            rigid.fmu.freeFMUstate(state)
+            assert rigid.errors()[-1].startswith("fmi2SetFMUstate: state rejected")
+        assert reason in rigid.errors()[-1], rigid.errors()[-1]
         assert outputs(rigid, RIGID) == before  # the instance keeps its state
-        assert rigid.errors()[-1].startswith("fmi2SetFMUstate: state rejected") and reason in rigid.errors()[-1]
-        assert rigid.step() == FMI2_DISCARD  # discarded once
-        rigid.t -= 0.0
+        assert rigid.step() == FMI2_ERROR  # the error state ...
+        rigid.fmu.setFMUstate(good)  # ... left with a good state
         assert rigid.step() == 0
-        before = outputs(rigid, RIGID)
+        rigid.fmu.setFMUstate(good)
+        rigid.t -= 0.01
+    rigid.fmu.freeFMUstate(good)
     rigid.free()
     flex.free()
 
@@ -277,12 +222,21 @@ def test_state_bytes_never_execute_code(fmus, tmp_path, monkeypatch):
     inst.init(phi_0=0.02)
     drive(inst, RIGID, 0, 2, 0.0)
     before = outputs(inst, RIGID)
+    good = inst.fmu.getFMUstate()
+    serialized = inst.fmu.serializeFMUstate(good)
+    prefix = serialized[:serialized.index(MAGIC)]  # the binary's header: FMI state and time
     for bad, reason in ((old_layout, "bad header"), (new_header, "not valid JSON")):
-        inst.fmu.setFMUstate(inst.fmu.deSerializeFMUstate(bad))
+        state = inst.fmu.deSerializeFMUstate(prefix + bad)
+        with pytest.raises(FMICallException):
+            inst.fmu.setFMUstate(state)
+        inst.fmu.freeFMUstate(state)
         assert reason in inst.errors()[-1]
         assert outputs(inst, RIGID) == before
-        assert inst.step() == FMI2_DISCARD and inst.step() == 0
-        before = outputs(inst, RIGID)
+        assert inst.step() == FMI2_ERROR
+        inst.fmu.setFMUstate(good)
+        assert inst.step() == 0
+        inst.fmu.setFMUstate(good)
+        inst.t -= 0.01
     assert not (tmp_path / "pwned").exists()
     inst.free()
 
@@ -348,8 +302,12 @@ def test_reset_returns_to_the_initial_state(fmus):
         inst.init(scheme=1, phi_0=0.01)
         first = drive(inst, kind, 0, 80, 3.0)
         inst.fmu.reset()
+        inst.fmu.setupExperiment(startTime=0.0)
+        inst.fmu.enterInitializationMode()
         assert inst.get("scheme", "phi_0") == [1, 0.0]  # start values
-        inst.init(scheme=1, phi_0=0.01)
+        inst.set(scheme=1, phi_0=0.01)
+        inst.fmu.exitInitializationMode()
+        inst.t = 0.0
         assert drive(inst, kind, 0, 80, 3.0) == first
         inst.free()
 
@@ -366,4 +324,5 @@ def test_reset_method_of_the_slave_class():
     assert slave.do_step(0.0, 0.01)
     slave.reset()
     assert slave.get_real([vr["phi_0"], vr["phi"]]) == [0.0, 0.0]
-    assert slave.do_step(0.0, 0.01) is False  # not initialized any more
+    with pytest.raises(ValueError, match="before initialization"):  # not initialized any more
+        slave.do_step(0.0, 0.01)

@@ -1,13 +1,11 @@
-/* Minimal non-Python FMI 2.0 co-simulation host for the rocking FMUs (pythonfmu).
+/* Minimal non-Python FMI 2.0 co-simulation host for the rocking FMUs.
  *
  * Usage: host <unzipped FMU dir> <modelIdentifier> <guid> <vr of ag> <vr of phi> <ag [m/s2]> <t_end [s]> <dt [s]>
  *
  * dlopens <dir>/binaries/linux64/<modelIdentifier>.so, instantiates a co-simulation slave with the resource
- * location file://<dir>/resources (pythonfmu's wrapper finds the Python slave class there), sets the input ag,
- * steps from 0 to t_end with step dt and prints "t,phi" after every step (%.17g).
- *
- * pythonfmu's binary embeds Python but is not linked against libpython: load it first, e.g.
- *   LD_PRELOAD=/path/to/libpython3.11.so PYTHONPATH=<site-packages with numpy, scipy> ./host ...
+ * location file://<dir>/resources, sets the input ag, steps from 0 to t_end with step dt, prints "t,phi"
+ * after every step (%.17g), frees the instance and unloads the binary. The FMU's binary loads libpython and
+ * finds numpy by itself (the paths recorded when it was built): no LD_PRELOAD, no PYTHONPATH.
  * Build: cc -std=c99 -I<dir with fmi2Functions.h> host.c -o host -ldl
  */
 #define _XOPEN_SOURCE 700
@@ -103,13 +101,7 @@ int main(int argc, char **argv) {
     CHECK(fmi2Terminate(c));
     fmi2FreeInstance(c);
     fflush(stdout);
-    /* pythonfmu 0.7's binary runs Py_FinalizeEx from a static destructor when it is unloaded. With numpy and
-     * scipy imported that crashed (SIGSEGV in the garbage collector during finalize_modules, Python 3.11)
-     * after every FMI call had returned. Set HOST_UNLOAD=1 to dlclose and return normally anyway; by default
-     * the host ends the process without running the destructors. */
-    if (getenv("HOST_UNLOAD")) {
-        dlclose(lib);
-        return 0;
-    }
-    _exit(0);
+    /* the binary never finalizes the interpreter it started: unloading it and returning is safe */
+    dlclose(lib);
+    return 0;
 }
