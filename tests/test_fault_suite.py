@@ -4,17 +4,18 @@ FMI 2.0 co-simulation function through fmpy's low-level ``FMU2Slave``.
 
 The cases live in tests/fault_harness.py (a case = a small function or a row of a table). Each runs in a
 process of its own -- forked by a harness server that imported fmpy and numpy once -- with a timeout, so a
-crash (SIGSEGV in the pythonfmu 0.7 C wrapper) or a hang is a failed case, never a dead pytest. The cases
+crash or a hang is a failed case, never a dead pytest. The cases
 selected for the session run up front on all cores (``FAULT_SUITE_JOBS``, default: the CPU count, at most 4);
 each test then asserts on its case's JSON record:
 
 1. the process survived (exit code 0, no signal) and finished within the case's timeout;
-2. the statuses follow FMI 2.0 as far as the pythonfmu 0.7 wrapper allows (fmi2OK, fmi2Discard, or fmi2Fatal
-   for invalid parameters at fmi2ExitInitializationMode; a call the wrapper can only answer with fmi2OK is
-   followed by a discarded fmi2DoStep);
-3. the logged message names the variable or the call;
-4. the state after a refused call is bit-identical to before (every variable as exact floats and the bytes of
-   fmi2SerializeFMUstate), and the instance steps on exactly like a control instance that never saw the call.
+2. the statuses are exactly those of FMI 2.0 (issue 13, the project's own binary): fmi2Error for an invalid
+   argument, value or call sequence (the instance then in the error state), fmi2Discard for a step the
+   simulator refuses, fmi2OK otherwise;
+3. the logged message names the variable or the call, with logging on or off;
+4. every variable is bit-identical after a refused call; after fmi2Error, fmi2SetFMUstate of a state saved
+   before brings the instance back bit-identical (the bytes of fmi2SerializeFMUstate), and it steps on
+   exactly like a control instance that never saw the call.
 
 Checks of kinds 2-4 are recorded by the worker as it goes; a case declares which kinds it must contain.
 The summary line (classes tried / passing, the longest case, the longest single FMI call) is printed at the
