@@ -12,6 +12,7 @@ from rocking_model.fmi import DefaultExperiment, Fmi2Status, RockingSlave, Var
 
 class GroundMotionSource(RockingSlave):
     """Ground-motion source: one-sine pulse or a sampled record file, times a scale factor."""
+    interpolates_inputs = False  # no input
 
     description = ("Ground-motion source: outputs the horizontal ground acceleration ag(t) of a one-sine pulse "
                    "(motion = 0: A sin(omega_p (t - t_start)) for one period) or of a sampled record (motion = "

@@ -9,6 +9,7 @@ from rocking_model.fmi import AG_INPUT, DefaultExperiment, RockingSlave, Var
 
 class LinearBuildingStorey(RockingSlave):
     """Damped single-degree-of-freedom storey; T = 0 is a rigid storey (the floor moves with the ground)."""
+    interpolates_inputs = False  # exact integration for ag held constant over a step
 
     description = ("Linear building storey: floor mass on a linear elastic, viscously damped frame, "
                    "u'' + 2 zeta omega u' + omega^2 u = -ag with omega = 2 pi / T; output the absolute floor "

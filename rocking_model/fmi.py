@@ -85,10 +85,11 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from .fmi_state import decode_state, encode_state
+from .ground_motion import LinearMotion
 from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
 
 __all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment",
-           "Fmi2Status", "FMUError", "run_fmu", "fmpy_callbacks", "collect_fmu_messages"]
+           "Fmi2Status", "FMUError", "run_fmu", "run_fmu_record", "fmpy_callbacks", "collect_fmu_messages"]
 
 # SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
 UNITS: Dict[str, Dict[str, int]] = {
@@ -278,6 +279,9 @@ class RockingSlave(Fmi2Slave):
     freeze_output: ClassVar[Optional[str]] = "overturned"
     #: relative tolerance on current_time versus the FMU's own communication time
     time_tolerance: ClassVar[float] = 1e-9
+    #: whether `advance` takes a time-varying input (then fmi2SetRealInputDerivatives of order 1 makes the
+    #: inputs vary linearly over a step: canInterpolateInputs = true)
+    interpolates_inputs: ClassVar[bool] = True
 
     log_categories = {
         "logStatusWarning": "Log messages with fmi2Warning status.",
@@ -315,6 +319,8 @@ class RockingSlave(Fmi2Slave):
         self._frozen = False
         self._t = 0.0                            # current communication point [s]
         self._t0 = 0.0
+        # Real input -> (rate [unit/s], t_ref [s]): the input is value + rate (t - t_ref) (first-order hold)
+        self._rates: Dict[str, tuple] = {}
 
     def reset(self) -> None:
         """fmi2Reset in place: start values, not initialized, no error (the log queue is kept).
@@ -373,8 +379,8 @@ class RockingSlave(Fmi2Slave):
         root = super().to_xml(model_options)
         cosim = root.find("CoSimulation")
         if cosim is not None:
-            # pythonfmu does not implement fmi2SetRealInputDerivatives
-            cosim.set("canInterpolateInputs", "false")
+            # fmi2SetRealInputDerivatives of order 1 (set_real_input_derivatives); no output derivatives
+            cosim.set("canInterpolateInputs", "true" if self.interpolates_inputs else "false")
         # <UnitDefinitions> right after <CoSimulation> (FMI 2.0 element order)
         units = {**UNITS, **self.extra_units}
         used: List[str] = []
@@ -411,7 +417,8 @@ class RockingSlave(Fmi2Slave):
         raise NotImplementedError
 
     def advance(self, sim, t_end: float, inputs: Dict[str, Any]) -> None:
-        """Advance ``sim`` to ``t_end`` with the inputs held constant (default: the single input)."""
+        """Advance ``sim`` to ``t_end`` under the inputs (default: the single input), each a number held
+        constant or, after fmi2SetRealInputDerivatives, a `LinearMotion` over the step."""
         if len(inputs) != 1:
             raise NotImplementedError("override advance() for FMUs with several inputs")
         (value,) = inputs.values()
@@ -477,8 +484,15 @@ class RockingSlave(Fmi2Slave):
         inputs = {}
         for name, lo, hi in self._inputs:
             value = inputs[name] = values[name]
+            rate = self._rates.get(name)
             try:  # the same check and message as the Python API (rocking_model.validation)
                 check_real(name, value, lo=lo, hi=hi)
+                if rate is not None:
+                    motion = inputs[name] = LinearMotion(value, rate[0], rate[1], t, t_end)
+                    check_real(f"{name} at the end of the step (rate {rate[0]:g} per s)", motion(t_end),
+                               lo=lo, hi=hi)
+                    check_real(f"{name} at the start of the step (rate {rate[0]:g} per s)", motion(t),
+                               lo=lo, hi=hi)
             except ValueError as exc:
                 return self._fail(f"input {name} = {value!r} at t = {t!r} is invalid: {exc}")
         if not self._frozen:
@@ -544,7 +558,7 @@ class RockingSlave(Fmi2Slave):
         return {"fmu": type(self).__name__, "signature": self._state_signature(),
                 "slave": {"initialized": self._initialized, "terminated": self._terminated,
                           "frozen": self._frozen, "t": self._t, "t0": self._t0, "error": self._error,
-                          "values": values},
+                          "values": values, "rates": {k: list(v) for k, v in self._rates.items()}},
                 "simulator": None if self._sim is None else self._sim.get_state()}
 
     def _restore(self, doc: Dict[str, Any]) -> None:
@@ -555,7 +569,15 @@ class RockingSlave(Fmi2Slave):
             raise ValueError(f"the state belongs to FMU {str(doc['fmu'])[:64]!r} (or to another version of its "
                              f"variables), not to {type(self).__name__!r}")
         slave = doc["slave"]
-        check_state_keys(slave, ("initialized", "terminated", "frozen", "t", "t0", "error", "values"))
+        check_state_keys(slave, ("initialized", "terminated", "frozen", "t", "t0", "error", "values", "rates"))
+        rates = slave["rates"]
+        if not isinstance(rates, dict) or len(rates) > len(self._inputs):
+            raise ValueError("state field slave.rates is not an object of the inputs")
+        for name, pair in rates.items():
+            if name not in {n for n, _, _ in self._inputs} or not isinstance(pair, list) or len(pair) != 2 or \
+                    not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                            for x in pair) or abs(pair[0]) > INPUT_RATE_MAX:
+                raise ValueError(f"state field slave.rates[{str(name)[:64]!r}] is not [rate, t_ref] of an input")
         for key in ("initialized", "terminated", "frozen"):
             state_bool(slave, key)
         for key in ("t", "t0"):
@@ -585,6 +607,7 @@ class RockingSlave(Fmi2Slave):
                                                              slave["frozen"])
         self._t, self._t0 = float(slave["t"]), float(slave["t0"])
         self._error = slave["error"]
+        self._rates = {k: (float(v[0]), float(v[1])) for k, v in rates.items()}
 
     # ------------------------------------------------------------------ value references
     # A call with a bad reference (unknown, of another type, an output set), a value that cannot be converted,
@@ -634,6 +657,7 @@ class RockingSlave(Fmi2Slave):
             raise ValueError(f"fmi2Set{type_name}: " + "; ".join(problems) + " (nothing was set)")
         for name, value in checked:
             self._values[name] = value
+            self._rates.pop(name, None)  # a new value: held until a derivative is given again
 
     def _check_assignment(self, var, value):
         """(problem, converted value): why ``value`` cannot be assigned to ``var``, or None."""
@@ -659,6 +683,42 @@ class RockingSlave(Fmi2Slave):
             return (f"parameter {name} is 'fixed' and cannot be changed after initialization (requested "
                     f"{value!r}, keeping {self._values[name]!r}); call fmi2Reset first to change it"), None
         return None, value
+
+    def set_real_input_derivatives(self, vrs, orders, values) -> None:
+        """fmi2SetRealInputDerivatives: order 1 gives the rate [unit/s] of a Real input at the current
+        communication point; from then on the input is u(t) = u_now + rate (t - t_now), a first-order hold
+        over the following steps, until the input or its rate is set again (fmi2SetReal resets the rate to 0).
+        A step whose input would leave the declared [min, max] is refused (fmi2Discard). Orders other than 1,
+        references that are not Real inputs and rates that are not finite or exceed `INPUT_RATE_MAX` raise
+        (fmi2Error); nothing of the call is set then."""
+        if not self.interpolates_inputs:
+            raise ValueError(f"fmi2SetRealInputDerivatives: {type(self).__name__} holds its inputs constant over "
+                             f"a step (canInterpolateInputs = false)")
+        vrs, orders, values = list(vrs), list(orders), list(values)
+        if not len(vrs) == len(orders) == len(values):
+            raise ValueError("fmi2SetRealInputDerivatives: the numbers of references, orders and values differ")
+        checked, problems = [], []
+        for vr, order, rate in zip(vrs, orders, values):
+            var, problem = self._lookup(vr, "Real")
+            if var is None or self._specs[var.name].causality != "input":
+                problems.append(problem or f"value reference {vr} is {var.name!r}, not a Real input")
+                continue
+            if order != 1:
+                problems.append(f"{var.name}: order = {order!r} is not supported; allowed: 1")
+                continue
+            try:
+                rate = check_real(f"rate of {var.name}", rate, lo=-INPUT_RATE_MAX, hi=INPUT_RATE_MAX)
+            except ValueError as exc:
+                problems.append(str(exc))
+                continue
+            checked.append((var.name, rate))
+        if problems:
+            raise ValueError("fmi2SetRealInputDerivatives: " + "; ".join(problems) + " (nothing was set)")
+        for name, rate in checked:
+            old = self._rates.get(name)
+            if old is not None:  # continue the line: the value at this communication point
+                self._values[name] = self._values[name] + old[0] * (self._t - old[1])
+            self._rates[name] = (rate, self._t)
 
     def get_real(self, vrs):
         return self._get(vrs, "Real")
@@ -703,6 +763,10 @@ def _var_type(var) -> str:
 
 
 _FMPY_LOCK = threading.Lock()
+
+#: [unit/s] largest input rate accepted by fmi2SetRealInputDerivatives: AG_MAX reached from 0 in 1 ms, far
+#: beyond any recorded ground motion (a steeper ramp is a step, which a zero-order hold represents)
+INPUT_RATE_MAX = AG_MAX / 1e-3
 
 #: [characters] longest text kept in a state or accepted for a String variable (a file path, a message)
 _MAX_TEXT = 4096
@@ -846,6 +910,66 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
         raise FMUError(f"{filename}: simulation failed at t = {t_last:g} s (stop_time = {stop_time:g} s): "
                        f"{what}", messages, result)
     return result
+
+
+def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: float, hold: str = "linear",
+                   start_values: Optional[Dict[str, Any]] = None, output: Sequence[str] = ("phi",)):
+    """Drive an FMU with input ``ag`` through a sampled record (times ``t_record`` [s], values ``ag_record``
+    [m/s2], linear between samples) with communication step ``step`` [s]; return a structured array with
+    "time" and the ``output`` variables after every step.
+
+    ``hold="linear"``: at every communication point the master sets ag and its slope over the coming step
+    (fmi2SetRealInputDerivatives, order 1), so the FMU integrates the record's straight line over the step;
+    with ``step`` equal to the record's sampling that is the record itself. ``hold="zoh"``: ag held constant
+    over each step (what a master without input derivatives does). fmpy 0.3.32's
+    ``simulate_fmu(set_input_derivatives=True)`` cannot serve here: its derivative buffer has a fixed length
+    of 9 (one input raises ValueError) and at a sample point it passes the slope of the previous interval."""
+    import numpy as np
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    hold = {"linear": "linear", "zoh": "zoh"}.get(hold)
+    if hold is None:
+        raise ValueError("hold must be 'linear' or 'zoh'")
+    step = check_real("step", step, lo=0.0, lo_open=True)
+    t_record = np.asarray(t_record, dtype=float)
+    ag_record = np.asarray(ag_record, dtype=float)
+    md = read_model_description(str(filename))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    types = {v.name: v.type for v in md.modelVariables}
+    unzip = extract(str(filename))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="record")
+    n = int(round(stop_time / step))
+    rows = []
+    with collect_fmu_messages() as messages:
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            fmu.instantiate(callbacks=fmpy_callbacks())
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
+            for name, value in (start_values or {}).items():
+                setter = {"Real": fmu.setReal, "Integer": fmu.setInteger, "Boolean": fmu.setBoolean,
+                          "String": fmu.setString}[types[name]]
+                setter([vr[name]], [value])
+            fmu.exitInitializationMode()
+            for k in range(n):
+                t = k * step
+                a0 = float(np.interp(t, t_record, ag_record))
+                fmu.setReal([vr["ag"]], [a0])
+                if hold == "linear":
+                    a1 = float(np.interp(t + step, t_record, ag_record))
+                    fmu.setRealInputDerivatives([vr["ag"]], [1], [(a1 - a0) / step])
+                fmu.doStep(t, step)
+                rows.append(tuple([t + step] + [fmu.getReal([vr[o]])[0] for o in output]))
+            fmu.terminate()
+        except FMICallException as exc:
+            errors = [m for st, _, m in messages if st >= int(Fmi2Status.error)]
+            raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
+        finally:
+            fmu.freeInstance()
+    return np.array(rows, dtype=[("time", float)] + [(o, float) for o in output])
 
 
 def _text(value) -> str:

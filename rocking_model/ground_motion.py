@@ -90,6 +90,29 @@ class ConstantMotion(GroundMotion):
         return ConstantMotion(self.value * check_real("factor", factor))
 
 
+class LinearMotion(GroundMotion):
+    """ag(t) = value + rate (t - t_ref) on the window [t_start, t_end] [s]: the first-order hold of a
+    co-simulation step whose master passed the input's derivative (``fmi2SetRealInputDerivatives``). Smooth
+    inside the step; its peak over the window is at an end, which the simulators check against AG_MAX."""
+
+    def __init__(self, value: float, rate: float, t_ref: float, t_start: float, t_end: float):
+        self.value = check_real("ag", value)
+        self.rate = check_real("ag rate", rate)      # [m/s3]
+        self.t_ref = check_real("t_ref", t_ref)
+        self.window = (check_real("t_start", t_start), check_real("t_end", t_end, lo=t_start))
+
+    def __call__(self, t):
+        return self.value + self.rate * (t - self.t_ref)
+
+    @property
+    def peak_bound(self):
+        return max(abs(self(self.window[0])), abs(self(self.window[1])))
+
+    def scaled(self, factor: float) -> "LinearMotion":
+        factor = check_real("factor", factor)
+        return LinearMotion(self.value * factor, self.rate * factor, self.t_ref, *self.window)
+
+
 class FunctionMotion(GroundMotion):
     """Wrap a user callable ag(t); `breakpoints` lists its known kinks [s]. Every value is checked: a value
     that is not a finite number in [-AG_MAX, AG_MAX] raises ValueError naming ag (and the time)."""
