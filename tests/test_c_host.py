@@ -66,10 +66,11 @@ def fmus(tmp_path_factory):
     return {p.stem: p for p in module.build_all(dest, names=["RigidRockingBlock", "FlexibleRockingOscillator"])}
 
 
-def run_host(host: Path, fmu: Path, tmp: Path, ag: float, t_end: float, dt: float, **env_extra):
+def run_host(host: Path, fmu: Path, tmp: Path, ag: float, t_end: float, dt: float, folder: str = "",
+             **env_extra):
     if libpython() is None:
         pytest.skip("this Python has no shared libpython (built without --enable-shared)")
-    unzip = tmp / fmu.stem
+    unzip = tmp / (folder or fmu.stem)
     with zipfile.ZipFile(fmu) as zf:
         zf.extractall(unzip)
     md = read_model_description(str(fmu))
@@ -103,5 +104,13 @@ def test_libpython_override(host, fmus, tmp_path):
     assert "fmi2Instantiate failed" in proc.stderr
     proc = run_host(host, fmus["RigidRockingBlock"], tmp_path / "ok", 3.0, 0.1, 0.01,
                     ROCKING_FMU_LIBPYTHON=str(libpython()))
+    assert proc.returncode == 0, proc.stderr
+    assert len(proc.stdout.split()) == 10
+
+
+def test_c_host_in_a_folder_with_special_characters(host, fmus, tmp_path):
+    """The host builds the resource URI by hand (file://<path>/resources, nothing escaped): an extraction
+    folder with é, #, [ and spaces works (fmpy's percent-encoded URIs are covered by the fault suite)."""
+    proc = run_host(host, fmus["RigidRockingBlock"], tmp_path, 3.0, 0.1, 0.01, folder="dir é # [ x")
     assert proc.returncode == 0, proc.stderr
     assert len(proc.stdout.split()) == 10
