@@ -1741,19 +1741,50 @@ add("misc/rigid/info-and-debug-logging", info_functions, kinds=("status", "state
     desc="fmi2GetVersion, fmi2GetTypesPlatform, fmi2SetDebugLogging with an unknown category")
 
 
-def wrong_guid(h: Harness):
-    """fmi2Instantiate with a GUID that is not the FMU's: no crash (the instance is refused or works)."""
-    try:
-        s = h.instance(RIGID, guid="{00000000-0000-0000-0000-000000000000}")
-    except HarnessError as exc:
-        h.check("status", "fmi2Instantiate refused (NULL)", True, str(exc))
+def instantiate_args(h: Harness, what: str):
+    """fmi2Instantiate with arguments it must refuse (NULL and a message naming the cause, never a crash) or
+    accept (the other spellings of a local file URI: the instance then runs)."""
+    import pathlib
+
+    from fmpy.fmi2 import FMU2Slave, fmi2CoSimulation, fmi2ModelExchange
+
+    md = h.md(RIGID)
+    unzip = h.unzip_dir(RIGID)
+    resources = pathlib.Path(unzip, "resources")
+    uri = resources.as_uri()
+    cases = {
+        "wrong-guid": (md.guid.replace(md.guid[1:9], "00000000"), uri, fmi2CoSimulation, ("fmuGUID", "does not match")),
+        "model-exchange": (md.guid, uri, fmi2ModelExchange, ("fmuType", "co-simulation")),
+        "uri-null": (md.guid, None, fmi2CoSimulation, ("NULL",)),
+        "uri-http": (md.guid, "http://example.org/resources", fmi2CoSimulation, ("not a file URI",)),
+        "uri-remote-host": (md.guid, "file://server/share/resources", fmi2CoSimulation, ("remote host",)),
+        "uri-missing": (md.guid, (resources.parent / "nowhere").as_uri(), fmi2CoSimulation, ("does not exist",)),
+        "uri-bad-escape": (md.guid, uri + "%zz", fmi2CoSimulation, ("invalid escape",)),
+        "uri-file-single-slash": (md.guid, "file:" + str(resources), fmi2CoSimulation, None),
+        "uri-file-localhost": (md.guid, "file://localhost" + str(resources), fmi2CoSimulation, None),
+    }
+    guid, location, kind, fragments = cases[what]
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=RIGID, instanceName="subject")
+    mark = h.mark()
+    component = fmu.fmi2Instantiate(b"subject", kind, guid.encode(), None if location is None else location.encode(),
+                                    ctypes.byref(h.callbacks), 0, 0)
+    if fragments is not None:
+        h.check("status", f"fmi2Instantiate ({what}) refused: NULL", not component)
+        h.expect_log("the message names the cause", mark, None, fragments)
         return
-    s.init()
-    s.drive(3)
-    h.check("status", "the instance runs (pythonfmu 0.7 does not check the GUID)", True)
+    h.check("status", f"fmi2Instantiate ({what}) accepted", bool(component))
+    if component:
+        fmu.component = component
+        ok = all(f() in (None, OK) for f in (lambda: fmu.setupExperiment(startTime=0.0), fmu.enterInitializationMode,
+                                      fmu.exitInitializationMode, lambda: fmu.doStep(0.0, DT)))
+        h.check("status", "the instance runs", ok)
+        fmu.fmi2FreeInstance(component)
 
 
-add("misc/rigid/wrong-guid", wrong_guid, kinds=("status",), desc="fmi2Instantiate with a foreign GUID")
+for _what in ("wrong-guid", "model-exchange", "uri-null", "uri-http", "uri-remote-host", "uri-missing",
+              "uri-bad-escape", "uri-file-single-slash", "uri-file-localhost"):
+    add(f"instantiate/rigid/{_what}", instantiate_args, what=_what, kinds=("status",),
+        desc=f"fmi2Instantiate: {_what.replace('-', ' ')}")
 
 
 def logging_off_subset(h: Harness, fmu: str):

@@ -218,8 +218,8 @@ def _summary(config, results: dict, wall: float) -> None:
         fam = fh.CASES[cid].family
         t, p = families.get(fam, (0, 0))
         families[fam] = (t + 1, p + (not v))
-    lines = [f"fault suite: {tried} classes tried, {passing} passing ({len(xfail)} strict xfails for the pythonfmu "
-             f"0.7 wrapper, {xfail_failing} of them failing as expected); cases wall time {wall:.1f} s on {JOBS} "
+    lines = [f"fault suite: {tried} classes tried, {passing} passing ({len(xfail)} strict xfails, "
+             f"{xfail_failing} of them failing as expected); cases wall time {wall:.1f} s on {JOBS} "
              f"processes",
              f"  longest case: {longest[0]} {longest[1]['elapsed']:.2f} s; longest FMI call: "
              f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}; longest fmi2DoStep: "
