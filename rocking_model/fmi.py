@@ -26,8 +26,10 @@ What the base class provides:
   inserted after ``<CoSimulation>``, a ``<DefaultExperiment>``, ``ModelStructure/Outputs`` (no direct
   feed-through: ``dependencies=""``) and ``ModelStructure/InitialUnknowns``;
 * ``do_step(t, dt)``: advances the simulator to ``t + dt`` with the inputs held constant over the step
-  (zero-order hold, the importer sets the inputs at the start of each step) and copies
-  ``Simulator.outputs()`` to the output variables;
+  (zero-order hold, the importer sets the inputs at the start of each step) or, after
+  ``fmi2SetRealInputDerivatives`` of order 1 (`set_real_input_derivatives`, ``canInterpolateInputs`` is
+  true where ``interpolates_inputs``), varying linearly over it (`rocking_model.ground_motion.LinearMotion`),
+  and copies ``Simulator.outputs()`` to the output variables;
 * FMU state (``canGetAndSetFMUstate`` and ``canSerializeFMUstate`` are true): ``fmi2GetFMUstate`` captures
   the complete internal state -- the values of every variable, the communication time, the status flags
   (initialized, terminated, frozen, failed, pending error) and the simulator's plain-data state
