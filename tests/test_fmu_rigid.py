@@ -88,7 +88,8 @@ def test_model_description_units_variability_structure(fmu):
                                      "ModelVariables", "ModelStructure"]
     assert root.get("description")
     cs = root.find("CoSimulation")
-    assert cs.get("canInterpolateInputs") == "false"
+    assert cs.get("canInterpolateInputs") == "true"  # fmi2SetRealInputDerivatives of order 1
+    assert cs.get("maxOutputDerivativeOrder") in (None, "0")
     assert cs.get("canGetAndSetFMUstate") == "true" and cs.get("canSerializeFMUstate") == "true"
     units = {u.get("name"): u.find("BaseUnit").attrib for u in root.find("UnitDefinitions")}
     assert units["m/s2"] == {"m": "1", "s": "-2"}
