@@ -160,3 +160,20 @@ def test_c_host_under_valgrind_has_no_invalid_access_in_the_binary(fmus, tmp_pat
     ours = [r for r in errors if f"{RIGID}.so" in r or "fmi2" in r]
     assert not ours, ours[0][:3000]
     assert not [r for r in errors if "Invalid write" in r], errors
+
+
+def test_missing_compiler_is_one_clear_error(monkeypatch, tmp_path):
+    """No C compiler: build_fmu stops with one message naming what to install (exit code 1 on the command
+    line), before any FMU is written."""
+    spec = importlib.util.spec_from_file_location("build_fmu_nocc", ROOT / "build_fmu.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))  # nothing to find there
+    with pytest.raises(build.BuildError, match=r"no C compiler found.*apt install gcc.*set CC"):
+        build.find_compiler()
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    with pytest.raises(build.BuildError, match="cannot run the C compiler"):
+        build.compile_binary(tmp_path)
+    assert build.main(["--dest", str(tmp_path / "dist"), "--no-cross-check", "RigidRockingBlock"]) == 1
+    assert not (tmp_path / "dist" / "RigidRockingBlock.fmu").exists()
