@@ -139,3 +139,18 @@ def test_only_real_inputs_and_interpolating_fmus(fmus):
         inst.fmu.setRealInputDerivatives([inst.vars["ag"].valueReference], [1], [1.0])
     assert "canInterpolateInputs = false" in inst.errors()[-1]
     inst.free()
+
+
+def test_first_order_hold_under_other_arithmetic_kernels():
+    """The record test again in a subprocess under other kernels (glibc without AVX2/FMA, OpenBLAS Prescott,
+    numpy's dispatch off: `roundoff.kernel_env`), where round-off differs: the same bounds hold."""
+    import subprocess
+    import sys
+
+    import roundoff
+
+    node = f"{Path(__file__).resolve()}::test_first_order_hold_reproduces_the_exact_record"
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", node],
+                          env=roundoff.kernel_env(), capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    assert "1 passed" in proc.stdout
