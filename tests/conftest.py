@@ -1,0 +1,44 @@
+"""Session fixtures shared by the test modules: the FMUs are built once per session (issue 14).
+
+``built_fmus`` -> {FMU name: path of the .fmu} of every FMU of fmu_src/, built by build_fmu.py into a
+session folder; ``build_module`` -> the imported build_fmu module; ``extracted_fmus`` -> {name: (path,
+model description, unzipped folder)}. The FMUs are read-only for the tests: a test that needs to alter one
+copies it first.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+for _p in (str(HERE), str(ROOT)):
+    if _p not in sys.path:
+        sys.path.insert(0, _p)
+
+
+@pytest.fixture(scope="session")
+def build_module():
+    """build_fmu.py, imported once."""
+    import build_fmu
+    return build_fmu
+
+
+@pytest.fixture(scope="session")
+def built_fmus(build_module, tmp_path_factory) -> dict:
+    """Every FMU of fmu_src/, built once per session: {name: Path}."""
+    pytest.importorskip("pythonfmu")
+    dest = tmp_path_factory.mktemp("fmus")
+    return {p.stem: p for p in build_module.build_all(dest)}
+
+
+@pytest.fixture(scope="session")
+def extracted_fmus(built_fmus, tmp_path_factory) -> dict:
+    """{name: (path, model description, unzipped folder)} of the session's FMUs, extracted once."""
+    fmpy = pytest.importorskip("fmpy")
+    root = tmp_path_factory.mktemp("fmus_unzipped")
+    return {name: (path, fmpy.read_model_description(str(path)),
+                   fmpy.extract(str(path), unzipdir=str(root / name)))
+            for name, path in built_fmus.items()}
