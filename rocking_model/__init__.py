@@ -5,9 +5,11 @@ from .ground_motion import ConstantMotion, FunctionMotion, GroundMotion, Sampled
 from .models.flexible_oscillator import FlexibleOscillator
 from .models.rigid_block import RigidBlock
 from .modes import Mode
-from .simulation import Result, Simulator, simulate
+from .simulation import Result, Simulator, SolverFailure, SolverWarning, simulate
+from .tolerances import ContactTolerances
 from .validation import AG_MAX, WorkLimitError
 
 __all__ = ["RigidBlock", "FlexibleOscillator", "Mode", "Simulator", "simulate", "Result", "GroundMotion", "ConstantMotion",
-           "FunctionMotion", "SampledMotion", "SinePulse", "AG_MAX", "WorkLimitError"]
+           "FunctionMotion", "SampledMotion", "SinePulse", "AG_MAX", "WorkLimitError",
+           "SolverWarning", "SolverFailure", "ContactTolerances"]
 __version__ = "0.1.0"

@@ -1,24 +1,29 @@
-"""The two contact LCPs of a model at a given state, shared by both integrators.
+"""The contact LCPs of a model at a given state, shared by both integrators (any number of contacts).
 
-- `impact`: velocity-level LCP with Newton's impact law (coefficient model.e_N) on the corners at the ground;
-- `uplift`: acceleration-level LCP on the corners that touch the ground with zero normal velocity; its active
-  set is the contact mode that follows (full contact, rocking on either corner, flight).
+- `impact`: velocity-level LCP with Newton's impact law (coefficient model.e_N) on the contacts at the ground;
+- `uplift`: acceleration-level LCP on the contacts that touch the ground with zero normal velocity; its active
+  set is the contact mode that follows (`next_closed`: full contact, rocking on either corner, flight);
+- `project_to_ground`, `closed_candidates`, `mode_forces`: the geometry and forces around them.
 """
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .lcp import ContactSolution, solve_contact_lcp
-from .modes import CLOSED, Mode, mode_from_closed
-from .models.base import RockingModel
+from .tolerances import DEFAULT_TOLERANCES
+
+if TYPE_CHECKING:                      # the models import this module (no import cycle at run time)
+    from .models.base import RockingModel
 
 
-def inverse_mass(model: RockingModel, q: np.ndarray) -> np.ndarray:
-    inv = getattr(model, "inverse_mass_matrix", None)
-    return inv(q) if inv is not None else np.linalg.inv(model.mass_matrix(q))
+def inverse_mass(model: "RockingModel", q: np.ndarray) -> np.ndarray:
+    """M(q)^-1 of ``model`` (its closed form where it has one)."""
+    return model.inverse_mass_matrix(q)
 
 
-def impact(model: RockingModel, q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
+def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
            e_N: float | None = None) -> ContactSolution:
     """Post-impact velocities from the impact LCP (Newton's law, sticking on contacts that take impulse).
 
@@ -29,21 +34,22 @@ def impact(model: RockingModel, q: np.ndarray, v_minus: np.ndarray, candidates, 
     b_N = e * np.minimum(U_minus, 0.0)
     for i in forced:
         b_N[i] = 0.0
-    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, np.zeros(2),
-                             candidates, forced)
+    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, np.zeros(model.n_contacts),
+                             candidates, forced, rtol=DEFAULT_TOLERANCES.lcp_exact)
 
 
-def uplift(model: RockingModel, q: np.ndarray, v: np.ndarray, ag: float, candidates,
+def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candidates,
            forced=()) -> ContactSolution:
     """Acceleration-level LCP: which of ``candidates`` stay closed (active) and their contact forces."""
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
     acc_free = Minv @ model.forces(q, v, ag)
-    return solve_contact_lcp(Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced)
+    return solve_contact_lcp(Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced,
+                             rtol=DEFAULT_TOLERANCES.lcp_exact)
 
 
-def project_to_ground(model: RockingModel, q: np.ndarray, corners) -> np.ndarray:
+def project_to_ground(model: "RockingModel", q: np.ndarray, corners) -> np.ndarray:
     """q moved onto g_N = 0 at ``corners`` (one Newton step of min |dq|_M subject to g_N(q + dq) = 0, as
     Siconos' MoreauJeanDirectProjectionOSI): undoes the drift of a closed corner off (or into) the ground."""
     corners = sorted(corners)
@@ -53,6 +59,8 @@ def project_to_ground(model: RockingModel, q: np.ndarray, corners) -> np.ndarray
     A = W_N.T @ MW
     if len(corners) == 1:
         mu = -g / A[0, 0]
+    elif len(corners) > 2:
+        mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
     else:
         det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
         if abs(det) > 1e-12 * abs(A[0, 0] * A[1, 1]):
@@ -62,27 +70,29 @@ def project_to_ground(model: RockingModel, q: np.ndarray, corners) -> np.ndarray
     return q + MW @ mu
 
 
-def closed_candidates(model: RockingModel, q: np.ndarray, v: np.ndarray, gap_tol: float,
+def closed_candidates(model: "RockingModel", q: np.ndarray, v: np.ndarray, gap_tol: float,
                       v_tol: float) -> list[int]:
-    """Corners at the ground (|g_N| <= gap_tol) with zero normal velocity (|U_N| <= v_tol)."""
+    """Contacts at the ground (g_N <= gap_tol [m]) with zero normal velocity (|U_N| <= v_tol [m/s])."""
     g = model.gaps(q)
     W_N, _ = model.contact_jacobians(q)
     U = W_N.T @ v
-    return [i for i in (0, 1) if g[i] <= gap_tol and abs(U[i]) <= v_tol]
+    return [i for i in range(model.n_contacts) if g[i] <= gap_tol and abs(U[i]) <= v_tol]
 
 
-def next_mode(model: RockingModel, q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
-              v_tol: float) -> Mode:
-    """Contact mode that follows a consistent state (q, v), decided by the uplift LCP."""
+def next_closed(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
+                v_tol: float) -> tuple[tuple, ContactSolution | None]:
+    """(closed contacts, uplift solution) that follow a consistent state (q, v): the active set of the
+    uplift LCP on the contacts at the ground at rest (`closed_candidates`); ((), None) when there is none."""
     cand = closed_candidates(model, q, v, gap_tol, v_tol)
     if not cand:
-        return Mode.FLIGHT
-    return mode_from_closed(uplift(model, q, v, ag, cand).active)
+        return (), None
+    sol = uplift(model, q, v, ag, cand)
+    return sol.active, sol
 
 
-def mode_forces(model: RockingModel, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
-    """Normal contact forces [N] of the closed corners of ``mode`` (bilateral), shape (2,)."""
-    closed = CLOSED[mode]
+def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
+    """Normal contact forces [N] of the closed contacts of ``mode`` (bilateral), shape (n_contacts,)."""
+    closed = model.closed_of(mode)
     if not closed:
-        return np.zeros(2)
+        return np.zeros(model.n_contacts)
     return uplift(model, q, v, ag, closed, forced=closed).P_N

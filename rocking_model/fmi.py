@@ -88,6 +88,7 @@ from pythonfmu.variables import Boolean, Integer, Real, String
 
 from .fmi_state import decode_state, encode_state
 from .ground_motion import LinearMotion
+from .simulation import Simulator, report_summary
 from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
 
 __all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment",
@@ -418,6 +419,19 @@ class RockingSlave(Fmi2Slave):
         """Build and return the Simulator from the parameter values; raise ValueError on bad values."""
         raise NotImplementedError
 
+    @staticmethod
+    def _prepared(sim):
+        """A simulator as the FMU runs it: a failed step is refused (fmi2Discard), not warned about; the
+        other reports (inexact contact solves) are logged as warnings by `do_step`."""
+        if isinstance(sim, Simulator):
+            sim.on_report = "raise"
+        return sim
+
+    def _log_reports(self) -> None:
+        reports = self._sim.last_reports if isinstance(self._sim, Simulator) else None
+        if reports:
+            self.log(f"t = {self._sim.t:.17g} s: {report_summary(reports)}", Fmi2Status.warning)
+
     def advance(self, sim, t_end: float, inputs: Dict[str, Any]) -> None:
         """Advance ``sim`` to ``t_end`` under the inputs (default: the single input), each a number held
         constant or, after fmi2SetRealInputDerivatives, a `LinearMotion` over the step."""
@@ -451,7 +465,7 @@ class RockingSlave(Fmi2Slave):
             raise ValueError("fmi2ExitInitializationMode called after initialization (call fmi2Reset first to "
                              "initialize again)")
         try:
-            sim = self.create_simulator(self.parameter_values, self._t0)
+            sim = self._prepared(self.create_simulator(self.parameter_values, self._t0))
         except Exception as exc:
             raise ValueError(f"invalid parameters: {_describe(exc)}") from None
         self._sim = sim
@@ -506,6 +520,7 @@ class RockingSlave(Fmi2Slave):
             except Exception as exc:
                 self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(exc)}"
                 raise RuntimeError(self._error) from None
+            self._log_reports()
             self._update_outputs()
         self._t = t_end
         return True
@@ -597,7 +612,7 @@ class RockingSlave(Fmi2Slave):
             if not isinstance(doc["simulator"], dict):
                 raise ValueError("state field simulator is not an object")
             params = {n: values[n] for n, s in self._specs.items() if s.causality == "parameter"}
-            sim = self.create_simulator(params, float(slave["t0"]))
+            sim = self._prepared(self.create_simulator(params, float(slave["t0"])))
             sim.set_state(doc["simulator"])
         elif slave["initialized"] and slave["error"] is None:
             raise ValueError("state field simulator is null in an initialized state without an error")

@@ -1,4 +1,4 @@
-"""One-step nonsmooth problems at the corners: the impact LCP and the uplift (acceleration) LCP.
+"""One-step nonsmooth problems at the contacts: the impact LCP and the uplift (acceleration) LCP.
 
 Both have the same structure. Unknown contact percussions (impulses or forces) P_N, P_T on the candidate
 contacts act on the velocity-like unknown
@@ -16,8 +16,19 @@ with, for every candidate contact i,
 
 The sticking row applies only on contacts that carry a normal percussion: a bilateral tangential row on a
 lifting contact would glue it to the ground. That makes the problem an LCP in the normal percussions
-whose matrix depends on the active set, so it is solved exactly by enumerating the active sets of the (at
-most two) candidate contacts and keeping the one that violates the conditions least (round-off only). Tangential rows of two contacts can be parallel (the rigid block at phi = 0);
+whose matrix depends on the active set. It is solved for any number n of contacts on the 2n x 2n Delassus
+matrix D = G^T M^-1 G of G = [W_N, W_T] (columns N_0..N_{n-1}, T_0..T_{n-1}); every active set's system is
+a sub-block of it:
+
+- up to ENUMERATE_MAX candidate contacts (the rocking models have two), by enumerating the active sets and
+  keeping the one that violates the conditions least (round-off only when a solution exists): exact, and
+  it finds the solution of a problem whose matrix is not a P-matrix (several or no solutions);
+- beyond, by principal pivoting on the active set (Murty's least-index rule, `_pivot`): from the hint (or
+  the empty set), the contact with the lowest index that violates its condition changes side, until none
+  does or MAX_PIVOTS changes; finite for P-matrices, reported inexact otherwise.
+
+Either way a solution that still violates the conditions beyond ``rtol`` comes back with ``exact=False``,
+which the integrators report. Tangential rows of two contacts can be parallel (the rigid block at phi = 0);
 the reduced system is then solved in the least-squares sense: the velocities and normal percussions stay
 unique, only the split of the tangential percussion is not (the minimum-norm split is returned).
 """
@@ -28,17 +39,29 @@ from itertools import combinations
 
 import numpy as np
 
+#: [contacts] largest number of candidate contacts solved by enumeration (2^n active sets)
+ENUMERATE_MAX = 6
+#: [pivots] most active-set changes of the pivoting method before it gives up (reported inexact)
+MAX_PIVOTS = 200
+#: [1] a pivot of the small dense solves below this times the largest entry counts as singular (round-off
+#: of a Delassus matrix whose entries are O(1/m))
+SINGULAR_RTOL = 1e-13
+#: [1] two tangential rows whose 2 x 2 Delassus block has a determinant below this times the product of
+#: its diagonal are parallel (the rigid block at phi = 0)
+PARALLEL_RTOL = 1e-12
+
 
 @dataclass
 class ContactSolution:
-    """Result of a contact LCP."""
+    """Result of a contact LCP over n contacts."""
 
     v: np.ndarray            #: solution velocity (impact) or acceleration (uplift)
-    P_N: np.ndarray          #: normal percussion per contact (0 off the active set), shape (2,)
-    P_T: np.ndarray          #: tangential percussion per contact, shape (2,)
+    P_N: np.ndarray          #: normal percussion per contact (0 off the active set), shape (n,)
+    P_T: np.ndarray          #: tangential percussion per contact, shape (n,)
     active: tuple            #: contacts carrying a normal percussion (sticking)
-    w_N: np.ndarray          #: w_N = W_N^T v + b_N, shape (2,) (nan for non-candidates)
+    w_N: np.ndarray          #: w_N = W_N^T v + b_N, shape (n,) (nan for non-candidates)
     exact: bool = True       #: False when no active set met every condition (least-violating returned)
+    violation: float = 0.0   #: [1] largest violation of the conditions, relative to the problem's scales
 
 
 _SETS_CACHE: dict = {}
@@ -75,7 +98,7 @@ def _solve_small(A, b):
         for r in range(c + 1, n):
             if abs(M[r][c]) > best:
                 p, best = r, abs(M[r][c])
-        if best <= 1e-13 * big:
+        if best <= SINGULAR_RTOL * big:
             return None
         if p != c:
             M[c], M[p] = M[p], M[c]
@@ -96,93 +119,150 @@ def _solve_small(A, b):
     return x
 
 
-def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free: np.ndarray,
-                      b_N: np.ndarray, b_T: np.ndarray, candidates, forced=(),
-                      rtol: float = 1e-9, hint=None) -> ContactSolution:
-    """Solve the sticking-contact LCP described in the module docstring.
+class _Problem:
+    """One contact LCP on floats: the Delassus matrix D (2n x 2n), the free residuals w0 and the scales;
+    `trial(S)` solves active set S and measures how much it violates the conditions."""
 
-    Parameters
-    ----------
-    Minv : (n, n) inverse (effective) mass matrix.
-    W_N, W_T : (n, 2) normal / tangential Jacobians of the two corners.
-    v_free : (n,) velocity (or acceleration) without contact percussions.
-    b_N, b_T : (2,) offsets of the normal / tangential conditions.
-    candidates : contacts (0 left, 1 right) taking part in the problem.
-    forced : candidates whose normal condition is an equality w_N = 0 whatever the sign of P_N (used by the
-        Zeno rule to close a contact).
-    rtol : relative violation below which the returned solution is flagged ``exact``.
-    hint : an active set to try first (a time-stepper's last one); taken if it violates the conditions
-        by less than 1e-12 (round-off), which spares the enumeration in the common persistent case.
+    def __init__(self, D, w0, n, cand, forced):
+        self.D, self.w0, self.n, self.cand, self.forced = D, w0, n, cand, forced
+        scale_v = 1e-300
+        for i in cand:
+            scale_v = max(scale_v, abs(w0[i]), abs(w0[n + i]))
+        self.scale_v = scale_v
 
-    The whole problem lives in the 4 x 4 Delassus matrix D = G^T M^-1 G of G = [W_N, W_T]: every active
-    set's system is a sub-block of it, solved on floats (at most 4 unknowns).
-    """
-    v_free = np.asarray(v_free, dtype=float)
-    cand = sorted(set(candidates) | set(forced))
-    G = np.concatenate([W_N, W_T], axis=1)          # columns N0, N1, T0, T1
-    MG = Minv @ G
-    GT = G.T
-    D = (GT @ MG).tolist()
-    w0 = (GT @ v_free + np.concatenate([b_N, b_T])).tolist()   # [w_N0, w_N1, w_T0, w_T1] without percussions
-    scale_v = 1e-300
-    for i in cand:
-        scale_v = max(scale_v, abs(w0[i]), abs(w0[2 + i]))
-    # parallel tangential directions (the rigid block at phi = 0): the two sticking rows are one condition
-    parallel = abs(D[2][2] * D[3][3] - D[2][3] * D[3][2]) <= 1e-12 * max(D[2][2] * D[3][3], 1e-300)
-    best = None
-    sets = _active_sets(cand, forced)
-    if hint is not None:
-        hint = tuple(sorted(hint))
-        if hint in sets:
-            sets = [hint] + [S for S in sets if S != hint]
-    for n_tried, S in enumerate(sets):
-        P = [0.0, 0.0, 0.0, 0.0]
+    def parallel(self, i, j) -> bool:
+        """Whether the tangential rows of contacts i and j are parallel (one sticking condition)."""
+        D, n = self.D, self.n
+        a, b = n + i, n + j
+        return abs(D[a][a] * D[b][b] - D[a][b] * D[b][a]) <= PARALLEL_RTOL * max(D[a][a] * D[b][b], 1e-300)
+
+    def trial(self, S):
+        """(violation, S, P, w) of active set S."""
+        D, w0, n = self.D, self.w0, self.n
+        m = 2 * n
+        P = [0.0] * m
         if S:
-            rows = list(S) + [2 + i for i in S]
-            merged = len(S) == 2 and parallel
+            rows = list(S) + [n + i for i in S]
+            merged = len(S) == 2 and self.parallel(S[0], S[1])
             if merged:
                 rows = rows[:3]
             A = [[D[r][c] for c in rows] for r in rows]
             rhs = [-w0[r] for r in rows]
             if merged:
                 # one tangential unknown acting through both contacts, split evenly (minimum-norm split)
+                t0, t1 = n + S[0], n + S[1]
                 for r in range(3):
-                    A[r][2] = 0.5 * (D[rows[r]][2] + D[rows[r]][3])
+                    A[r][2] = 0.5 * (D[rows[r]][t0] + D[rows[r]][t1])
             x = _solve_small(A, rhs)
             if x is None:
-                sub = np.array(A)
-                x = np.linalg.lstsq(sub, np.array(rhs), rcond=1e-12)[0].tolist()
+                x = np.linalg.lstsq(np.array(A), np.array(rhs), rcond=1e-12)[0].tolist()
             for r, xr in zip(rows, x):
                 P[r] = xr
             if merged:
-                P[2] = P[3] = 0.5 * x[2]
-        nz = [c for c in range(4) if P[c] != 0.0]
+                P[n + S[0]] = P[n + S[1]] = 0.5 * x[2]
+        nz = [c for c in range(m) if P[c] != 0.0]
         w = []
-        for r in range(4):
+        for r in range(m):
             Dr, acc = D[r], 0
             for c in nz:
                 acc += Dr[c] * P[c]
             w.append(w0[r] + acc)
         # violations, relative to the problem's scales
-        scale_P = max(abs(P[0]), abs(P[1]), 1e-300)
+        scale_P = 1e-300
+        for i in range(n):
+            scale_P = max(scale_P, abs(P[i]))
+        scale_v, forced = self.scale_v, self.forced
         viol = 0.0
-        for i in cand:
+        for i in self.cand:
             if i in S:
                 if i not in forced:
                     viol = max(viol, -P[i] / scale_P)
-                viol = max(viol, abs(w[i]) / scale_v, abs(w[2 + i]) / scale_v)
+                viol = max(viol, abs(w[i]) / scale_v, abs(w[n + i]) / scale_v)
             else:
                 viol = max(viol, -w[i] / scale_v)
-        if best is None or viol < best[0]:
-            best = (viol, S, P, w)
-            if viol == 0.0 or (n_tried == 0 and hint is not None and viol <= 1e-12):
+        return viol, S, P, w
+
+    def violators(self, S, P, w, rtol) -> list:
+        """Candidates whose condition S violates beyond rtol: a pulling contact in S, a sinking one outside."""
+        n, scale_v = self.n, self.scale_v
+        scale_P = max([abs(P[i]) for i in range(n)] + [1e-300])
+        return [i for i in self.cand if i not in self.forced and
+                ((i in S and -P[i] / scale_P > rtol) or (i not in S and -w[i] / scale_v > rtol))]
+
+
+def _enumerate(prob: _Problem, sets, hint_first: bool, hint_tol: float):
+    best = None
+    for n_tried, S in enumerate(sets):
+        res = prob.trial(S)
+        if best is None or res[0] < best[0]:
+            best = res
+            if res[0] == 0.0 or (n_tried == 0 and hint_first and res[0] <= hint_tol):
                 break
-    viol, S, P, w = best
+    return best
+
+
+def _pivot(prob: _Problem, start, rtol: float):
+    """Murty's least-index principal pivoting on the active set: the violating contact of lowest index
+    changes side until no contact violates its condition beyond rtol (or MAX_PIVOTS changes: the least
+    violating set met is returned)."""
+    S = tuple(sorted(set(start) | set(prob.forced)))
+    best = None
+    for _ in range(MAX_PIVOTS):
+        res = prob.trial(S)
+        if best is None or res[0] < best[0]:
+            best = res
+        bad = prob.violators(S, res[2], res[3], rtol)
+        if not bad:
+            return res
+        i = bad[0]
+        S = tuple(sorted(set(S) - {i})) if i in S else tuple(sorted(set(S) | {i}))
+    return best
+
+
+def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free: np.ndarray,
+                      b_N: np.ndarray, b_T: np.ndarray, candidates, forced=(),
+                      rtol: float = 1e-9, hint=None, hint_tol: float = 1e-12) -> ContactSolution:
+    """Solve the sticking-contact LCP described in the module docstring.
+
+    Parameters
+    ----------
+    Minv : (m, m) inverse (effective) mass matrix.
+    W_N, W_T : (m, n) normal / tangential Jacobians of the n contacts.
+    v_free : (m,) velocity (or acceleration) without contact percussions.
+    b_N, b_T : (n,) offsets of the normal / tangential conditions.
+    candidates : contacts (indices in 0..n-1) taking part in the problem.
+    forced : candidates whose normal condition is an equality w_N = 0 whatever the sign of P_N (used by the
+        Zeno rule to close a contact).
+    rtol : [1] relative violation below which the returned solution is flagged ``exact``
+        (`ContactTolerances.lcp_exact`).
+    hint : an active set to try first (a time-stepper's last one); taken if it violates the conditions
+        by less than ``hint_tol`` (round-off, `ContactTolerances.lcp_hint`), which spares the enumeration in
+        the common persistent case.
+    """
+    v_free = np.asarray(v_free, dtype=float)
+    n = W_N.shape[1]
+    cand = sorted(set(candidates) | set(forced))
+    G = np.concatenate([W_N, W_T], axis=1)          # columns N_0..N_{n-1}, T_0..T_{n-1}
+    MG = Minv @ G
+    GT = G.T
+    D = (GT @ MG).tolist()
+    w0 = (GT @ v_free + np.concatenate([b_N, b_T])).tolist()   # residuals without percussions
+    prob = _Problem(D, w0, n, cand, tuple(forced))
+    if hint is not None:
+        hint = tuple(sorted(hint))
+    if len(cand) - len(set(forced)) <= ENUMERATE_MAX:
+        sets = _active_sets(cand, forced)
+        if hint is not None and hint in sets:
+            sets = [hint] + [S for S in sets if S != hint]
+        viol, S, P, w = _enumerate(prob, sets, hint is not None, hint_tol)
+    else:
+        start = [i for i in (hint or ()) if i in cand]
+        viol, S, P, w = _pivot(prob, start, rtol)
     v = v_free + MG @ np.array(P)
-    w_out = np.full(2, np.nan)
+    w_out = np.full(n, np.nan)
     for i in cand:
         w_out[i] = w[i]
     # the exact solution violates the conditions by round-off only; near-degenerate sets (a force that is
     # zero to 1e-9) are told apart by their violations rather than by a tolerance
-    return ContactSolution(v=v, P_N=np.array(P[:2]), P_T=np.array(P[2:]), active=S, w_N=w_out,
-                           exact=viol <= rtol)
+    return ContactSolution(v=v, P_N=np.array(P[:n]), P_T=np.array(P[n:]), active=S, w_N=w_out,
+                           exact=viol <= rtol, violation=viol)

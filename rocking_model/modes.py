@@ -1,7 +1,23 @@
-"""Contact modes shared by all models (the integer codes are an FMU contract)."""
+"""Contact states: one per contact (`ContactState`), and the contact modes of the two-corner rocking models
+(`Mode`: the set of closed corners, whose integer codes are the FMU output ``contact``)."""
 from __future__ import annotations
 
 from enum import IntEnum
+
+
+class ContactState(IntEnum):
+    """State of one contact. OPEN: no percussion, the gap may open; CLOSED: at the ground, stuck
+    (tangential sliding excluded: the paper's law, the mu -> inf limit). Room is left for the stick / slide
+    states of Coulomb friction (issue 15)."""
+
+    OPEN = 0
+    CLOSED = 1
+
+
+def contact_states(closed, n_contacts: int) -> tuple:
+    """Per-contact states of the closed set ``closed`` among ``n_contacts`` contacts."""
+    s = set(closed)
+    return tuple(ContactState.CLOSED if i in s else ContactState.OPEN for i in range(n_contacts))
 
 
 class Mode(IntEnum):

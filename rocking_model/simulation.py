@@ -7,14 +7,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import warnings
+
 from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion, checked_motion
-from .integrators.event_driven import EventDriven
-from .integrators.moreau_jean import MoreauJean
+from .integrators import SCHEMES as SCHEME_CLASSES
+from .integrators import Report, SolverOptions, scheme_choices
 from .models.base import RockingModel
-from .modes import Mode
+from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
-SCHEMES = {"moreau_jean": "moreau_jean", 0: "moreau_jean", "event_driven": "event_driven", 1: "event_driven"}
+
+class SolverWarning(UserWarning):
+    """An advance completed, but something in it needs the user's attention (a `Report`): a contact LCP
+    without an exact solution under the sticking law, or an adaptive step accepted at the smallest step size
+    with its error above tolerance. ``reports`` lists them."""
+
+    def __init__(self, message: str, reports=()):
+        super().__init__(message)
+        self.reports = list(reports)
+
+
+class SolverFailure(ValueError):
+    """Raised instead of a `SolverWarning` by a Simulator built with ``on_report="raise"`` (the FMUs): the
+    advance is refused with the state kept."""
+
+
+#: accepted spellings of a scheme: names and integer codes of the registered schemes
+SCHEMES = scheme_choices()
 
 #: [1] smallest dt_max (other than 0, the scheme's default) relative to the model's time scale 1/p: a
 #: Moreau-Jean step of 1e-6/p has a first-order error of ~1e-6 of the motion (finer than any rocking study
@@ -50,6 +69,12 @@ class Simulator:
         with each event counting EVENT_WORK = 30), default MAX_STEPS = 10000; None = unlimited (trusted batch
         use). An advance that needs more raises `WorkLimitError` (Moreau-Jean before any work) and leaves the
         simulator as it was.
+    tolerances : `ContactTolerances` of both schemes (default: the documented defaults).
+    on_report : what an advance does with its `Report`s (an inexact contact solve, a failed adaptive step):
+        "warn" (default: one `SolverWarning` per advance), "raise" (a failed step raises `SolverFailure`, the
+        advance refused and the state kept; the other reports, inexact contact solves, which have no better
+        answer, are only kept in ``last_reports`` for the caller: the FMUs log them), or "ignore".
+        ``last_reports`` keeps the reports of the last advance in every case.
     t0 : [s] start time.
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
@@ -62,7 +87,8 @@ class Simulator:
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = 1e-6, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,
-                 max_steps: int | None = MAX_STEPS, **initial):
+                 max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
+                 on_report: str = "warn", **initial):
         if not isinstance(model, RockingModel):
             raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
         self.model = model
@@ -84,21 +110,17 @@ class Simulator:
             raise ValueError(f"dt_max = {dt:g} is out of range; allowed values 0 (the scheme's default) or "
                              f"[{dt_min:.3g}, inf) s: at least {DT_MIN_REL:g} times the model's time scale "
                              f"1/p = {model.time_scale:.3g} s")
-        if self.scheme == "moreau_jean":
-            dt = dt or 1e-3
-            theta = check_real("theta", theta, lo=0.5, hi=1.0)
-            self.integrator = MoreauJean(model, mode, q, v, t0, dt_max=dt, theta=theta,
-                                         impact_log_size=impact_log_size)
-            self._token = "v"            # replaced (never mutated) whenever the state changes
-        else:
-            dt = dt or math.inf                                 # uncapped
-            tol = check_real("tolerance", tolerance, lo=1e-14, hi=1e-2)
-            zt = check_real("zeno_tol", zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
-            method = check_choice("method", method, {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5",
-                                                     0: "DOP853", 1: "DOPRI5"})
-            self.integrator = EventDriven(model, mode, q, v, t0, tolerance=tol, dt_max=dt, zeno_tol=zt,
-                                          method=method, impact_log_size=impact_log_size)
-            self._token = "y"
+        if not isinstance(tolerances, ContactTolerances):
+            raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
+        self.on_report = check_choice("on_report", on_report, {"warn": "warn", "raise": "raise",
+                                                               "ignore": "ignore"})
+        options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
+                                impact_log_size=impact_log_size, tolerances=tolerances)
+        self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
+        # the attribute replaced (never mutated) whenever the state changes: caches key on its identity
+        self._token = "v" if self.scheme == "moreau_jean" else "y"
+        #: `Report`s of the last advance
+        self.last_reports: list[Report] = []
         self._out = None              # (state token, model outputs) of the last checked state
         self._motion = None           # (motion, checked motion) of the last non-constant input
 
@@ -143,16 +165,38 @@ class Simulator:
             raise ValueError(f"t_end = {t_end:.17g} is before the current time; allowed range "
                              f"[{integ.t:.17g}, inf)")
         gm = self._ground_motion(ag)
+        self._guarded(t_end, gm, lambda: integ.advance(t_end, gm, max_steps=self.max_steps))
+
+    def sample(self, times, ag) -> tuple:
+        """Advance through the increasing ``times`` [s] under ``ag`` and return the outputs there:
+        (contact codes, {output name: array}, impacts, overturned), arrays of len(times) + 1 that start with
+        the current state. The same guarantees as `advance` (the work budget applies between consecutive
+        times); the event-driven scheme reads its dense output, so the times do not shorten its steps."""
+        integ = self.integrator
+        times = [check_real("times", t, lo=integ.t) for t in times]
+        if not times:
+            raise ValueError("times must hold at least one time after the current one")
+        if any(b < a for a, b in zip(times, times[1:])):
+            raise ValueError("times must be increasing")
+        gm = self._ground_motion(ag)
+        return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))
+
+    def _guarded(self, t_end: float, gm, action):
+        """Run ``action`` (an advance of the integrator to t_end under gm) with the checkpoint / rollback,
+        the reports and the check of the outputs that `advance` promises; returns what action returns."""
+        integ = self.integrator
         snap = integ.checkpoint()
+        integ.reports = []
         try:
-            integ.advance(t_end, gm, max_steps=self.max_steps)
+            result = action()
+            self._check_reports(integ.reports)
             out = integ.outputs()
             if not math.isfinite(sum(out.values())):
                 bad = {k: v for k, v in out.items() if not math.isfinite(v)}
                 if bad:
                     raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}"
                                                                               for k, v in bad.items()))
-        except WorkLimitError:
+        except (WorkLimitError, SolverFailure):
             integ.rollback(snap)
             raise
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
@@ -167,6 +211,21 @@ class Simulator:
             raise
         integ.commit(snap)
         self._out = (getattr(integ, self._token), out)
+        return result
+
+    def _check_reports(self, reports) -> None:
+        """Act on the `Report`s of an advance as ``on_report`` says (see the class docstring)."""
+        self.last_reports = list(reports)
+        if not reports or self.on_report == "ignore":
+            return
+        if self.on_report == "raise":
+            failures = [r for r in reports if r.kind in Report.FAILURES]
+            if failures:
+                raise SolverFailure(f"{len(failures)} failed step(s) in this advance, the first: "
+                                    f"{failures[0].message}")
+            return                    # the caller reads last_reports (the FMUs log them)
+        msg = report_summary(reports)
+        warnings.warn(SolverWarning(msg, reports), stacklevel=_user_stacklevel())
 
     def _diverged(self, exc, t_end, gm, t_fail) -> str:
         """Message of an advance whose motion overflowed: where, and the likely cause."""
@@ -286,29 +345,38 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
     times = np.minimum(t0 + dt * np.arange(n + 1), t_end)
-    if hold == "exact" and sim.scheme == "event_driven":
-        # one pass through the output grid: the steps are not cut at the output times (dense output), and
-        # the outputs are evaluated per contact mode on arrays
-        integ = sim.integrator
-        samples = [(integ.mode, list(integ.y), integ.impacts, integ.overturned)]
-        # the work budget applies between consecutive output samples
-        samples += integ.advance(float(times[-1]), gm, samples=times[1:], max_steps=sim.max_steps)
-        modes = np.array([int(smp[0]) for smp in samples])
-        values = {}
-        for mode in np.unique(modes):
-            idx = np.nonzero(modes == mode)[0]
-            out = sim.model.mode_outputs_array(Mode(int(mode)), np.array([samples[i][1] for i in idx]))
-            for name, arr in out.items():
-                values.setdefault(name, np.empty(len(samples)))[idx] = arr
+    if hold == "exact":
+        # one pass through the output grid (the event-driven scheme reads its dense output there); the work
+        # budget applies between consecutive output samples
+        modes, values, impacts, overturned = sim.sample(times[1:], gm)
         values["contact"] = modes
-        values["impacts"] = np.array([smp[2] for smp in samples])
-        values["overturned"] = np.array([smp[3] for smp in samples], dtype=bool)
+        values["impacts"] = impacts
+        values["overturned"] = overturned
     else:
         records = [sim.outputs()]
         for k in range(n):
-            ag = ConstantMotion(gm(times[k])) if hold == "zoh" else gm
-            sim.advance(times[k + 1], ag)
+            sim.advance(times[k + 1], ConstantMotion(gm(times[k])))
             records.append(sim.outputs())
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
                   n_steps=sim.integrator.n_steps)
+
+
+def report_summary(reports) -> str:
+    """One message for the `Report`s of an advance: how many of each kind, and the first of each."""
+    kinds: dict = {}
+    for r in reports:
+        kinds.setdefault(r.kind, []).append(r)
+    return "; ".join(f"{len(rs)} {kind.replace('_', ' ')} report(s), the first: {rs[0].message}"
+                     for kind, rs in kinds.items())
+
+
+def _user_stacklevel() -> int:
+    """The stacklevel of `warnings.warn` that names the first caller outside this package."""
+    import os
+    import sys
+    package = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package + os.sep):
+        frame, level = frame.f_back, level + 1
+    return level

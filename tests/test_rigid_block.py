@@ -7,13 +7,18 @@ import pytest
 from scipy.integrate import quad
 
 from rocking_model import RigidBlock, SampledMotion, Simulator, SinePulse, simulate
-from rocking_model.contact import impact, next_mode, uplift
+from rocking_model.contact import impact, next_closed, uplift
 from rocking_model.models.base import RockingModel
 from rocking_model.modes import Mode
 
 SLENDER = dict(b=0.2, h=1.0)        # sin^2(alpha) = 0.038 < 2/3
 SQUAT = dict(b=2.0, h=1.0)          # sin^2(alpha) = 0.8 > 2/3
 TOL = dict(gap_tol=1e-12, v_tol=1e-12)
+
+
+def next_mode(block, q, v, ag, gap_tol, v_tol):
+    """The mode the event-driven scheme enters at (q, v): the production path (`contact.next_closed`)."""
+    return block.mode_of(next_closed(block, q, v, ag, gap_tol, v_tol)[0])
 
 
 def pre_impact(block, pivot_mode, speed=1.0):

@@ -1,0 +1,8 @@
+"""Integration schemes behind one contract (`Integrator`) and their registry (`SCHEMES`): the Moreau-Jean
+time-stepper (`moreau_jean`, code 0) and the event-driven scheme (`event_driven`, code 1)."""
+from .base import SCHEMES, Integrator, Report, SolverOptions, register_scheme, scheme_choices, scheme_class
+from .event_driven import EventDriven
+from .moreau_jean import MoreauJean
+
+__all__ = ["Integrator", "Report", "SolverOptions", "SCHEMES", "register_scheme", "scheme_choices",
+           "scheme_class", "EventDriven", "MoreauJean"]

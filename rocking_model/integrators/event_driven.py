@@ -37,12 +37,16 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, inverse_mass, project_to_ground, uplift
-from ..modes import CLOSED, BoundedLog, Mode, bounded_log, mode_from_closed
-from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int
+from ..contact import closed_candidates, impact, inverse_mass, next_closed, project_to_ground
+from ..modes import BoundedLog, bounded_log
+from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from ..validation import WorkLimitError, check_choice, check_real, state_bool, state_float, state_floats, state_int
+from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .state import Checkpointed, check_configuration, check_times
+from .events import bounce_search, dip_search, first_negative, locate, with_overturn
+from .moreau_jean import inexact_message
+from .state import check_configuration, check_times
 
 _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
 
@@ -52,56 +56,14 @@ _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
 #: against 20 and 55 us per step), so that the budget bounds the time of an event storm as of a long stretch
 #: of smooth steps
 EVENT_WORK = 30
+#: the Runge-Kutta pairs of the smooth phases, by name
 METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
+#: accepted spellings of ``method``
+METHOD_CHOICES = {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5", 0: "DOP853", 1: "DOPRI5"}
 
 
-def _locate(fun, a: float, ga: float, b: float, gb: float, xtol: float) -> float:
-    """Regula falsi with the Anderson-Bjorck modification on a bracket with ga > 0 >= gb; returns a time t
-    with fun(t) <= 0 and t - t_root <= xtol.
-
-    Each trial point keeps at least xtol/2 from the ends of the bracket, so that once the estimate has
-    converged the next evaluation on the far side of the root closes the bracket: some 6 to 10 evaluations
-    from a step-sized bracket to round-off (about 12 to 20 on average in the scenes, against 20 to 25 when
-    every iteration also bisects). A bisection follows a trial point that had to be held off an end without
-    closing the bracket (a function that starts tangent to zero) and two iterations that did not halve it."""
-    side = 0
-    half = 0.5 * xtol
-    width = b - a
-    n_slow = 0
-    bisect = False
-    while b - a > xtol:
-        clamped = False
-        if bisect:
-            t = 0.5 * (a + b)
-        else:
-            t = a + (b - a) * (ga / (ga - gb))
-            if t < a + half:
-                t, clamped = a + half, True
-            elif t > b - half:
-                t, clamped = b - half, True
-        gt = fun(t)
-        if gt > 0.0:
-            if side == 1:                     # a moved twice in a row: scale down the far value
-                m = 1.0 - gt / ga
-                gb *= m if m > 0.0 else 0.5
-            a, ga = t, gt
-            side = 1
-        else:
-            if side == -1:
-                m = 1.0 - gt / gb if gb != 0.0 else 0.5
-                ga *= m if m > 0.0 else 0.5
-            b, gb = t, gt
-            side = -1
-        if bisect or b - a <= 0.5 * width:
-            width = b - a
-            n_slow = 0
-        else:
-            n_slow += 1
-        bisect = clamped or n_slow >= 2
-    return b
-
-
-class EventDriven(Checkpointed):
+@register_scheme
+class EventDriven(Integrator):
     """Event-driven integration of ``model`` with relative/absolute tolerance ``tolerance``.
 
     method: "DOP853" (order 8) or "DOPRI5" (order 5, cheaper at loose tolerances).
@@ -110,25 +72,41 @@ class EventDriven(Checkpointed):
     """
 
     name = "event_driven"
+    code = 1
     LOGS = ("impact_times", "impact_log")
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
     _work_end = math.inf    #: value of n_steps at which the budget runs out
 
-    def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
+    @classmethod
+    def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
+        tol = check_real("tolerance", options.tolerance, lo=1e-14, hi=1e-2)
+        zt = check_real("zeno_tol", options.zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
+        method = check_choice("method", options.method, METHOD_CHOICES)
+        return cls(model, mode, q, v, t0, tolerance=tol, dt_max=options.dt_max or math.inf, zeno_tol=zt,
+                   method=method, impact_log_size=options.impact_log_size, tolerances=options.tolerances)
+
+    def __init__(self, model, mode, q: np.ndarray, v: np.ndarray, t0: float,
                  tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = 1e-6,
-                 max_events: int = 100000, method: str = "DOP853", impact_log_size: int | None = None):
+                 max_events: int = 100000, method: str = "DOP853", impact_log_size: int | None = None,
+                 tolerances: ContactTolerances = DEFAULT_TOLERANCES):
         self.model = model
         self.t = float(t0)
         self.tolerance = tolerance
         self.dt_max = dt_max
         self.method = method
-        L = model.length_scale
-        self.gap_tol = 1e-9 * L
-        self.v_tol = 1e-10 * math.sqrt(model.g * L)
-        self.v_zeno = zeno_tol * math.sqrt(model.g * L)
+        self.tolerances = tolerances
+        scaled = tolerances.for_model(model)
+        #: [m] a corner this close to the ground is at the ground (ContactTolerances.gap)
+        self.gap_tol = scaled.gap
+        #: [m/s] a normal velocity this small is zero (ContactTolerances.rest_velocity)
+        self.v_tol = scaled.rest_velocity
+        self.v_zeno = zeno_tol * scaled.velocity_scale
         #: [1] how far below zero a disarmed (normalised) event function may go before it fires
-        self.event_tol = 1e-10
+        self.event_tol = tolerances.event
+        #: [s] longest step of a phase without state (ContactTolerances.stateless_step)
+        self.stateless_step = scaled.stateless_step
+        self.reports = []
         self.max_events = max_events
         self.impacts = 0
         self.impact_times: BoundedLog = BoundedLog(impact_log_size)
@@ -137,11 +115,11 @@ class EventDriven(Checkpointed):
         self.overturned = False
         self.n_steps = 0
         self._h = None
-        self._set_state(Mode(mode), np.asarray(q, float), np.asarray(v, float))
+        self._set_state(model.mode_code(int(mode)), np.asarray(q, float), np.asarray(v, float))
 
     # ------------------------------------------------------------------ state
     def _set_state(self, mode, q, v):
-        self.mode = Mode(mode)
+        self.mode = mode
         r, rd = self.model.reduce(self.mode, q, v)
         self.k = len(r)
         self.y = [float(a) for a in r] + [float(a) for a in rd]
@@ -159,13 +137,15 @@ class EventDriven(Checkpointed):
         return self.model.mode_outputs(self.mode, self.y)
 
     def _functions(self, mode, ag):
-        """model.mode_functions(mode, ag), reused while the mode and a constant input stay the same (each
+        """(rhs, monitors, G) of model.mode_functions(mode, ag), G the event function vector
+        (`events.with_overturn`); reused while the mode and a constant input stay the same (each
         co-simulation step would otherwise build them twice)."""
         key = (mode, ag.value) if ag.constant else (mode, id(ag))
         cached = self.__dict__.get("_fn_cache")
         if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
             return cached[2]
-        fns = self.model.mode_functions(mode, ag)
+        rhs, monitors = self.model.mode_functions(mode, ag)
+        fns = (rhs, monitors, with_overturn(monitors))
         self._fn_cache = (key, ag, fns)
         return fns
 
@@ -196,7 +176,7 @@ class EventDriven(Checkpointed):
         error."""
         model = self.model
         t = state_float(state, "t")
-        mode = Mode(state_int(state, "mode", 0, 3))
+        mode = model.mode_code(state_int(state, "mode", 0, model.n_modes - 1))
         k = len(model.mode_dofs(mode))
         y = state_floats(state, "y", length=2 * k)
         impacts = state_int(state, "impacts")
@@ -240,24 +220,40 @@ class EventDriven(Checkpointed):
         return cached[mode]
 
     def _atol_of(self, mode):
-        dof_scales = getattr(self.model, "dof_scales", None)
-        idx = self.model.mode_dofs(mode)
-        if dof_scales is None:
-            s = [1.0 if i == self.model.phi_index else self.model.length_scale for i in idx]
-        else:
-            s = [dof_scales[i] for i in idx]
+        dof_scales = self.model.dof_scales
+        s = [dof_scales[i] for i in self.model.mode_dofs(mode)]
         ts = self.model.time_scale
         return [self.tolerance * a for a in s] + [self.tolerance * a / ts for a in s]
 
     # ------------------------------------------------------------------ driver
-    def advance(self, t_end: float, ag, samples=None, max_steps: int | None = None):
+    def advance(self, t_end: float, ag, max_steps: int | None = None) -> None:
         """Integrate to exactly t_end; ``ag`` is a GroundMotion.
 
-        samples: increasing times in (t, t_end] at which to record the motion; returns the list of
-        (mode, y, impacts, overturned) there (None when no samples are asked for).
-        max_steps: work budget (None: unlimited): Runge-Kutta steps plus EVENT_WORK per event, of this call
-        or, with samples, between two consecutive samples; exceeding it raises `WorkLimitError` (the state is
-        then partly advanced: `Simulator.advance` restores it)."""
+        max_steps: work budget (None: unlimited): Runge-Kutta steps plus EVENT_WORK per event; exceeding it
+        raises `WorkLimitError` (the state is then partly advanced: `Simulator.advance` restores it)."""
+        self._run(t_end, ag, None, max_steps)
+
+    def sample(self, times, ag, max_steps: int | None = None):
+        """Outputs at ``times`` in one pass, read from the dense output (a fine output grid does not shorten
+        the steps) and evaluated per contact mode on arrays; the work budget applies between consecutive
+        times. See `Integrator.sample`."""
+        samples = [(self.mode, list(self.y), self.impacts, self.overturned)]
+        samples += self._run(float(times[-1]), ag, times, max_steps)
+        modes = np.array([int(smp[0]) for smp in samples])
+        values = {}
+        for code in np.unique(modes):
+            idx = np.nonzero(modes == code)[0]
+            out = self.model.mode_outputs_array(self.model.mode_code(int(code)),
+                                                np.array([samples[i][1] for i in idx]))
+            for name, arr in out.items():
+                values.setdefault(name, np.empty(len(samples)))[idx] = arr
+        return (modes, values, np.array([smp[2] for smp in samples]),
+                np.array([smp[3] for smp in samples], dtype=bool))
+
+    def _run(self, t_end: float, ag, samples, max_steps):
+        """`advance` to t_end recording (mode, y, impacts, overturned) at the increasing ``samples`` in
+        (t, t_end] (None: no samples, returns None); the work budget of ``max_steps`` then applies between two
+        samples."""
         self._max_work = max_steps
         self._work_end = math.inf if max_steps is None else self.n_steps + max_steps
         self._span = (self.t, t_end)
@@ -279,7 +275,7 @@ class EventDriven(Checkpointed):
                 break
             tb = ag.next_breakpoint(self.t)
             t_stop = t_end if t_end < tb else tb
-            if self.mode != Mode.FLIGHT and not kink:
+            if self.model.closed_of(self.mode) and not kink:
                 self._settle(self.t, ag)
             if self._segment(t_stop, ag, pending, out):
                 self._live = None
@@ -306,20 +302,23 @@ class EventDriven(Checkpointed):
     def _settle(self, t, ag):
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
         mode = self.mode
-        closed = CLOSED[mode]
-        _, monitors = self._functions(mode, ag)
+        closed = self.model.closed_of(mode)
+        _, monitors, _ = self._functions(mode, ag)
         e = monitors(t, self.y)
+        nc = self.model.n_contacts
         # fast path: closed corners loaded, open corners clearly open (then the active set still holds)
-        if all(e[i] > 0.0 if i in closed else e[i] > 1e-9 for i in (0, 1)):
+        clear = self.tolerances.clearly_open
+        if all(e[i] > 0.0 if i in closed else e[i] > clear for i in range(nc)):
             return
         q, v = self.state()
         if all(i in closed for i in closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)):
             if all(e[i] > 0.0 for i in closed):
                 return
-        new = self._select_mode(q, v, ag(t))
+        new = self._select_mode(q, v, ag(t), t)
         if new != mode:
             self._set_state(new, q, v)
 
+    # ------------------------------------------------------------------ smooth phase
     def _segment(self, t_stop: float, ag, pending, out) -> bool:
         """Integrate the current mode towards t_stop; returns True if an event ended the segment."""
         mode, k = self.mode, self.k
@@ -337,14 +336,15 @@ class EventDriven(Checkpointed):
                 out.append((mode, list(self.y), self.impacts, False))
             self._full = None
             return False
-        rhs, G = self._functions(mode, ag)
-        kinds = [(_KIND_RELEASE if i in CLOSED[mode] else _KIND_IMPACT) for i in (0, 1)]
+        rhs, _, G = self._functions(mode, ag)
+        nc = self.model.n_contacts
+        closed = self.model.closed_of(mode)
+        kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(nc)] + [_KIND_OVERTURN]
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
-        max_step = self.dt_max if k else min(self.dt_max, 0.1 * self.model.time_scale)
+        max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
         stepper = self._stepper(mode, rhs, max_step)
         g_prev = G(self.t, self.y)
-        g_prev[2] = 0.5 * math.pi - abs(g_prev[2])
         tol = self.event_tol
         armed = [g > 0.0 for g in g_prev]
         watch = [not a and g > -tol for a, g in zip(armed, g_prev)]
@@ -352,75 +352,31 @@ class EventDriven(Checkpointed):
         while stepper.t < t_stop:
             stepper.step(t_stop)
             self.n_steps += 1
+            if stepper.failed:
+                stepper.failed = False
+                self.report("failed_step", stepper.t, stepper.failure)
             if self.n_steps > self._work_end:
                 raise WorkLimitError(self._work_message(stepper))
             g_new = G(stepper.t, stepper.y)
-            g_new[2] = 0.5 * math.pi - abs(g_new[2])
-            dense = None
-            t0, t_hit = stepper.t_old, stepper.t
             rose = {}
             if first:
                 first = False
-                for i in (0, 1):
-                    if watch[i] and kinds[i] == _KIND_IMPACT and g_new[i] <= 0.0:
-                        # an open corner that starts at the ground and is back at or below it after the first
-                        # step: a short bounce (it left slowly) rose above zero just after the start; if so it
-                        # is armed and lands at zero, not event_tol below
-                        if dense is None:
-                            dense = stepper.dense_output()
-                        found = self._rise(dense, G, i, t0, t_hit, 1e-3 * tol)
-                        if found is not None:
-                            armed[i], watch[i] = True, False
-                            rose[i] = found
-            hits = [i for i in range(3) if (armed[i] and g_new[i] <= 0.0) or (watch[i] and g_new[i] <= -tol)]
-            g_a, g_b = g_prev, g_new
-            if not hits:
-                hits, t0, t_hit, g_a, g_b, dense = self._dips(stepper, G, armed, g_prev, g_new)
-            if hits:
-                if dense is None:
-                    dense = stepper.dense_output()
-                xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
-
-                def earliest(ids, ta, ga, tb, gb):
-                    best = None
-                    for i in ids:
-                        shift = 0.0 if armed[i] else tol
-
-                        def gi(t, i=i, shift=shift):
-                            val = G(t, dense(t))[i]
-                            return (0.5 * math.pi - abs(val) if i == 2 else val) + shift
-                        ta_i, ga_i = rose[i] if i in rose and rose[i][0] > ta else (ta, ga)
-                        te = _locate(gi, ta_i, ga_i[i] + shift, tb, gb[i] + shift, xtol)
-                        if best is None or te < best[0]:
-                            best = (te, i)
-                    return best
-                te, i = earliest(hits, t0, g_a, t_hit, g_b)
-                # another contact function may dip below zero and come back before that event (e.g. the
-                # pivot force of a block that lifts off just before it overturns)
-                others = [j for j in (0, 1) if armed[j] and j not in hits]
-                if others and te > t0:
-                    ta, ga = t0, g_a
-                    for n in range(1, 16):
-                        tn = t0 + (te - t0) * n / 16.0
-                        gn = G(tn, dense(tn))
-                        gn[2] = 0.5 * math.pi - abs(gn[2])
-                        neg = [j for j in others if gn[j] <= 0.0]
-                        if neg:
-                            te, i = earliest(neg, ta, ga, tn, gn)
-                            break
-                        ta, ga = tn, gn
+                rose = self._bounces(stepper, G, kinds, watch, armed, g_new)
+            event = self._find_event(stepper, G, armed, watch, rose, g_prev, g_new)
+            if event is not None:
+                te, i, dense = event
                 self._record_samples(pending, out, mode, dense, te, inclusive=False)
                 if k and stepper.h_abs > 0:
                     self._h = stepper.h_abs
                 self.t = te
                 self.y = dense(te)
                 self._full = None
-                self._handle(kinds[i] if i < 2 else _KIND_OVERTURN, te, ag)
+                self._handle(kinds[i], te, ag)
                 return True
             if pending and pending[0] <= stepper.t:
                 self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
-            for i in range(3):
-                if g_new[i] > 0.0:
+            for i, g in enumerate(g_new):
+                if g > 0.0:
                     armed[i] = True
                     watch[i] = False
             g_prev = g_new
@@ -431,6 +387,66 @@ class EventDriven(Checkpointed):
         self._full = None
         self._live = stepper
         return False
+
+    def _bounces(self, stepper, G, kinds, watch, armed, g_new) -> dict:
+        """After the first step of a segment: an open corner that started at the ground and is back at or
+        below it had a short bounce (it left slowly) just after the start, if `bounce_search` finds it above
+        zero; it is then armed and lands at zero, not event_tol below. Returns {corner: (t, G(t))} of those
+        found (``armed`` and ``watch`` updated)."""
+        rose = {}
+        dense = None
+        level = self.tolerances.rise * self.event_tol
+        for i, kind in enumerate(kinds):
+            if watch[i] and kind == _KIND_IMPACT and g_new[i] <= 0.0:
+                if dense is None:
+                    dense = stepper.dense_output()
+                found = bounce_search(dense, G, i, stepper.t_old, stepper.t, level)
+                if found is not None:
+                    armed[i], watch[i] = True, False
+                    rose[i] = found
+        return rose
+
+    def _find_event(self, stepper, G, armed, watch, rose, g_prev, g_new):
+        """(t_event, function index, dense output) of the first event in the last step, or None.
+
+        An armed function fires at zero, a disarmed one (watched) at -event_tol; without a sign change at
+        the ends, a dip inside the step is looked for (`dip_search`). Before the event found, another armed
+        contact function may dip below zero and come back (the pivot force of a block that lifts off just
+        before it overturns): the step up to it is sub-sampled for that (`first_negative`)."""
+        tol = self.event_tol
+        n_sub = self.tolerances.sub_samples
+        t0, t_hit = stepper.t_old, stepper.t
+        hits = [i for i in range(len(g_new)) if (armed[i] and g_new[i] <= 0.0) or (watch[i] and g_new[i] <= -tol)]
+        g_a, g_b = g_prev, g_new
+        dense = None
+        if not hits:
+            hits, t0, t_hit, g_a, g_b, dense = dip_search(stepper, G, armed, g_prev, g_new, n_sub)
+            if not hits:
+                return None
+        if dense is None:
+            dense = stepper.dense_output()
+        xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
+
+        def earliest(ids, ta, ga, tb, gb):
+            best = None
+            for i in ids:
+                shift = 0.0 if armed[i] else tol
+
+                def gi(t, i=i, shift=shift):
+                    return G(t, dense(t))[i] + shift
+                ta_i, ga_i = rose[i] if i in rose and rose[i][0] > ta else (ta, ga)
+                te = locate(gi, ta_i, ga_i[i] + shift, tb, gb[i] + shift, xtol)
+                if best is None or te < best[0]:
+                    best = (te, i)
+            return best
+        te, i = earliest(hits, t0, g_a, t_hit, g_b)
+        others = [j for j in range(len(g_new) - 1) if armed[j] and j not in hits]
+        if others and te > t0:
+            found = first_negative(G, dense, t0, g_a, te, others, n_sub)
+            if found is not None:
+                neg, ta, ga, tn, gn = found
+                te, i = earliest(neg, ta, ga, tn, gn)
+        return te, i, dense
 
     def _stepper(self, mode, rhs, max_step):
         """The Runge-Kutta stepper of a segment starting at the current state: the last segment's, carried
@@ -467,58 +483,6 @@ class EventDriven(Checkpointed):
                 "Way out: shorter communication steps, a looser tolerance, a larger dt_max (0: uncapped), or "
                 "max_steps=None (unlimited, for trusted batch runs)")
 
-    @staticmethod
-    def _rise(dense, G, i, t0, t1, level):
-        """(t, G(t)) of a time in (t0, t1) where function i is above ``level`` (> 0, above round-off), sampled
-        at t0 + (t1 - t0) 4^-n down to round-off in time (it starts at zero with a positive slope), or None."""
-        d = t1 - t0
-        xtol = 4.0 * math.ulp(max(abs(t1), 1.0))
-        while d > xtol:
-            d *= 0.25
-            t = t0 + d
-            gt = G(t, dense(t))
-            if gt[i] > level:
-                gt[2] = 0.5 * math.pi - abs(gt[2])
-                return t, gt
-        return None
-
-    @staticmethod
-    def _may_dip(g0: float, gm: float, g1: float) -> bool:
-        """Whether a function positive at both ends of a step may reach zero inside: its midpoint lies
-        below both ends, or the parabola through (0, g0), (1/2, gm), (1, g1) has its vertex inside the step
-        and comes down to less than half the smaller end value."""
-        lo = min(g0, g1)
-        if gm < lo:
-            return True
-        c = 2.0 * (g0 + g1) - 4.0 * gm
-        if c <= 0.0:
-            return False
-        b = g1 - g0 - c
-        x = -b / (2.0 * c)
-        return 0.0 < x < 1.0 and g0 + 0.5 * b * x < 0.5 * lo
-
-    def _dips(self, stepper, G, armed, g_prev, g_new):
-        """A contact function that dips below zero and comes back within the step (a short excursion of
-        the base of a vibrating column, the pivot force of a block about to lift off): look inside the
-        step when a cubic Hermite estimate of the midpoint value says it may (`_may_dip`). Returns (hits, t_a, t_b, g_a, g_b, dense) of the first sub-interval with a sign change."""
-        t0, t1 = stepper.t_old, stepper.t
-        tm = 0.5 * (t0 + t1)
-        gm = G(tm, stepper.hermite_mid())
-        dip = [i for i in (0, 1) if armed[i] and self._may_dip(g_prev[i], gm[i], g_new[i])]
-        if not dip:
-            return [], t0, t1, g_prev, g_new, None
-        dense = stepper.dense_output()
-        ga, ta = g_prev, t0
-        for j in range(1, 16):
-            tj = t0 + (t1 - t0) * j / 16.0
-            gj = G(tj, dense(tj))
-            gj[2] = 0.5 * math.pi - abs(gj[2])
-            neg = [i for i in dip if gj[i] <= 0.0]
-            if neg:
-                return neg, ta, tj, ga, gj, dense
-            ga, ta = gj, tj
-        return [], t0, t1, g_prev, g_new, dense
-
     # ------------------------------------------------------------------ events
     def _handle(self, kind, t, ag):
         q, v = self.state()
@@ -528,40 +492,41 @@ class EventDriven(Checkpointed):
         if kind == _KIND_IMPACT:
             self._impact(q, v, t, ag(t))
         else:
-            self._enter(q, v, ag(t))
+            self._enter(q, v, ag(t), t)
 
     def _impact(self, q, v, t, ag_t):
         model = self.model
         g = model.gaps(q)
-        cand = [i for i in (0, 1) if g[i] <= self.gap_tol]
+        cand = [i for i in range(model.n_contacts) if g[i] <= self.gap_tol]
+        closed_before = model.closed_of(self.mode)
         # a corner found below the ground beyond round-off fired event_tol below it: a grazing landing (it
         # never rose measurably: the tail of an impact accumulation). It is put back onto the ground (the next
         # segment starts there, its watch margin unused) and closed plastically (the Zeno rule)
-        grazing = tuple(i for i in cand if g[i] < -1e-3 * self.gap_tol)
+        grazing = tuple(i for i in cand if g[i] < -self.tolerances.grazing * self.gap_tol)
         q_found = q
         if grazing:
-            q = project_to_ground(model, q, set(cand) | set(CLOSED[self.mode]))
-        classical = getattr(model, "classical_impact_velocity", None)
-        if classical is not None and self.mode in (Mode.LEFT, Mode.RIGHT) and len(cand) == 2:
-            v_plus = classical(q, v, self.mode)
+            q = project_to_ground(model, q, set(cand) | set(closed_before))
+        if len(closed_before) == 1 and len(cand) == model.n_contacts == 2:
+            # an impact rule of the model (the classical rule) replaces the impact LCP at a rocking impact
+            v_plus = model.classical_impact_velocity(q, v, self.mode)
             if v_plus is not None:
                 self._record_impact(t, v, v_plus)
-                self._enter(q, v_plus, ag_t)
+                self._enter(q, v_plus, ag_t, t)
                 return
-        v_plus = self._impact_velocity(q, v, cand, grazing, ag_t)
-        mode = self._select_mode(q, v_plus, ag_t)
-        if any(i not in CLOSED[mode] for i in grazing):
+        v_plus = self._impact_velocity(q, v, cand, grazing, ag_t, t)
+        mode = self._select_mode(q, v_plus, ag_t, t)
+        if any(i not in model.closed_of(mode) for i in grazing):
             # held closed, the corner is still sent into flight: the sticking LCP has no solution (the corner
             # should slide, bug 7); not held (that would be a chatter of grazing landings)
             q = q_found
-            v_plus = self._impact_velocity(q, v, cand, (), ag_t)
-            mode = self._select_mode(q, v_plus, ag_t)
+            v_plus = self._impact_velocity(q, v, cand, (), ag_t, t)
+            mode = self._select_mode(q, v_plus, ag_t, t)
         U_minus = model.contact_jacobians(q)[0].T @ v
         if any(U_minus[i] < -self.v_zeno for i in cand):
             self._record_impact(t, v, v_plus)
         self._set_state(mode, q, v_plus)
 
-    def _impact_velocity(self, q, v, cand, closed, ag_t):
+    def _impact_velocity(self, q, v, cand, closed, ag_t, t):
         """Post-impact velocity by the impact LCP; corners of ``closed``, corners that would leave slower
         than v_Zeno and (when all leave) corners whose free-flight bounce would stay within gap_tol of the
         ground are closed plastically (the Zeno rule)."""
@@ -579,6 +544,8 @@ class EventDriven(Checkpointed):
             zeno += [i for i in cand if i not in zeno and U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol]
         if zeno:
             sol = impact(model, q, v, cand, forced=tuple(zeno))
+        if not sol.exact:
+            self.report("inexact_contact", t, inexact_message(sol, t, "impact LCP"))
         return sol.v
 
     def _record_impact(self, t, v_minus, v_plus):
@@ -586,10 +553,12 @@ class EventDriven(Checkpointed):
         self.impact_times.append(t)
         self.impact_log.append((t, np.array(v_minus), np.array(v_plus)))
 
-    def _select_mode(self, q, v, ag_t) -> Mode:
-        """The mode that the acceleration LCP selects at the consistent state (q, v)."""
-        cand = closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)
-        return mode_from_closed(uplift(self.model, q, v, ag_t, cand).active) if cand else Mode.FLIGHT
+    def _select_mode(self, q, v, ag_t, t):
+        """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_closed`)."""
+        closed, sol = next_closed(self.model, q, v, ag_t, self.gap_tol, self.v_tol)
+        if sol is not None and not sol.exact:
+            self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
+        return self.model.mode_of(closed)
 
-    def _enter(self, q, v, ag_t):
-        self._set_state(self._select_mode(q, v, ag_t), q, v)
+    def _enter(self, q, v, ag_t, t):
+        self._set_state(self._select_mode(q, v, ag_t, t), q, v)

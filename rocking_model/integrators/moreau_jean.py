@@ -23,33 +23,54 @@ import numpy as np
 
 from ..contact import inverse_mass, project_to_ground
 from ..lcp import solve_contact_lcp
-from ..modes import CLOSED, BoundedLog, Mode, bounded_log, mode_from_closed
-from ..validation import WorkLimitError, state_bool, state_float, state_floats, state_int, state_ints
-from .state import Checkpointed, check_configuration, check_times
+from ..modes import BoundedLog, bounded_log
+from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from ..validation import WorkLimitError, check_real, state_bool, state_float, state_floats, state_int, state_ints
+from .base import Integrator, SolverOptions, register_scheme
+from .state import check_configuration, check_times
+
+#: [s] default step
+DT_DEFAULT = 1e-3
 
 
-class MoreauJean(Checkpointed):
+@register_scheme
+class MoreauJean(Integrator):
     """LCP time-stepper on the full coordinates of ``model``; steps of at most ``dt_max`` [s] and at most
     ``model.step_limit`` (0.25/omega for the flexible oscillator)."""
 
     name = "moreau_jean"
+    code = 0
     LOGS = ("impact_times",)
 
-    def __init__(self, model, mode: Mode, q: np.ndarray, v: np.ndarray, t0: float,
-                 dt_max: float = 1e-3, theta: float = 0.5, impact_log_size: int | None = None):
+    @classmethod
+    def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "MoreauJean":
+        theta = check_real("theta", options.theta, lo=0.5, hi=1.0)
+        return cls(model, mode, q, v, t0, dt_max=options.dt_max or DT_DEFAULT, theta=theta,
+                   impact_log_size=options.impact_log_size, tolerances=options.tolerances)
+
+    def __init__(self, model, mode, q: np.ndarray, v: np.ndarray, t0: float,
+                 dt_max: float = DT_DEFAULT, theta: float = 0.5, impact_log_size: int | None = None,
+                 tolerances: ContactTolerances = DEFAULT_TOLERANCES):
         self.model = model
+        self.tolerances = tolerances
+        tol = tolerances.for_model(model)
+        #: [m] round-off margin of the candidate test (ContactTolerances.step_gap)
+        self.gap_margin = tol.step_gap
+        #: [m/s] closing slower than this is no impact; two closed corners this slow are at rest
+        self.v_rest = tol.step_rest_velocity
+        self.reports = []
         self.q = np.array(q, dtype=float)
         self.v = np.array(v, dtype=float)
         self.t = float(t0)
         self.dt_max = min(dt_max, model.step_limit)  # sub-step where the model needs it (stiff columns)
         self.theta = theta
-        self.mode = Mode(mode)
+        self.mode = model.mode_code(int(mode))
         self.impacts = 0
         self.impact_times: BoundedLog = BoundedLog(impact_log_size)
         self.overturned = False
         self.n_steps = 0
         # corners that carried impulse in the last step (impacts are counted on newly closing corners)
-        self._closed = set(CLOSED[self.mode])
+        self._closed = set(model.closed_of(self.mode))
 
     def advance(self, t_end: float, ag, max_steps: int | None = None) -> None:
         """Integrate to exactly t_end in equal steps of at most dt_max.
@@ -105,14 +126,15 @@ class MoreauJean(Checkpointed):
         g = model.gaps(q)
         W_N, W_T = model.contact_jacobians(q)
         U = W_N.T @ v
-        classical = getattr(model, "classical_impact_velocity", None)
         rule_impact = False
-        if classical is not None and self.mode in (Mode.LEFT, Mode.RIGHT):
-            hitting = 1 if self.mode == Mode.LEFT else 0
+        closed_now = model.closed_of(self.mode)
+        if len(closed_now) == 1 and model.n_contacts == 2:
+            hitting = 1 - closed_now[0]
             if g[hitting] + dt * U[hitting] <= 0.0 and U[hitting] < 0.0:
-                # classical impact rule: replace the pre-impact velocity by the rule's post-impact one; the
-                # step's LCP (e_N applied to the new, non-approaching velocity) then keeps the contacts closed
-                v_rule = classical(q, v, self.mode)
+                # an impact rule of the model (the classical rule): replace the pre-impact velocity by the
+                # rule's post-impact one; the step's LCP (e_N applied to the new, non-approaching velocity)
+                # then keeps the contacts closed
+                v_rule = model.classical_impact_velocity(q, v, self.mode)
                 if v_rule is not None:
                     v = v_rule
                     v_free = v + (v_free - self.v)
@@ -123,18 +145,22 @@ class MoreauJean(Checkpointed):
         # a needless candidate only gets a zero percussion from the LCP
         g_half = g + 0.5 * dt * U
         g_free = g + dt * ((1.0 - theta) * U + theta * (W_N.T @ v_free))
-        margin = 1e-12 * model.length_scale
-        active = [i for i in (0, 1) if g_half[i] <= margin or g_free[i] <= 0.0]
+        margin = self.gap_margin
+        active = [i for i in range(model.n_contacts) if g_half[i] <= margin or g_free[i] <= 0.0]
         if active:
             b_N = model.e_N * np.minimum(U, 0.0)
-            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(2), active,
-                                    hint=[i for i in self._closed if i in active])
+            tols = self.tolerances
+            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(model.n_contacts), active,
+                                    hint=[i for i in self._closed if i in active], rtol=tols.lcp_exact,
+                                    hint_tol=tols.lcp_hint)
+            if not sol.exact:
+                self.report("inexact_contact", t + dt, inexact_message(sol, t + dt, "step LCP"))
             v_new = sol.v
             closed = set(sol.active)
         else:
             v_new = v_free
             closed = set()
-        v_scale = 1e-9 * math.sqrt(model.g * model.length_scale)
+        v_scale = self.v_rest
         new = [i for i in closed - self._closed if U[i] < -v_scale]
         if new or rule_impact:
             self.impacts += 1
@@ -143,13 +169,14 @@ class MoreauJean(Checkpointed):
         q_new = q + dt * ((1.0 - theta) * v + theta * v_new)
         if closed:
             q_new = self._project(q_new, sorted(closed))
-        if len(closed) == 2 and np.all(np.abs(W_N.T @ v_new) <= v_scale):
-            # both corners stuck and at rest in the normal direction: the state is on the full-contact
+        if len(closed) == model.n_contacts and np.all(np.abs(W_N.T @ v_new) <= v_scale):
+            # all corners stuck and at rest in the normal direction: the state is on the full-contact
             # manifold up to round-off; put it there exactly so that phi stays 0 at rest (no drift)
-            q_new, v_new = model.embed(Mode.FULL, *model.reduce(Mode.FULL, q_new, v_new))
+            full = model.mode_of(closed)
+            q_new, v_new = model.embed(full, *model.reduce(full, q_new, v_new))
         self.q = q_new
         self.v = v_new
-        self.mode = mode_from_closed(closed)
+        self.mode = model.mode_of(closed)
         self.n_steps += 1
         if abs(self.q[model.phi_index]) >= 0.5 * math.pi:
             self.overturned = True
@@ -185,13 +212,14 @@ class MoreauJean(Checkpointed):
         t = state_float(state, "t")
         q = np.array(state_floats(state, "q", length=n))
         v = np.array(state_floats(state, "v", length=n))
-        mode = Mode(state_int(state, "mode", 0, 3))
-        closed = state_ints(state, "closed", lo=0, hi=1, max_len=2)
+        mode = model.mode_code(state_int(state, "mode", 0, model.n_modes - 1))
+        nc = model.n_contacts
+        closed = state_ints(state, "closed", lo=0, hi=nc - 1, max_len=nc)
         if closed != sorted(set(closed)):
             raise ValueError(f"state field 'closed' = {closed!r} must list distinct corners in increasing order")
-        if mode_from_closed(closed) != mode:
+        if model.mode_of(closed) != mode:
             raise ValueError(f"state field 'mode' = {int(mode)} does not match 'closed' = {closed!r}; expected "
-                             f"{int(mode_from_closed(closed))}")
+                             f"{int(model.mode_of(closed))}")
         impacts = state_int(state, "impacts")
         overturned = state_bool(state, "overturned")
         n_steps = state_int(state, "n_steps")
@@ -207,3 +235,10 @@ class MoreauJean(Checkpointed):
     def outputs(self) -> dict:
         """The model's outputs at the current time."""
         return self.model.outputs(self.q, self.v)
+
+
+def inexact_message(sol, t: float, what: str) -> str:
+    """Message of a `Report` of kind "inexact_contact"."""
+    return (f"the {what} at t = {t:.17g} s has no solution under the sticking law (least violation "
+            f"{sol.violation:.3g}, active set {tuple(int(i) for i in sol.active)}): kept the least-violating "
+            "one; a corner may sink or lift against the law (physics notes: the mu -> inf limit)")

@@ -11,6 +11,7 @@ dense output) and `rocking_model.integrators.dopri5` (order 5, 4th-order dense o
 """
 from __future__ import annotations
 
+import linecache
 import math
 from typing import Callable, Sequence
 
@@ -101,7 +102,11 @@ class _Compiled:
         d.append("    return [" + ", ".join("[" + ", ".join(r) + "]" for r in rows) + "]")
         src = "\n".join(lines) + "\n\n" + "\n".join(d) + "\n\n" + tab.interpolant_source(n) + "\n"
         scope: dict = {"sqrt": math.sqrt}
-        exec(compile(src, f"<{tab.name} n={n}>", "exec"), scope)
+        filename = f"<rocking_model generated {tab.name} n={n}>"
+        # registered with linecache so that tracebacks and debuggers show the generated lines
+        linecache.cache[filename] = (len(src), None, src.splitlines(True), filename)
+        exec(compile(src, filename, "exec"), scope)
+        self.filename = filename
         self.rk_step = scope["rk_step"]
         self.dense = scope["dense"]
         self.make_interpolant = scope["make_interpolant"]
@@ -123,6 +128,10 @@ class ExplicitRK:
     interpolant of the last step. ``first_step`` is a guess (estimated when None)."""
 
     tableau: Tableau
+    #: set by `step` when it had to accept a step at the smallest step size with its error above the
+    #: tolerance (``failure`` says where); the caller reports it and clears the flag
+    failed: bool = False
+    failure: str = ""
 
     def __init__(self, fun: Callable, t0: float, y0, rtol: float, atol, max_step: float = math.inf,
                  first_step: float | None = None, f0=None):
@@ -198,10 +207,16 @@ class ExplicitRK:
                 h_abs = abs(h)
             y_new, f_new, err, K = rk_step(self.fun, t, y, self.f, h, atol, rtol, t_new)
             if err < 1.0 or h_abs <= min_step:
-                if not err < 1.0 and not math.isfinite(err):
-                    # even the smallest step does not give a finite state: the motion has overflowed
-                    raise FloatingPointError(f"{self.tableau.name}: the state is not finite after a step of "
-                                             f"{h:.3g} s from t = {t:.17g} s (y = {y!r})")
+                if not err < 1.0:
+                    if not math.isfinite(err):
+                        # even the smallest step does not give a finite state: the motion has overflowed
+                        raise FloatingPointError(f"{self.tableau.name}: the state is not finite after a step "
+                                                 f"of {h:.3g} s from t = {t:.17g} s (y = {y!r})")
+                    # accepted only because no smaller step exists: the caller reports it
+                    self.failed = True
+                    self.failure = (f"{self.tableau.name}: the step of {h:.3g} s from t = {t:.17g} s was accepted "
+                                    f"at the smallest step size with its error estimate {err:.3g} times the "
+                                    "tolerance: the solution may be inaccurate there")
                 factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err ** self._err_exp)
                 if rejected:
                     factor = min(1.0, factor)

@@ -1,15 +1,47 @@
-"""Common interface of the rocking models.
+"""Common interface of the rocking models: what a model must provide, what it may provide.
 
 A model bundles, in the Siconos sense,
 - the dynamical system: generalized coordinates q (full description, ground frame), mass matrix M(q),
   non-contact generalized forces f(q, v, ag) (gravity, elastic, damping, gyroscopic, and the inertial force
   of the ground acceleration ag);
-- the contact relation: the two base corners (index 0 = left, 1 = right), their normal gaps g_N(q), the
-  normal and tangential Jacobians W_N, W_T (columns per contact) and the drift terms W_dot^T v;
-- the reduced coordinates r of each contact mode (`Mode`), with the embedding q = q(r), v = J(r) r_dot.
+- the contact relation: ``n_contacts`` contacts (the rocking models: the two base corners, 0 = left,
+  1 = right), their normal gaps g_N(q), the normal and tangential Jacobians W_N, W_T (one column per contact)
+  and the drift terms W_dot^T v;
+- the reduced coordinates r of each contact mode (a set of closed contacts), with the embedding q = q(r),
+  v = J(r) r_dot.
 
-The nonsmooth law (Newton impact, sticking) and the one-step problems (LCPs) live in `rocking_model.lcp`;
-the integrators only talk to this interface.
+The nonsmooth law (Newton impact, sticking) and the one-step problems (LCPs) live in `rocking_model.lcp` and
+`rocking_model.contact`; the integrators only talk to this interface.
+
+Contract (in the style of scipy's ``OdeSolver``)
+-----------------------------------------------
+A subclass must provide:
+
+    dof_names, phi_index        names of q and the index of the rotation phi (overturning: |phi| = pi/2)
+    e_N, g                      coefficient of restitution [1], gravity [m/s2]
+    mass_matrix(q), forces(q, v, ag)
+    gaps(q), contact_jacobians(q), contact_drift(q, v)
+    mode_dofs(mode), embed(mode, r, r_dot), mode_jacobian(mode, r, r_dot)
+    rest_position(), energy(q, v), outputs(q, v), initial_state(**initial)
+    length_scale [m], time_scale [s]
+
+A subclass may provide (the defaults here are generic and correct, the overrides are faster or add a rule):
+
+    n_contacts = 2                              number of contacts
+    mode_of(closed), closed_of(mode)            the contact mode of a set of closed contacts and back
+                                                (default: `Mode`, the four modes of two corners)
+    inverse_mass_matrix(q)                      default: inv(M(q))
+    stiff_jacobians(q, v)                       (K, C) of a stiff linear part of f; default None
+    step_limit                                  largest time-stepper step [s]; default inf
+    dof_scales                                  scale of each coordinate for error control; default 1 for
+                                                phi, length_scale for the others
+    classical_impact_velocity(q, v_minus, mode) an impact rule replacing the impact LCP at a rocking impact;
+                                                default None (the LCP with Newton's law)
+    reduced_acceleration, contact_forces        per mode, from the numpy interface
+    mode_functions, mode_outputs(_array)        float-level right-hand sides, event functions and outputs
+    force_scale                                 scale of the contact forces [N]; default |f| at rest
+    fields()                                    declared parameters (name, unit, range, description):
+                                                the Python API, the CLI and the FMUs read them
 """
 from __future__ import annotations
 
@@ -19,7 +51,8 @@ import math
 
 import numpy as np
 
-from ..modes import Mode
+from ..contact import mode_forces
+from ..modes import CLOSED, Mode, mode_from_closed
 
 
 class RockingModel(ABC):
@@ -34,9 +67,30 @@ class RockingModel(ABC):
     #: gravity [m/s2]
     g: float = 9.81
 
+    #: number of contacts (columns of W_N, W_T; entries of g_N)
+    n_contacts: int = 2
+
     @property
     def n_dof(self) -> int:
         return len(self.dof_names)
+
+    # ------------------------------------------------------------------ contact modes (may override)
+    def mode_of(self, closed) -> Mode:
+        """The contact mode whose closed contacts are ``closed`` (an iterable of contact indices)."""
+        return mode_from_closed(closed)
+
+    def closed_of(self, mode) -> tuple:
+        """The closed contacts of ``mode``, in increasing order."""
+        return CLOSED[mode]
+
+    def mode_code(self, value: int):
+        """The mode of an integer code (a saved state, the FMU output ``contact``); ValueError if none."""
+        return Mode(value)
+
+    @property
+    def n_modes(self) -> int:
+        """Number of contact modes (integer codes 0 .. n_modes - 1)."""
+        return len(Mode)
 
     # ------------------------------------------------------------------ dynamical system
     @abstractmethod
@@ -47,6 +101,10 @@ class RockingModel(ABC):
     def forces(self, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
         """Non-contact generalized forces f(q, v, ag), shape (n,), so that M q_ddot = f + contact forces."""
 
+    def inverse_mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q)^-1, shape (n, n); override with a closed form where there is one."""
+        return np.linalg.inv(self.mass_matrix(q))
+
     def stiff_jacobians(self, q: np.ndarray, v: np.ndarray):
         """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f, treated implicitly by the time-stepper.
 
@@ -56,15 +114,20 @@ class RockingModel(ABC):
     # ------------------------------------------------------------------ contact relation
     @abstractmethod
     def gaps(self, q: np.ndarray) -> np.ndarray:
-        """Normal gaps g_N of the left and right corners [m], shape (2,)."""
+        """Normal gaps g_N of the contacts [m], shape (n_contacts,)."""
 
     @abstractmethod
     def contact_jacobians(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(W_N, W_T), each shape (n, 2): normal and tangential velocity of corner i is W[:, i] . v."""
+        """(W_N, W_T), each shape (n, n_contacts): normal and tangential velocity of contact i is W[:, i] . v."""
 
     @abstractmethod
     def contact_drift(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(a_N, a_T), each shape (2,): the terms (d/dt W)^T v of the corner accelerations."""
+        """(a_N, a_T), each shape (n_contacts,): the terms (d/dt W)^T v of the contact accelerations."""
+
+    def classical_impact_velocity(self, q: np.ndarray, v_minus: np.ndarray, mode) -> np.ndarray | None:
+        """Post-impact velocities of an impact rule that replaces the impact LCP when the open contact of a
+        rocking ``mode`` hits the ground; None (the default): the impact LCP with Newton's law decides."""
+        return None
 
     # ------------------------------------------------------------------ contact modes
     @abstractmethod
@@ -99,8 +162,14 @@ class RockingModel(ABC):
 
         Generic: the acceleration-level problem with the mode's corners forced closed; models may override
         with a closed form."""
-        from ..contact import mode_forces
         return mode_forces(self, mode, q, v, ag)
+
+    @property
+    def dof_scales(self) -> tuple:
+        """Scale of each coordinate of q for the error control of the smooth phases: 1 [rad] for phi,
+        length_scale [m] for the others (velocities are scaled by 1 / time_scale on top)."""
+        L = self.length_scale
+        return tuple(1.0 if i == self.phi_index else L for i in range(self.n_dof))
 
     @property
     def step_limit(self) -> float:
@@ -118,14 +187,15 @@ class RockingModel(ABC):
         """(rhs, monitors) of ``mode`` under the ground motion ``ag`` (a GroundMotion), on lists of floats.
 
         rhs(t, y) -> [r_dot..., r_ddot...] for the reduced state y = [r..., r_dot...];
-        monitors(t, y) -> [e_0, e_1, phi]: e_i of a closed corner is its normal force / force_scale, of an
+        monitors(t, y) -> [e_0, .., e_{n-1}, phi]: e_i of a closed corner is its normal force / force_scale, of an
         open corner a measure of its opening, positive while open (gap / length_scale; while rocking, the
         tilt -s phi [rad] of the lifted corner, exact where the gap loses digits).
 
         Generic version on top of the numpy interface; models override it with closed forms (the event-driven
         scheme calls these some twenty times per step)."""
         k = len(self.mode_dofs(mode))
-        closed = {Mode.FULL: (0, 1), Mode.LEFT: (0,), Mode.RIGHT: (1,), Mode.FLIGHT: ()}[mode]
+        closed = self.closed_of(mode)
+        nc = self.n_contacts
         F, L, ip = self.force_scale, self.length_scale, self.phi_index
         a_of = (lambda t: ag.value) if ag.constant else ag
 
@@ -141,10 +211,10 @@ class RockingModel(ABC):
             g = self.gaps(q)
             phi = float(q[ip])
             out = []
-            for i in (0, 1):
+            for i in range(nc):
                 if i in closed:
                     out.append(float(lam[i]) / F)
-                elif mode == Mode.FLIGHT:
+                elif not closed:
                     out.append(float(g[i]) / L)
                 else:
                     out.append(-phi if mode == Mode.RIGHT else phi)

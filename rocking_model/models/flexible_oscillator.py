@@ -29,6 +29,7 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..validation import check_choice, check_real
 from .base import RockingModel
+from .flexible_impact import classical_impact
 
 
 #: [rad/s] largest fixed-base circular frequency omega = sqrt(k_tilde/m_tilde) of the column (1.6 kHz).
@@ -322,7 +323,6 @@ class FlexibleOscillator(RockingModel):
         rocking on ``pivot``; None when the LCP with Newton's law is the rule (the default)."""
         if self.impact_rule == 0:
             return None
-        from ..post_impact import classical_impact
         return classical_impact(self, float(q[0]), float(v_minus[0]), float(v_minus[3]), pivot).v_plus
 
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, u_0=0.0, u_dot_0=0.0, **extra):
