@@ -26,8 +26,6 @@ def rss_mib() -> float:
 
 
 def main(minutes: float = 10.0, scheme: str = "event_driven") -> dict:
-    import numpy as np
-
     from rocking_model import RigidBlock, Simulator
     from rocking_model.ground_motion import ConstantMotion
 

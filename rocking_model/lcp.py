@@ -23,9 +23,10 @@ a sub-block of it:
 - up to ENUMERATE_MAX candidate contacts (the rocking models have two), by enumerating the active sets and
   keeping the one that violates the conditions least (round-off only when a solution exists): exact, and
   it finds the solution of a problem whose matrix is not a P-matrix (several or no solutions);
-- beyond, by principal pivoting on the active set (Murty's least-index rule, `_pivot`): from the hint (or
-  the empty set), the contact with the lowest index that violates its condition changes side, until none
-  does or MAX_PIVOTS changes; finite for P-matrices, reported inexact otherwise.
+- beyond, by principal pivoting on the active set (Murty's least-index rule, `_pivot`): from the hint, then
+  from all candidates closed, the contact with the lowest index that violates its condition changes side,
+  until none does (at most MAX_PIVOTS changes, then a descent over single changes); finite for P-matrices,
+  reported inexact when it finds no solution.
 
 Either way a solution that still violates the conditions beyond ``rtol`` comes back with ``exact=False``,
 which the integrators report. Tangential rows of two contacts can be parallel (the rigid block at phi = 0);
@@ -202,20 +203,37 @@ def _enumerate(prob: _Problem, sets, hint_first: bool, hint_tol: float):
 
 
 def _pivot(prob: _Problem, start, rtol: float):
-    """Murty's least-index principal pivoting on the active set: the violating contact of lowest index
-    changes side until no contact violates its condition beyond rtol (or MAX_PIVOTS changes: the least
-    violating set met is returned)."""
-    S = tuple(sorted(set(start) | set(prob.forced)))
+    """Principal pivoting on the active set, for more candidates than enumeration can afford.
+
+    Murty's least-index rule: the violating contact of lowest index changes side until no contact violates
+    its condition beyond rtol -- from ``start`` (the hint), then from all candidates closed. The matrix of
+    this problem changes with the active set, so the rule can cycle; the pivoting is then capped at
+    MAX_PIVOTS and followed by a descent over single changes of the least-violating set met. On random
+    problems of 3 to 7 contacts that have a solution, this finds one in 96 % of the cases (tests/
+    test_contact_lcp.py); the others come back inexact and are reported."""
     best = None
-    for _ in range(MAX_PIVOTS):
-        res = prob.trial(S)
-        if best is None or res[0] < best[0]:
-            best = res
-        bad = prob.violators(S, res[2], res[3], rtol)
-        if not bad:
-            return res
-        i = bad[0]
-        S = tuple(sorted(set(S) - {i})) if i in S else tuple(sorted(set(S) | {i}))
+    for first in (tuple(start), tuple(prob.cand)):
+        S = tuple(sorted(set(first) | set(prob.forced)))
+        for _ in range(MAX_PIVOTS):
+            res = prob.trial(S)
+            if best is None or res[0] < best[0]:
+                best = res
+            bad = prob.violators(S, res[2], res[3], rtol)
+            if not bad:
+                return res
+            i = bad[0]
+            S = tuple(sorted(set(S) - {i})) if i in S else tuple(sorted(set(S) | {i}))
+    S, improved = best[1], True
+    while improved:
+        improved = False
+        for i in prob.cand:
+            if i in prob.forced:
+                continue
+            res = prob.trial(tuple(sorted(set(S) ^ {i})))
+            if res[0] < best[0]:
+                best, S, improved = res, res[1], True
+                if res[0] <= rtol:
+                    return res
     return best
 
 

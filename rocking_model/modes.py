@@ -33,6 +33,14 @@ class Mode(IntEnum):
     FLIGHT = 3
 
 
+#: what each mode code means (the FMU output ``contact``)
+MODE_DESCRIPTIONS = {
+    Mode.FULL: "full contact",
+    Mode.LEFT: "rocking on the left corner",
+    Mode.RIGHT: "rocking on the right corner",
+    Mode.FLIGHT: "flight",
+}
+
 #: closed contacts (0 = left corner, 1 = right corner) of each mode
 CLOSED = {
     Mode.FULL: (0, 1),

@@ -13,6 +13,7 @@ from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion, check
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
 from .models.base import RockingModel
+from .params import Param
 from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
@@ -34,6 +35,16 @@ class SolverFailure(ValueError):
 
 #: accepted spellings of a scheme: names and integer codes of the registered schemes
 SCHEMES = scheme_choices()
+
+#: the solver options the FMUs expose (and the command line), declared once
+SOLVER_PARAMETERS = (
+    Param("scheme", "event_driven", None, "Integration scheme", items=tuple(
+        (name, cls.code, cls.summary) for name, cls in sorted(SCHEME_CLASSES.items(), key=lambda kv: kv[1].code))),
+    Param("dt_max", 0.0, "s", "Moreau-Jean time step (largest; each communication step is split evenly) or "
+          "largest event-driven step; 0: the scheme's default (Moreau-Jean 1e-3 s, event-driven uncapped)",
+          lo=0.0),
+    Param("tolerance", 1e-8, "1", "Relative tolerance of the event-driven scheme", lo=1e-14, hi=1e-2),
+)
 
 #: [1] smallest dt_max (other than 0, the scheme's default) relative to the model's time scale 1/p: a
 #: Moreau-Jean step of 1e-6/p has a first-order error of ~1e-6 of the motion (finer than any rocking study

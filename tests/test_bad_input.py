@@ -115,7 +115,16 @@ def test_bad_parameter_fmu(fmus, kind, params, name, allowed):
     py_msg = python_error(kind, params)
     inst = Instance(fmus[kind])
     msg = inst.error_init(**params)  # fmi2ExitInitializationMode fails: fmpy raises
-    assert msg == f"fmi2ExitInitializationMode: invalid parameters: {py_msg}"
+    if fmus[kind][1] and any(v.name == name and v.declaredType is not None and v.declaredType.items
+                             for v in fmus[kind][1].modelVariables):
+        # an Enumeration (issue 14): a value that is none of its items is refused when it is set, with the
+        # items named by code and name
+        items = ", ".join(f"{i.value} ({i.name})" for i in next(
+            v for v in fmus[kind][1].modelVariables if v.name == name).declaredType.items)
+        assert msg == f"fmi2SetInteger: {name} = {params[name]} is not supported; allowed values: {items} " \
+                      "(nothing was set)"
+    else:
+        assert msg == f"fmi2ExitInitializationMode: invalid parameters: {py_msg}"
     # the instance is in the error state: a step is an illegal call, answered with fmi2Error and a message
     assert inst.step() == FMI2_ERROR
     assert "fmi2DoStep: illegal call sequence" in inst.errors()[-1]
@@ -257,8 +266,17 @@ def test_python_models_are_immutable():
 
 
 def test_unknown_initial_values_python_api():
-    with pytest.raises(ValueError, match=r"unknown initial values for RigidBlock: \['u_0'\]; allowed: phi_0"):
+    with pytest.raises(ValueError, match=r"unknown keyword argument\(s\) 'u_0' for RigidBlock; allowed initial "
+                                         r"values: phi_0, phi_dot_0; solver options: scheme, dt_max"):
         Simulator(RigidBlock(), u_0=0.1)
+
+
+@pytest.mark.parametrize("keyword, hint", [("sheme", "scheme"), ("phi0", "phi_0"), ("tolerence", "tolerance"),
+                                           ("dtmax", "dt_max")])
+def test_misspelt_keyword_names_the_closest(keyword, hint):
+    """Issue 14: a misspelt solver option is not reported as an unknown initial value only."""
+    with pytest.raises(ValueError, match=f"'{keyword}' \\(did you mean '{hint}'\\?\\)"):
+        simulate(RigidBlock(), 0.0, 0.1, **{keyword: 1})
 
 
 def test_no_initial_penetration():

@@ -67,7 +67,7 @@ def test_fmu_matches_python_simulator(fmus, scheme, impact_rule):
 
 
 def test_both_fmus_in_one_process(fmus):
-    from fmpy import instantiate_fmu, read_model_description
+    from fmpy import read_model_description
     from fmpy.fmi2 import FMU2Slave
 
     slaves = []

@@ -84,8 +84,8 @@ def test_validate_fmu_reports_no_problems(fmu):
 
 def test_model_description_units_variability_structure(fmu):
     root = model_description(fmu)
-    assert [c.tag for c in root] == ["CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment",
-                                     "ModelVariables", "ModelStructure"]
+    assert [c.tag for c in root] == ["CoSimulation", "UnitDefinitions", "TypeDefinitions", "LogCategories",
+                                     "DefaultExperiment", "ModelVariables", "ModelStructure"]
     assert root.get("description")
     cs = root.find("CoSimulation")
     assert cs.get("canInterpolateInputs") == "true"  # fmi2SetRealInputDerivatives of order 1
@@ -114,7 +114,20 @@ def test_model_description_units_variability_structure(fmu):
         assert variables[name][2].get("start") is not None
     assert float(variables["b"][2].get("start")) == 0.2
     assert float(variables["g"][2].get("start")) == 9.81
-    assert variables["scheme"][2].tag == "Integer"
+    # scheme is an Enumeration (issue 14): tools show the names; its items are the registered schemes
+    assert variables["scheme"][2].tag == "Enumeration"
+    declared = variables["scheme"][2].get("declaredType")
+    (enum,) = [t.find("Enumeration") for t in root.find("TypeDefinitions") if t.get("name") == declared]
+    assert [(i.get("name"), i.get("value")) for i in enum] == [("moreau_jean", "0"), ("event_driven", "1")]
+    assert variables["scheme"][2].get("start") == "1"
+    # start values, ranges and descriptions come from the model's declarations (one source of truth)
+    from rocking_model.models import RigidBlock
+    for p in RigidBlock.parameters() + RigidBlock.INITIAL:
+        typ = variables[p.name][2]
+        assert float(typ.get("start")) == p.default
+        for bound, value in (("min", p.lo), ("max", p.hi)):
+            assert (None if typ.get(bound) is None else float(typ.get(bound))) == value, (p.name, bound)
+        assert variables[p.name][1].get("description").startswith(p.description)
     assert (variables["ag"][1].get("causality"), variables["ag"][1].get("variability")) == ("input", "continuous")
     for name in OUTPUTS:
         sv, typ = variables[name][1], variables[name][2]
@@ -134,7 +147,7 @@ def test_fmu_bundles_package_without_bytecode(fmu):
 
     names = zipfile.ZipFile(fmu).namelist()
     alias = f"rocking_model_{build_fmu.package_digest()}"   # the bundled copy's own import name
-    assert f"resources/{alias}/fmi.py" in names
+    assert f"resources/{alias}/fmi/slave.py" in names
     assert f"resources/{alias}/simulation.py" in names
     assert "resources/RigidRockingBlock.py" in names
     assert not [n for n in names if n.startswith("resources/rocking_model/")]
@@ -177,13 +190,15 @@ def test_default_start_values_run(fmu):
 
 
 # ---------------------------------------------------------------------------------------------- errors
-@pytest.mark.parametrize("start_values, pattern", [
-    ({"b": -1.0}, r"b = -1 is out of range; allowed range \[1e-06, 1000\]"),
-    ({"scheme": 5}, r"scheme = 5 is not supported"),
-    ({"e_N": 1.5}, r"e_N = 1.5 is out of range; allowed range \[0, 1\]"),
-    ({"phi_0": 2.0}, r"phi_0 = 2 is out of range"),
+@pytest.mark.parametrize("start_values, pattern, call", [
+    ({"b": -1.0}, r"b = -1 is out of range; allowed range \[1e-06, 1000\]", "fmi2ExitInitializationMode"),
+    # an Enumeration value that is none of its items is refused where it is set
+    ({"scheme": 5}, r"scheme = 5 is not supported; allowed values: 0 \(moreau_jean\), 1 \(event_driven\)",
+     "fmi2SetInteger"),
+    ({"e_N": 1.5}, r"e_N = 1.5 is out of range; allowed range \[0, 1\]", "fmi2ExitInitializationMode"),
+    ({"phi_0": 2.0}, r"phi_0 = 2 is out of range", "fmi2ExitInitializationMode"),
 ])
-def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern):
+def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern, call):
     messages = []
 
     def logger(env, instance, status, category, message):
@@ -191,16 +206,31 @@ def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern):
 
     # plain fmpy: fmi2ExitInitializationMode fails (pythonfmu 0.7 can only say fmi2Fatal), fmpy raises, and
     # the message naming the variable reaches the logger
-    with pytest.raises(fmpy.fmi1.FMICallException, match="fmi2ExitInitializationMode"):
+    with pytest.raises(fmpy.fmi1.FMICallException, match=call):
         fmpy.simulate_fmu(str(fmu), stop_time=1.0, output_interval=0.01, start_values=start_values,
                           debug_logging=True, logger=logger)
-    assert any(re.search(pattern, m) and "invalid parameters: " in m for s, m in messages if s >= 3), messages
+    assert any(re.search(pattern, m) for s, m in messages if s >= 3), messages
     # run_fmu turns that into an FMUError naming the variable
     with pytest.raises(FMUError, match=pattern):
         run_fmu(fmu, stop_time=1.0, output_interval=0.01, start_values=start_values)
     # the process (and the embedded interpreter) is fine
     res = run_fmu(fmu, stop_time=0.05, output_interval=0.01)
     assert math.isclose(res["time"][-1], 0.05)
+
+
+def test_enumeration_start_values_by_name(fmu):
+    """scheme is an FMI Enumeration (issue 14): run_fmu takes its item names (fmpy itself passes start values
+    through int(), so fmpy.simulate_fmu(start_values={"scheme": "moreau_jean"}) cannot), and a misspelt name
+    is an FMUError listing the items."""
+    by_name = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "moreau_jean",
+                                                                              "phi_0": 0.05})
+    by_code = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": 0, "phi_0": 0.05})
+    assert by_name["phi"].tobytes() == by_code["phi"].tobytes()
+    event = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "event_driven",
+                                                                            "phi_0": 0.05})
+    assert event["phi"].tobytes() != by_code["phi"].tobytes()
+    with pytest.raises(FMUError, match=r"scheme = 'moreau-jean' is not one of its items: moreau_jean, event_driven"):
+        run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "moreau-jean"})
 
 
 def test_non_finite_input_is_rejected(fmu):

@@ -8,6 +8,7 @@ A subclass must provide:
 
     name : str                  registry name ("moreau_jean", "event_driven")
     code : int                  integer code of the scheme (the FMU parameter ``scheme``)
+    summary : str               one line describing it
     STATE_KEYS : tuple          fields of `get_state`
     from_options(model, mode, q, v, t0, options) -> Integrator
                                 a new integrator from the user's solver options (`SolverOptions`), checking
@@ -84,6 +85,8 @@ class Integrator(Checkpointed):
 
     name: ClassVar[str] = ""
     code: ClassVar[int] = -1
+    #: one line for documentation and tools (the FMU's enumeration item)
+    summary: ClassVar[str] = ""
     STATE_KEYS: ClassVar[tuple] = ()
 
     #: reports of the current advance (cleared by the Simulator before each one)

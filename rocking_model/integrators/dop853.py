@@ -6,7 +6,6 @@ accepted digit at tolerances of 1e-7 and tighter.
 """
 from __future__ import annotations
 
-import math
 
 from .rk import ExplicitRK, Tableau, _lincomb
 

@@ -5,7 +5,6 @@ Seven function evaluations per step (FSAL) against DOP853's twelve: the cheaper 
 """
 from __future__ import annotations
 
-import math
 
 from .rk import ExplicitRK, Tableau, _lincomb
 

@@ -73,6 +73,7 @@ class EventDriven(Integrator):
 
     name = "event_driven"
     code = 1
+    summary = "event-driven: Runge-Kutta phases in reduced coordinates, LCPs at events (the faster at equal error, see docs/performance.md)"
     LOGS = ("impact_times", "impact_log")
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)

@@ -40,6 +40,7 @@ class MoreauJean(Integrator):
 
     name = "moreau_jean"
     code = 0
+    summary = "Moreau-Jean time-stepping: one velocity-level LCP per step, order 1"
     LOGS = ("impact_times",)
 
     @classmethod

@@ -45,14 +45,20 @@ A subclass may provide (the defaults here are generic and correct, the overrides
 """
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-
+import difflib
 import math
+from abc import ABC, abstractmethod
 
 import numpy as np
 
 from ..contact import mode_forces
-from ..modes import CLOSED, Mode, mode_from_closed
+from ..modes import CLOSED, MODE_DESCRIPTIONS, Mode, mode_from_closed
+from ..params import declared_parameters
+
+#: the keyword arguments of `rocking_model.simulation.Simulator` besides the initial values (named in the
+#: message of a misspelt keyword)
+SOLVER_KEYWORDS = ("scheme", "dt_max", "tolerance", "theta", "zeno_tol", "t0", "method", "impact_log_size",
+                   "max_steps", "tolerances", "on_report")
 
 
 class RockingModel(ABC):
@@ -67,8 +73,33 @@ class RockingModel(ABC):
     #: gravity [m/s2]
     g: float = 9.81
 
+    #: registry name of the model (`rocking_model.models.MODELS`), its FMU's name and a title
+    kind: str = ""
+    fmu_name: str = ""
+    title: str = ""
     #: number of contacts (columns of W_N, W_T; entries of g_N)
     n_contacts: int = 2
+    #: declared initial values (`rocking_model.params.Param`, the keywords of `initial_state`)
+    INITIAL: tuple = ()
+    #: declared outputs (the keys of `outputs`, with unit and description)
+    OUTPUTS: tuple = ()
+
+    @classmethod
+    def parameters(cls) -> tuple:
+        """The declared parameters (`rocking_model.params.Param`) of the model, in constructor order."""
+        return declared_parameters(cls)
+
+    def check_initial_names(self, names) -> None:
+        """ValueError for keywords that are not initial values of this model, with the closest names."""
+        if not names:
+            return
+        allowed = [p.name for p in self.INITIAL]
+        hints = []
+        for name in sorted(names):
+            close = difflib.get_close_matches(str(name), allowed + list(SOLVER_KEYWORDS), n=1)
+            hints.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        raise ValueError(f"unknown keyword argument(s) {', '.join(hints)} for {type(self).__name__}; allowed "
+                         f"initial values: {', '.join(allowed)}; solver options: {', '.join(SOLVER_KEYWORDS)}")
 
     @property
     def n_dof(self) -> int:
@@ -90,7 +121,17 @@ class RockingModel(ABC):
     @property
     def n_modes(self) -> int:
         """Number of contact modes (integer codes 0 .. n_modes - 1)."""
-        return len(Mode)
+        return len(self.contact_codes())
+
+    @classmethod
+    def contact_codes(cls) -> tuple:
+        """The contact modes, by integer code."""
+        return tuple(Mode)
+
+    @classmethod
+    def contact_description(cls) -> str:
+        """What the integer codes of the contact modes mean (the FMU output ``contact``)."""
+        return ", ".join(f"{int(m)} {MODE_DESCRIPTIONS[m]}" for m in Mode)
 
     # ------------------------------------------------------------------ dynamical system
     @abstractmethod

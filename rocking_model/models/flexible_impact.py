@@ -64,7 +64,6 @@ coordinate that no contact force provides (reported as `P_u`).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from enum import Enum
 

@@ -23,11 +23,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from ..modes import Mode, pivot_sign
-from ..validation import check_choice, check_real
+from ..params import Param, check_parameters, param
+from ..validation import check_real
 from .base import RockingModel
 from .flexible_impact import classical_impact
 
@@ -65,31 +67,55 @@ class FlexibleOscillator(RockingModel):
     p = 2.55 rad/s (omega/p = 16), slenderness b/h_cg = 0.20.
     """
 
-    m: float = 500.0
-    m_c: float = 30.0
-    m_b: float = 100.0
-    rho: float = 0.145
-    h: float = 1.5
-    b: float = 0.25
-    EI: float = 9.45e5
-    zeta: float = 0.02
-    e_N: float = 0.0
-    impact_rule: int = 0
-    g: float = 9.81
+    # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
+    m: float = param(500.0, "kg", "Lumped top mass (> 0)", lo=1e-9, hi=1e12)
+    m_c: float = param(30.0, "kg", "Column mass, uniformly distributed (>= 0)", lo=0.0, hi=1e12)
+    m_b: float = param(100.0, "kg", "Base mass (>= 0)", lo=0.0, hi=1e12)
+    rho: float = param(0.145, "m", "Radius of gyration of the base (>= 0)", lo=0.0, hi=1e3)
+    h: float = param(1.5, "m", "Column height (> 0)", lo=1e-6, hi=1e3)
+    b: float = param(0.25, "m", "Half-width of the base (> 0)", lo=1e-6, hi=1e3)
+    EI: float = param(9.45e5, "N.m2", "Flexural rigidity of the column (> 0; the column's omega at most "
+                      "OMEGA_MAX = 1e4 rad/s)", lo=0.0, lo_open=True, hi=1e15)
+    zeta: float = param(0.02, "1", "Damping ratio of the flexural mode (>= 0)", lo=0.0, hi=10.0)
+    e_N: float = param(0.0, "1", "Newton coefficient of restitution at the base corners, in [0, 1]",
+                       lo=0.0, hi=1.0)
+    impact_rule: int = param(0, None, "Impact rule at a rocking impact", items=(
+        ("lcp", 0, "the impact LCP with Newton's law (the paper's formulation)"),
+        ("classical", 1, "the classical rule: angular momentum about the impacting corner conserved, "
+                         "flexural velocity continuous")))
+    g: float = param(9.81, "m/s2", "Gravitational acceleration", lo=1e-3, hi=1e3)
     dof_names: tuple = field(default=("u", "x", "y", "phi"), init=False, repr=False)
     phi_index: int = field(default=3, init=False, repr=False)
 
+    kind: ClassVar[str] = "flexible"
+    fmu_name: ClassVar[str] = "FlexibleRockingOscillator"
+    title: ClassVar[str] = "flexible rocking oscillator"
+
+    #: initial values (`initial_state`)
+    INITIAL: ClassVar[tuple] = (
+        Param("phi_0", 0.0, "rad", "Initial base rotation (positive: pivoting on the left corner), "
+              "|phi_0| < pi/2", lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True),
+        Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity of the base", lo=-1e4, hi=1e4),
+        Param("u_0", 0.0, "m", "Initial flexural coordinate (tip deflection), |u_0| <= h"),
+        Param("u_dot_0", 0.0, "m/s", "Initial flexural velocity", lo=-1e4, hi=1e4),
+    )
+    #: outputs (`outputs`)
+    OUTPUTS: ClassVar[tuple] = (
+        Param("u", 0.0, "m", "Flexural coordinate (tip deflection relative to the base)"),
+        Param("u_dot", 0.0, "m/s", "Flexural velocity"),
+        Param("phi", 0.0, "rad", "Rotation of the base"),
+        Param("phi_dot", 0.0, "rad/s", "Angular velocity of the base"),
+        Param("x", 0.0, "m", "Horizontal displacement of the base midpoint relative to the ground"),
+        Param("y", 0.0, "m", "Vertical displacement of the base midpoint"),
+        Param("x_dot", 0.0, "m/s", "Horizontal velocity of the base midpoint"),
+        Param("y_dot", 0.0, "m/s", "Vertical velocity of the base midpoint"),
+        Param("top_displacement", 0.0, "m", "Horizontal displacement of the top mass relative to the ground"),
+        Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
+              "potential + strain)"),
+    )
+
     def __post_init__(self):
-        # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
-        mass, length = dict(lo=1e-9, hi=1e12), dict(lo=1e-6, hi=1e3)
-        for name, rng in (("m", mass), ("m_c", dict(lo=0.0, hi=1e12)), ("m_b", dict(lo=0.0, hi=1e12)),
-                          ("rho", dict(lo=0.0, hi=1e3)), ("h", length), ("b", length),
-                          ("EI", dict(lo=0.0, lo_open=True, hi=1e15)), ("zeta", dict(lo=0.0, hi=10.0)),
-                          ("g", dict(lo=1e-3, hi=1e3))):
-            object.__setattr__(self, name, check_real(name, getattr(self, name), **rng))
-        object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
-        object.__setattr__(self, "impact_rule", check_choice(
-            "impact_rule", self.impact_rule, {0: 0, 1: 1, "lcp": 0, "classical": 1}))
+        check_parameters(self)
         if self.m_c == 0.0 and self.m_b * self.rho ** 2 == 0.0:
             bad = "m_b" if self.m_b == 0.0 else "rho"  # rho > 0 can still give m_b*rho^2 = 0 (underflow)
             raise ValueError(
@@ -326,13 +352,10 @@ class FlexibleOscillator(RockingModel):
         return classical_impact(self, float(q[0]), float(v_minus[0]), float(v_minus[3]), pivot).v_plus
 
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, u_0=0.0, u_dot_0=0.0, **extra):
-        if extra:
-            raise ValueError(f"unknown initial values for FlexibleOscillator: {sorted(extra)}; "
-                             f"allowed: phi_0, phi_dot_0, u_0, u_dot_0")
-        phi_0 = check_real("phi_0", phi_0, lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
-        phi_dot_0 = check_real("phi_dot_0", phi_dot_0, lo=-1e4, hi=1e4)
+        self.check_initial_names(extra)
+        phi_0, phi_dot_0, _, u_dot_0 = (p.check(value) for p, value in
+                                        zip(self.INITIAL, (phi_0, phi_dot_0, 0.0, u_dot_0)))
         u_0 = check_real("u_0", u_0, lo=-self.h, hi=self.h)  # tip deflection at most the column height
-        u_dot_0 = check_real("u_dot_0", u_dot_0, lo=-1e4, hi=1e4)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, np.array([u_0]), np.array([u_dot_0]))

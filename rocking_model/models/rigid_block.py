@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from ..modes import Mode, pivot_sign
-from ..validation import check_real
+from ..params import Param, check_parameters, param
 from .base import RockingModel
 
 _S = (-1.0, 1.0)
@@ -23,19 +24,40 @@ _S = (-1.0, 1.0)
 class RigidBlock(RockingModel):
     """Rigid block: b, h [m] half-dimensions, m [kg], g [m/s2], e_N [1] in [0, 1]."""
 
-    b: float = 0.2
-    h: float = 1.0
-    m: float = 1.0
-    g: float = 9.81
-    e_N: float = 0.0
+    # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
+    b: float = param(0.2, "m", "Half-width of the block", lo=1e-6, hi=1e3)
+    h: float = param(1.0, "m", "Half-height of the block", lo=1e-6, hi=1e3)
+    m: float = param(1.0, "kg", "Mass of the block", lo=1e-9, hi=1e12)
+    g: float = param(9.81, "m/s2", "Gravitational acceleration", lo=1e-3, hi=1e3)
+    e_N: float = param(0.0, "1", "Newton coefficient of restitution at the corners (0: Housner's "
+                       "angular-momentum impact)", lo=0.0, hi=1.0)
     dof_names: tuple = field(default=("x", "y", "phi"), init=False, repr=False)
     phi_index: int = field(default=2, init=False, repr=False)
 
+    kind: ClassVar[str] = "rigid"
+    fmu_name: ClassVar[str] = "RigidRockingBlock"
+    title: ClassVar[str] = "rigid rocking block"
+
+    #: initial values (`initial_state`)
+    INITIAL: ClassVar[tuple] = (
+        Param("phi_0", 0.0, "rad", "Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2",
+              lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True),
+        Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity", lo=-1e4, hi=1e4),
+    )
+    #: outputs (`outputs`)
+    OUTPUTS: ClassVar[tuple] = (
+        Param("phi", 0.0, "rad", "Rotation of the block"),
+        Param("phi_dot", 0.0, "rad/s", "Angular velocity of the block"),
+        Param("x", 0.0, "m", "Horizontal displacement of the centroid relative to the ground"),
+        Param("y", 0.0, "m", "Vertical displacement of the centroid from rest"),
+        Param("x_dot", 0.0, "m/s", "Horizontal velocity of the centroid relative to the ground"),
+        Param("y_dot", 0.0, "m/s", "Vertical velocity of the centroid"),
+        Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
+              "potential)"),
+    )
+
     def __post_init__(self):
-        # supported ranges (SI): generous, but they keep every derived quantity finite (no overflow)
-        for name, lo, hi in (("b", 1e-6, 1e3), ("h", 1e-6, 1e3), ("m", 1e-9, 1e12), ("g", 1e-3, 1e3)):
-            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=lo, hi=hi))
-        object.__setattr__(self, "e_N", check_real("e_N", self.e_N, lo=0.0, hi=1.0))
+        check_parameters(self)
         # derived parameters, computed once (the integrators read them in their inner loops)
         R = math.hypot(self.b, self.h)
         for name, value in (("_R", R), ("_alpha", math.atan2(self.b, self.h)),
@@ -274,10 +296,8 @@ class RigidBlock(RockingModel):
         return np.array([0.0, self.h, 0.0])
 
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, **extra):
-        if extra:
-            raise ValueError(f"unknown initial values for RigidBlock: {sorted(extra)}; allowed: phi_0, phi_dot_0")
-        phi_0 = check_real("phi_0", phi_0, lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
-        phi_dot_0 = check_real("phi_dot_0", phi_dot_0, lo=-1e4, hi=1e4)
+        self.check_initial_names(extra)
+        phi_0, phi_dot_0 = (p.check(value) for p, value in zip(self.INITIAL, (phi_0, phi_dot_0)))
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, np.zeros(0), np.zeros(0))

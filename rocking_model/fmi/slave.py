@@ -1,262 +1,28 @@
-"""Shared FMI 2.0 co-simulation plumbing for the rocking FMUs (pythonfmu 0.7, driven by fmpy).
-
-This module knows nothing about the physics. An FMU script (``fmu_src/<Name>.py``, unique module name)
-subclasses :class:`RockingSlave`, declares its interface as a table of :class:`Var` and implements
-:meth:`RockingSlave.create_simulator`, which builds the model and its `Simulator` from the parameter
-values when the importer leaves initialization mode::
-
-    class MyBlock(RockingSlave):
-        description = "..."
-        variables = (
-            Var("b", "parameter", 0.2, unit="m", description="half-width"),
-            Var("ag", "input", 0.0, unit="m/s2", description="ground acceleration"),
-            Var("phi", "output", unit="rad", description="rotation"),
-            ...
-        )
-
-        def create_simulator(self, p, t0):
-            return Simulator(RigidBlock(b=p["b"]), t0=t0)
-
-What the base class provides:
-
-* registration of every variable with description, unit, start value and an explicit variability
-  (parameters ``fixed``, Real inputs/outputs ``continuous``, Integer/Boolean outputs ``discrete``,
-  outputs ``initial="calculated"``);
-* a modelDescription that passes ``fmpy validate``: ``<UnitDefinitions>`` (with ``<BaseUnit>`` exponents)
-  inserted after ``<CoSimulation>``, a ``<DefaultExperiment>``, ``ModelStructure/Outputs`` (no direct
-  feed-through: ``dependencies=""``) and ``ModelStructure/InitialUnknowns``;
-* ``do_step(t, dt)``: advances the simulator to ``t + dt`` with the inputs held constant over the step
-  (zero-order hold, the importer sets the inputs at the start of each step) or, after
-  ``fmi2SetRealInputDerivatives`` of order 1 (`set_real_input_derivatives`, ``canInterpolateInputs`` is
-  true where ``interpolates_inputs``), varying linearly over it (`rocking_model.ground_motion.LinearMotion`),
-  and copies ``Simulator.outputs()`` to the output variables;
-* FMU state (``canGetAndSetFMUstate`` and ``canSerializeFMUstate`` are true): ``fmi2GetFMUstate`` captures
-  the complete internal state -- the values of every variable, the communication time, the status flags
-  (initialized, terminated, frozen, failed, pending error) and the simulator's plain-data state
-  (`Simulator.get_state`: time, contact mode, coordinates, counters, step-size memory) -- as the serialized
-  byte string of `rocking_model.fmi_state` (versioned, data only, no pickle). ``fmi2SetFMUstate`` checks
-  every field (type, shape, range), rebuilds the simulator from the saved parameter values and sets its
-  state, in the same or in another instance of the same FMU, so that save -> step -> restore -> step gives
-  bit-identical outputs (rollback for iterative masters). A state of another FMU, a corrupted, truncated,
-  foreign or junk byte string is rejected when it is set: error log, the instance keeps its state and the
-  next ``do_step`` is discarded once;
-* ``fmi2Reset``: the pythonfmu 0.7 C wrapper re-creates the Python object (start values, not initialized);
-  :meth:`RockingSlave.reset` does the same in place for direct use of the class.
-
-Status of every FMI call. The FMUs run the project's own binary (``fmi_binary/``, see its ``fmi2_cs.c``),
-which calls these pythonfmu methods directly: an exception is fmi2Error (its text goes to the importer's
-logger, the instance is in the error state until fmi2Reset or fmi2SetFMUstate), ``do_step`` returning False
-is fmi2Discard, a warning logged during the call is fmi2Warning. The binary checks the call sequence, NULL
-arguments, ``fmi2SetupExperiment``'s times and ``fmi2DoStep``'s step size and communication point itself;
-the same checks here serve direct users of the class. Hence:
-
-* invalid parameters (the model / Simulator raise ``ValueError`` naming the variable and its allowed range):
-  ``exit_initialization_mode`` raises, fmi2ExitInitializationMode is fmi2Error (fmpy raises
-  ``FMICallException``, the message is printed by its logger);
-* an invalid value reference (unknown, of another type, an output set), a value that cannot be converted, an
-  input outside its declared ``min``/``max`` or not finite, a ``fixed`` parameter changed after
-  initialization: the setter or getter raises and nothing of that call is set (fmi2Error);
-* a step whose internal work would exceed the simulator's budget (`WorkLimitError`) or that would leave the
-  physical ranges (``ValueError`` from the simulator): error log naming the cause and the way out,
-  ``do_step`` returns False (fmi2Discard), the state is unchanged and the step can be retried;
-* any other exception inside the integrator: ``do_step`` raises (fmi2Error) and keeps refusing until reset;
-* a rejected FMU state (foreign, corrupted, of another FMU): ``_set_fmu_state`` raises, the instance keeps its
-  state (fmi2Error);
-* once the output named by ``freeze_output`` (``"overturned"``) is true the integration stops, the outputs
-  stay frozen (a warning says so) and ``do_step`` keeps returning True.
-
-Messages are queued with `RockingSlave.log`; the binary passes each one to the importer's logger as data
-(``"%s"``): errors and warnings always, the others only with logging on.
-
-Each FMU bundles the package under the digest of its sources (``build_fmu.py``), so FMUs built from other
-versions and a host's own ``rocking_model`` can live in one process.
-"""
+"""The slave and its state machine: `RockingSlave`, the generic pythonfmu slave around a `Simulator` that
+the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call)."""
 from __future__ import annotations
 
 import hashlib
 import math
-import threading
-from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
 
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
+from pythonfmu import Fmi2Causality, Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
-from .fmi_state import decode_state, encode_state
-from .ground_motion import LinearMotion
-from .simulation import Simulator, report_summary
-from .validation import AG_MAX, MAX_STEPS, WorkLimitError, check_real, check_state_keys, state_bool
-
-__all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "DefaultExperiment",
-           "Fmi2Status", "FMUError", "run_fmu", "run_fmu_record", "fmpy_callbacks", "collect_fmu_messages"]
-
-# SI base-unit exponents of every unit an FMU of this package may use (FMI 2.0 <BaseUnit> attributes).
-UNITS: Dict[str, Dict[str, int]] = {
-    "1": {},
-    "m": {"m": 1},
-    "s": {"s": 1},
-    "kg": {"kg": 1},
-    "rad": {"rad": 1},
-    "rad/s": {"rad": 1, "s": -1},
-    "rad/s2": {"rad": 1, "s": -2},
-    "m/s": {"m": 1, "s": -1},
-    "m/s2": {"m": 1, "s": -2},
-    "1/s": {"s": -1},
-    "Hz": {"s": -1},
-    "J": {"kg": 1, "m": 2, "s": -2},
-    "N": {"kg": 1, "m": 1, "s": -2},
-    "N.m": {"kg": 1, "m": 2, "s": -2},
-    "N.m2": {"kg": 1, "m": 3, "s": -2},
-    "N/m": {"kg": 1, "s": -2},
-    "N.s/m": {"kg": 1, "s": -1},
-    "kg/m": {"kg": 1, "m": -1},
-    "kg.m2": {"kg": 1, "m": 2},
-    "Pa": {"kg": 1, "m": -1, "s": -2},
-}
-
-_CAUSALITIES = {"parameter": Fmi2Causality.parameter, "input": Fmi2Causality.input,
-                "output": Fmi2Causality.output}
-_VARIABILITIES = {"fixed": Fmi2Variability.fixed, "tunable": Fmi2Variability.tunable,
-                  "discrete": Fmi2Variability.discrete, "continuous": Fmi2Variability.continuous}
-_PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
-
-
-@dataclass(frozen=True)
-class Var:
-    """One FMU variable.
-
-    name: FMI name (also the key in the parameter dict and in ``Simulator.outputs()``).
-    causality: "parameter", "input" or "output".
-    start: start value (parameters, inputs); outputs report it until initialization is done.
-    type: "Real", "Integer", "Boolean" or "String" (String: parameters only, e.g. a file name).
-    unit: unit name, a key of ``UNITS`` (or of the FMU's ``extra_units``); required for Real.
-    description: text for the modelDescription.
-    variability: default "fixed" for parameters, "continuous" for Real inputs/outputs, "discrete"
-        otherwise. A "tunable" parameter may be changed after initialization (the subclass must read it
-        from ``self.parameter_values`` itself); "fixed" ones may not.
-    min, max: optional declared range (written to the XML; inputs are checked against it in do_step).
-    """
-
-    name: str
-    causality: str
-    start: Any = None
-    type: str = "Real"
-    unit: Optional[str] = None
-    description: str = ""
-    variability: Optional[str] = None
-    min: Optional[float] = None
-    max: Optional[float] = None
-
-    def __post_init__(self):
-        if self.causality not in _CAUSALITIES:
-            raise ValueError(f"Var {self.name!r}: causality must be one of {sorted(_CAUSALITIES)}")
-        if self.type not in _PY_TYPES:
-            raise ValueError(f"Var {self.name!r}: type must be one of {sorted(_PY_TYPES)}")
-        if self.type == "Real" and self.unit is None:
-            raise ValueError(f"Var {self.name!r}: a Real variable needs a unit ('1' if dimensionless)")
-        if self.type != "Real" and self.unit is not None:
-            raise ValueError(f"Var {self.name!r}: only Real variables carry a unit in FMI 2.0")
-        if not self.description:
-            raise ValueError(f"Var {self.name!r}: a description is required")
-        if self.resolved_variability not in _VARIABILITIES:
-            raise ValueError(f"Var {self.name!r}: variability must be one of {sorted(_VARIABILITIES)}")
-        if self.causality == "parameter" and self.resolved_variability not in ("fixed", "tunable"):
-            raise ValueError(f"Var {self.name!r}: a parameter is 'fixed' or 'tunable'")
-        if self.type == "String" and self.causality != "parameter":
-            raise ValueError(f"Var {self.name!r}: String variables are parameters here")
-        if self.type != "Real" and self.resolved_variability == "continuous":
-            raise ValueError(f"Var {self.name!r}: only Real variables can be 'continuous'")
-
-    @property
-    def resolved_variability(self) -> str:
-        if self.variability is not None:
-            return self.variability
-        if self.causality == "parameter":
-            return "fixed"
-        return "continuous" if self.type == "Real" else "discrete"
-
-    @property
-    def default(self):
-        """Start value cast to the Python type (0 / 0.0 / False when no start is given)."""
-        py = _PY_TYPES[self.type]
-        return py(0) if self.start is None else py(self.start)
-
-    def range_text(self) -> str:
-        lo = "-inf" if self.min is None else f"{self.min:g}"
-        hi = "inf" if self.max is None else f"{self.max:g}"
-        return f"[{lo}, {hi}]"
-
-
-#: the ground acceleration input of every FMU that takes one (the bound of `rocking_model.validation.AG_MAX`)
-AG_INPUT = Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
-               description="Horizontal ground acceleration (held constant over each communication step), "
-                           f"|ag| <= {AG_MAX:g} m/s2 (about 100 g)")
-#: the work budget of one communication step, a parameter of every FMU that runs a `Simulator`
-MAX_STEPS_PARAMETER = Var("max_steps", "parameter", MAX_STEPS, type="Integer", min=1, max=1000000000,
-                          description="Work budget of one communication step: internal steps (Moreau-Jean "
-                                      "steps, or Runge-Kutta steps with each event counting 30); a step that "
-                                      "needs more is refused (fmi2Discard, state unchanged, message naming "
-                                      "the cause)")
-
-
-# ----------------------------------------------------------------------------------------------------
-# pythonfmu variables with the attributes pythonfmu 0.7 does not write (unit, min, max)
-def _fmt(value, type_: str) -> str:
-    if type_ == "Real":
-        return f"{float(value):.16g}"
-    if type_ == "Boolean":
-        return "true" if value else "false"
-    return str(int(value))
-
-
-class _ExtraAttrs:
-    """Mixin: add attributes to the type element (<Real>, <Integer>) of the ScalarVariable node."""
-
-    _type_tag = ""
-
-    def _set_extra(self, **attrs):
-        self._extra = {k: v for k, v in attrs.items() if v is not None}
-
-    def to_xml(self) -> Element:
-        node = super().to_xml()
-        child = node.find(self._type_tag)
-        for key, value in getattr(self, "_extra", {}).items():
-            child.set(key, value)
-        return node
-
-
-class UnitReal(_ExtraAttrs, Real):
-    """pythonfmu ``Real`` with ``unit``, ``min`` and ``max`` attributes."""
-
-    _type_tag = "Real"
-
-    def __init__(self, name: str, unit: str, min: Optional[float] = None, max: Optional[float] = None,
-                 **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-        self._set_extra(unit=unit, min=None if min is None else _fmt(min, "Real"),
-                        max=None if max is None else _fmt(max, "Real"))
-
-
-class RangedInteger(_ExtraAttrs, Integer):
-    """pythonfmu ``Integer`` with ``min`` and ``max`` attributes."""
-
-    _type_tag = "Integer"
-
-    def __init__(self, name: str, min: Optional[int] = None, max: Optional[int] = None, **kwargs):
-        super().__init__(name, **kwargs)
-        self._set_extra(min=None if min is None else _fmt(min, "Integer"),
-                        max=None if max is None else _fmt(max, "Integer"))
-
+from ..fmi_state import decode_state, encode_state
+from ..ground_motion import LinearMotion
+from ..simulation import Simulator, report_summary
+from ..validation import AG_MAX, WorkLimitError, check_real, check_state_keys, state_bool
+from .variables import (_CAUSALITIES, _PY_TYPES, _VARIABILITIES, UNITS, EnumerationInteger, RangedInteger, UnitReal,
+                        Var, type_definitions)
 
 # ----------------------------------------------------------------------------------------------------
 def _package_version() -> Optional[str]:
     try:
-        from . import __version__
+        from .. import __version__
         return str(__version__)
     except Exception:  # pragma: no cover - only outside the package
         return None
@@ -347,6 +113,8 @@ class RockingSlave(Fmi2Slave):
             return UnitReal(spec.name, unit=spec.unit, min=spec.min, max=spec.max, **kwargs)
         if spec.type == "String":
             return String(spec.name, **kwargs)
+        if spec.type == "Enumeration":
+            return EnumerationInteger(spec.name, spec.declared_type, min=spec.min, max=spec.max, **kwargs)
         if spec.type == "Integer":
             return RangedInteger(spec.name, min=spec.min, max=spec.max, **kwargs)
         return Boolean(spec.name, **kwargs)
@@ -398,6 +166,13 @@ class RockingSlave(Fmi2Slave):
             children = list(root)
             position = children.index(cosim) + 1 if cosim is not None else 0
             root.insert(position, unit_defs)
+        # <TypeDefinitions> next (the enumerations: scheme, impact_rule)
+        types = type_definitions(self.variables)
+        if types is not None:
+            children = list(root)
+            anchor = root.find("UnitDefinitions")
+            anchor = anchor if anchor is not None else cosim
+            root.insert(children.index(anchor) + 1 if anchor is not None else 0, types)
         # ModelStructure: outputs have no direct feed-through from inputs (co-simulation); every output is
         # an initial unknown (initial="calculated")
         structure = root.find("ModelStructure")
@@ -606,7 +381,7 @@ class RockingSlave(Fmi2Slave):
         values = slave["values"]
         check_state_keys(values, tuple(self._specs))
         for name, spec in self._specs.items():
-            values[name] = _check_value(name, spec.type, values[name])
+            values[name] = _check_value(name, spec.access_type, values[name])
         sim = None
         if doc["simulator"] is not None:
             if not isinstance(doc["simulator"], dict):
@@ -688,6 +463,9 @@ class RockingSlave(Fmi2Slave):
             value = _PY_TYPES[spec.type](value)
         except Exception:
             return f"{name}: cannot convert {str(value)[:64]!r} to {spec.type}", None
+        if not spec.allows(value):
+            return (f"{name} = {value!r} is not supported; allowed values: "
+                    + ", ".join(f"{code} ({item})" for item, code, _ in spec.items)), None
         if spec.type == "String" and len(value) > _MAX_TEXT:
             return f"{name}: a text of {len(value)} characters is too long; at most {_MAX_TEXT}", None
         if spec.causality == "input" and spec.type == "Real":
@@ -779,7 +557,6 @@ def _var_type(var) -> str:
     return type(var).__name__
 
 
-_FMPY_LOCK = threading.Lock()
 
 #: [unit/s] largest input rate accepted by fmi2SetRealInputDerivatives: AG_MAX reached from 0 in 1 ms, far
 #: beyond any recorded ground motion (a steeper ramp is a step, which a zero-order hold represents)
@@ -810,186 +587,42 @@ def _check_value(name: str, type_: str, value):
     return value
 
 
-# ----------------------------------------------------------------------------------------------------
-# importer side
-class FMUError(RuntimeError):
-    """An FMU run failed: error messages logged by the FMU, or the simulation ended before stop_time."""
+class ModelSlave(RockingSlave):
+    """The FMU of a registered model (`rocking_model.models.MODELS`), its whole interface derived from the
+    model's declarations: parameters (start values, units, ranges, descriptions), initial values, the solver
+    options (`rocking_model.simulation.SOLVER_PARAMETERS`), the work budget, the input ag, the model's outputs
+    and the simulator's (contact, impacts, overturned). An FMU script only names the model::
 
-    def __init__(self, message: str, messages: Sequence[tuple] = (), result=None):
-        super().__init__(message)
-        self.messages = list(messages)
-        self.result = result
+        class RigidRockingBlock(ModelSlave):
+            model_class = RigidBlock
+            description = "..."
+            variables = ModelSlave.variables_of(RigidBlock)
+    """
 
-
-class _FmpyLog:
-    """The logger of every FMU this package instantiates through fmpy, alive as long as the process.
-
-    fmpy formats the variadic FMI message in a C proxy (``fmpy.logging.addLoggerProxy``) that forwards to ONE
-    process-wide Python logger, the last one registered: after ``fmpy.simulate_fmu(logger=f)`` returns, the
-    proxy points at a ctypes closure that is freed with the run, and the next message of any FMU crashes the
-    process. `fmpy_callbacks` registers this logger again (re-pointing the proxy at a live closure) and
-    routes the messages: to the sink given to `fmpy_callbacks` (through the componentEnvironment of its
-    callbacks), else to the sink of `collect_fmu_messages` in this thread, else to fmpy's printer."""
-
-    callbacks = None
-    raw_logger = None
-    local = threading.local()
-    sinks: Dict[int, list] = {}   # componentEnvironment -> list of (status, category, text)
+    model_class: ClassVar[type] = None
 
     @staticmethod
-    def dispatch(env, instance, status, category, message):
-        sink = _FmpyLog.sinks.get(env) if env else None
-        if sink is None:
-            sink = getattr(_FmpyLog.local, "sink", None)
-        if sink is not None:
-            sink.append((int(status), _text(category), _text(message)))
-            return
-        from fmpy.fmi2 import printLogMessage
+    def variables_of(model_class) -> tuple:
+        """The variable table of ``model_class``'s FMU (see the class docstring)."""
+        from ..simulation import SOLVER_PARAMETERS
+        from .variables import AG_INPUT, MAX_STEPS_PARAMETER, model_variables
 
-        printLogMessage(env, instance, status, category, message)
+        extra_outputs = (
+            Var("contact", "output", 0, type="Integer", min=0, max=len(model_class.contact_codes()) - 1,
+                description="Contact state: " + model_class.contact_description()),
+            Var("impacts", "output", 0, type="Integer", description="Number of impacts so far"),
+            Var("overturned", "output", False, type="Boolean",
+                description="True once the structure has overturned (outputs are frozen from then on)"),
+        )
+        return model_variables(model_class, SOLVER_PARAMETERS, (MAX_STEPS_PARAMETER,), (AG_INPUT,),
+                               extra_outputs)
 
+    def create_simulator(self, p, t0):
+        from ..simulation import SOLVER_PARAMETERS
 
-def fmpy_callbacks(sink: Optional[list] = None):
-    """``fmi2CallbackFunctions`` for fmpy (pass as ``FMU2Slave.instantiate(callbacks=...)``), with fmpy's
-    logger proxy pointed at the process-wide logger again (see `_FmpyLog`). With ``sink``, new callbacks
-    whose messages are appended to it as (status, category, text); keep them alive with the instance."""
-    from ctypes import byref
-
-    from fmpy.fmi2 import (calloc, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, free)
-
-    with _FMPY_LOCK:
-        if _FmpyLog.callbacks is None:
-            _FmpyLog.raw_logger = fmi2CallbackLoggerTYPE(_FmpyLog.dispatch)
-            callbacks = fmi2CallbackFunctions()
-            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            _FmpyLog.callbacks = callbacks
-        callbacks = _FmpyLog.callbacks
-        # the proxy replaces callbacks.logger by itself: start from the raw logger every time
-        callbacks.logger = _FmpyLog.raw_logger
-        try:
-            from fmpy.logging import addLoggerProxy
-            addLoggerProxy(byref(callbacks))
-        except Exception:  # pragma: no cover - fmpy without its logging library: the raw format arrives
-            pass
-        if sink is None:
-            return callbacks
-        own = fmi2CallbackFunctions()
-        own.logger = callbacks.logger   # the proxy, which formats and calls `dispatch`
-        own.allocateMemory = callbacks.allocateMemory
-        own.freeMemory = callbacks.freeMemory
-        token = len(_FmpyLog.sinks) + 1
-        own.componentEnvironment = token
-        _FmpyLog.sinks[token] = sink
-        return own
-
-
-@contextmanager
-def collect_fmu_messages():
-    """Collect the messages of the FMUs run through fmpy in this thread into a list of
-    (status, category, text), yielded; fmpy's default callbacks and `fmpy_callbacks` both end here."""
-    fmpy_callbacks()
-    previous = getattr(_FmpyLog.local, "sink", None)
-    messages: List[tuple] = []
-    _FmpyLog.local.sink = messages
-    try:
-        yield messages
-    finally:
-        _FmpyLog.local.sink = previous
-        fmpy_callbacks()
-
-
-def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: float = 0.0,
-            start_values: Optional[Dict[str, Any]] = None, input=None, output=None, **kwargs):
-    """``fmpy.simulate_fmu`` that fails loudly: raise :class:`FMUError` with the FMU's messages if a call
-    fails (fmi2Error: invalid parameters, inputs, ...), the FMU logged an error, or the run ended before
-    ``stop_time`` (a refused step: fmi2Discard with fmi2Terminated, which fmpy treats as an early end).
-    ``output_interval`` is the co-simulation step (always pass it: fmpy coarsens the default one). Returns
-    the fmpy result (structured array with a 'time' column).
-    """
-    import fmpy
-    from fmpy.fmi1 import FMICallException
-
-    with collect_fmu_messages() as messages:
-        try:
-            result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,
-                                       output_interval=output_interval, start_values=dict(start_values or {}),
-                                       input=input, output=output, **kwargs)
-        except FMICallException as exc:
-            errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
-            raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
-    errors = [m for s, _, m in messages if s >= int(Fmi2Status.error)]
-    t_last = float(result["time"][-1])
-    early = t_last < stop_time and not math.isclose(t_last, stop_time, rel_tol=1e-9, abs_tol=1e-12)
-    if errors or early:
-        what = "; ".join(errors) if errors else "no error message"
-        raise FMUError(f"{filename}: simulation failed at t = {t_last:g} s (stop_time = {stop_time:g} s): "
-                       f"{what}", messages, result)
-    return result
-
-
-def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: float, hold: str = "linear",
-                   start_values: Optional[Dict[str, Any]] = None, output: Sequence[str] = ("phi",)):
-    """Drive an FMU with input ``ag`` through a sampled record (times ``t_record`` [s], values ``ag_record``
-    [m/s2], linear between samples) with communication step ``step`` [s]; return a structured array with
-    "time" and the ``output`` variables after every step.
-
-    ``hold="linear"``: at every communication point the master sets ag and its slope over the coming step
-    (fmi2SetRealInputDerivatives, order 1), so the FMU integrates the record's straight line over the step;
-    with ``step`` equal to the record's sampling that is the record itself. ``hold="zoh"``: ag held constant
-    over each step (what a master without input derivatives does). fmpy 0.3.32's
-    ``simulate_fmu(set_input_derivatives=True)`` cannot serve here: its derivative buffer has a fixed length
-    of 9 (one input raises ValueError) and at a sample point it passes the slope of the previous interval."""
-    import numpy as np
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    hold = {"linear": "linear", "zoh": "zoh"}.get(hold)
-    if hold is None:
-        raise ValueError("hold must be 'linear' or 'zoh'")
-    step = check_real("step", step, lo=0.0, lo_open=True)
-    t_record = np.asarray(t_record, dtype=float)
-    ag_record = np.asarray(ag_record, dtype=float)
-    md = read_model_description(str(filename))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    types = {v.name: v.type for v in md.modelVariables}
-    unzip = extract(str(filename))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                    instanceName="record")
-    n = int(round(stop_time / step))
-    rows = []
-    with collect_fmu_messages() as messages:
-        from fmpy.fmi1 import FMICallException
-
-        try:
-            fmu.instantiate(callbacks=fmpy_callbacks())
-            fmu.setupExperiment(startTime=0.0)
-            fmu.enterInitializationMode()
-            for name, value in (start_values or {}).items():
-                setter = {"Real": fmu.setReal, "Integer": fmu.setInteger, "Boolean": fmu.setBoolean,
-                          "String": fmu.setString}[types[name]]
-                setter([vr[name]], [value])
-            fmu.exitInitializationMode()
-            for k in range(n):
-                t = k * step
-                a0 = float(np.interp(t, t_record, ag_record))
-                fmu.setReal([vr["ag"]], [a0])
-                if hold == "linear":
-                    a1 = float(np.interp(t + step, t_record, ag_record))
-                    fmu.setRealInputDerivatives([vr["ag"]], [1], [(a1 - a0) / step])
-                fmu.doStep(t, step)
-                rows.append(tuple([t + step] + [fmu.getReal([vr[o]])[0] for o in output]))
-            fmu.terminate()
-        except FMICallException as exc:
-            errors = [m for st, _, m in messages if st >= int(Fmi2Status.error)]
-            raise FMUError(f"{filename}: {exc}: " + ("; ".join(errors) or "no error message"), messages) from None
-        finally:
-            fmu.freeInstance()
-    return np.array(rows, dtype=[("time", float)] + [(o, float) for o in output])
-
-
-def _text(value) -> str:
-    if value is None:
-        return ""
-    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+        cls = self.model_class
+        model = cls(**{q.name: p[q.name] for q in cls.parameters() if q.fmu})
+        options = {q.name: p[q.name] for q in SOLVER_PARAMETERS}
+        initial = {q.name: p[q.name] for q in cls.INITIAL if q.fmu}
+        # impact_log_size = 0: the FMU keeps no impact log (memory flat over any run; the count is kept)
+        return Simulator(model, t0=t0, impact_log_size=0, max_steps=p["max_steps"], **options, **initial)

@@ -1,0 +1,92 @@
+"""Declared parameters: name, default, unit, allowed range and description, written once.
+
+A model declares its parameters as dataclass fields made by `param` and its initial values and outputs as
+`Param` tuples; the model's checks, the `Simulator`'s solver options, the command line and the FMUs (start
+values, ``min``/``max``, descriptions, enumeration items) all read these declarations (`declared_parameters`),
+so that a default or a range lives in one place.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from .validation import check_choice, check_real
+
+
+@dataclass(frozen=True)
+class Param:
+    """One declared quantity.
+
+    name: the keyword (and FMU variable) name; default: its value when not given; unit: SI unit ("1" if
+    dimensionless, None for integers and choices); description: one sentence for documentation and tools;
+    lo, hi, lo_open, hi_open: the allowed range of a real value (None: unbounded); items: for a choice, the
+    allowed values as (name, code, description) -- the value is given by name or code and stored as the code;
+    fmu: whether the FMUs expose it (False: Python API only)."""
+
+    name: str
+    default: Any
+    unit: str | None = "1"
+    description: str = ""
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    items: tuple = ()
+    fmu: bool = True
+
+    @property
+    def is_choice(self) -> bool:
+        return bool(self.items)
+
+    def check(self, value):
+        """``value`` checked against the declaration (ValueError naming it and the allowed range/values);
+        a choice is returned as its code."""
+        if self.items:
+            allowed = {code: code for _, code, _ in self.items}
+            allowed.update({name: code for name, code, _ in self.items})
+            return check_choice(self.name, value, allowed)
+        return check_real(self.name, value, lo=self.lo, hi=self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
+
+    def fmu_min(self):
+        """Closed lower bound for the FMU's ``min`` attribute (None: none; an open bound is written as is,
+        the check names it)."""
+        if self.items:
+            return min(code for _, code, _ in self.items)
+        return None if self.lo is None or not math.isfinite(self.lo) else self.lo
+
+    def fmu_max(self):
+        if self.items:
+            return max(code for _, code, _ in self.items)
+        return None if self.hi is None or not math.isfinite(self.hi) else self.hi
+
+    def range_text(self) -> str:
+        if self.items:
+            return ", ".join(f"{code} {name}" for name, code, _ in self.items)
+        lo = "-inf" if self.lo is None else f"{self.lo:g}"
+        hi = "inf" if self.hi is None else f"{self.hi:g}"
+        return (f"{'(' if self.lo_open or self.lo is None else '['}{lo}, {hi}"
+                f"{')' if self.hi_open or self.hi is None else ']'}")
+
+
+def param(default, unit: str | None = "1", description: str = "", **kw):
+    """A dataclass field declared as a `Param` (its name is the field's name)."""
+    return dataclasses.field(default=default, metadata={"param": dict(default=default, unit=unit,
+                                                                      description=description, **kw)})
+
+
+def declared_parameters(cls) -> tuple:
+    """The `Param` of every dataclass field of ``cls`` declared with `param`, in field order."""
+    out = []
+    for f in dataclasses.fields(cls):
+        spec = f.metadata.get("param")
+        if spec is not None:
+            out.append(Param(name=f.name, **spec))
+    return tuple(out)
+
+
+def check_parameters(obj) -> None:
+    """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place."""
+    for p in declared_parameters(type(obj)):
+        object.__setattr__(obj, p.name, p.check(getattr(obj, p.name)))
