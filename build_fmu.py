@@ -54,9 +54,25 @@ PYHOST_CONFIG = "fmi2_pyhost.json"
 _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", "*.egg-info", ".pytest_cache")
 
 
+def registered_fmu_names() -> list[str]:
+    """The FMU names of the registered models (`rocking_model.models.MODELS`): each needs a script in
+    fmu_src/ (the other FMUs there, the ground-motion source and the building storey, are system parts)."""
+    sys.path.insert(0, str(ROOT))
+    try:
+        from rocking_model.models import MODELS
+    finally:
+        sys.path.pop(0)
+    return [cls.fmu_name for cls in MODELS.values()]
+
+
 def fmu_scripts(names=None) -> list[Path]:
-    """The FMU scripts in fmu_src/ (optionally only those whose stem is in ``names``)."""
+    """The FMU scripts in fmu_src/ (optionally only those whose stem is in ``names``); BuildError when a
+    registered model has none."""
     scripts = sorted(p for p in FMU_SRC.glob("*.py") if not p.name.startswith("_"))
+    lacking = [n for n in registered_fmu_names() if n not in {p.stem for p in scripts}]
+    if lacking:
+        raise BuildError(f"the registered model(s) {lacking} have no FMU script in {FMU_SRC}: add "
+                         f"fmu_src/<fmu_name>.py with a ModelSlave naming the model (see fmu_src/RigidRockingBlock.py)")
     if names:
         missing = set(names) - {p.stem for p in scripts}
         if missing:

@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rocking_model import RigidBlock, SampledMotion, SinePulse
+from rocking_model import SampledMotion, SinePulse
+from rocking_model.models import make_model
 from rocking_model.records import synthetic_record  # noqa: F401  (moved there; numbers unchanged)
 
 G = 9.81
@@ -36,7 +37,7 @@ FLEX_PULSE_F = 1.5
 class Scene:
     """One benchmark case.
 
-    kind: "rigid" or "flexible"; model_kw: constructor arguments; motion: ("none",), ("sine", A, omega_p)
+    kind: a registered model ("rigid", "flexible"); model_kw: constructor arguments; motion: ("none",), ("sine", A, omega_p)
     or ("sampled", t, ag); initial: initial state (phi_0, ...); t_end [s]; grid: output interval of the
     common comparison grid [s]; mj_dts / ed_tols / base_tols / sic_dts: the sweeps (full run)."""
 
@@ -57,10 +58,8 @@ class Scene:
     note: str = ""
 
     def model(self):
-        if self.kind == "rigid":
-            return RigidBlock(**self.model_kw)
-        from rocking_model.models.flexible_oscillator import FlexibleOscillator
-        return FlexibleOscillator(**self.model_kw)
+        """The scene's model: the registered ``kind`` (`rocking_model.models.MODELS`) with ``model_kw``."""
+        return make_model(self.kind, **self.model_kw)
 
     def ground_motion(self):
         kind = self.motion[0]

@@ -25,10 +25,13 @@ from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 from .ground_motion import PULSES
+from .integrators import SCHEMES as _SCHEME_CLASSES
+from .models import model_class
 
 # PULSES: the pulse kinds of the grids, built by `ground_motion.pulse_from_parameters` (rectangular:
 # duration 2 pi / omega_p)
-SCHEMES = ("event_driven", "moreau_jean")
+#: the registered schemes (`rocking_model.integrators.SCHEMES`), event-driven first (the default)
+SCHEMES = tuple(sorted(_SCHEME_CLASSES, key=lambda name: -_SCHEME_CLASSES[name].code))
 
 #: case fields, in output column order
 CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "motion", "A", "omega_p", "a_ratio", "w_ratio",
@@ -84,8 +87,7 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
     (enough for overturning after an impact). dt_max: Moreau-Jean step [s] (default 1e-3)."""
     if kind not in PULSES:
         raise ValueError(f"pulse = {kind!r} is not supported; allowed values: {', '.join(PULSES)}")
-    if model not in ("rigid", "flexible"):
-        raise ValueError(f"model = {model!r} is not supported; allowed values: 'rigid', 'flexible'")
+    model_class(model)                    # ValueError naming the registered models
     if (amplitude_ratios is None) == (amplitudes is None):
         raise ValueError("give either amplitude ratios A/(g tan alpha) or amplitudes [m/s2]")
     if (frequency_ratios is None) == (frequencies is None):
@@ -166,12 +168,9 @@ def case_motion(case: dict):
 
 
 def case_model(case: dict):
-    """The model of a case (RigidBlock or FlexibleOscillator with the case's b, h, e_N)."""
-    if case["model"] == "rigid":
-        from .models.rigid_block import RigidBlock
-        return RigidBlock(b=case["b"], h=case["h"], e_N=case["e_N"])
-    from .models.flexible_oscillator import FlexibleOscillator
-    return FlexibleOscillator(b=case["b"], h=case["h"], e_N=case["e_N"])
+    """The model of a case: the registered ``case["model"]`` (`rocking_model.models.MODELS`) with the case's
+    b, h, e_N."""
+    return model_class(case["model"])(b=case["b"], h=case["h"], e_N=case["e_N"])
 
 
 def run_case(case: dict) -> dict:

@@ -36,10 +36,6 @@ class Param:
     items: tuple = ()
     fmu: bool = True
 
-    @property
-    def is_choice(self) -> bool:
-        return bool(self.items)
-
     def check(self, value):
         """``value`` checked against the declaration (ValueError naming it and the allowed range/values);
         a choice is returned as its code."""

@@ -291,9 +291,6 @@ class Inst:
 
         self.h, self.name, self.iname = h, name, iname
         md = h.md(name)
-        for v in md.modelVariables:
-            if v.type == "Enumeration":     # FMI 2.0: read and written with fmi2Get/SetInteger
-                v.type = "Integer"
         self.vars = {v.name: v for v in md.modelVariables}
         self.by_vr = {v.valueReference: v for v in md.modelVariables}
         self.output_names = [v.name for v in md.modelVariables if v.causality == "output"]

@@ -17,9 +17,6 @@ class Instance:
 
     def __init__(self, fmu, name="instance"):
         path, md, unzip = fmu
-        for v in md.modelVariables:
-            if v.type == "Enumeration":     # FMI 2.0: read and written with fmi2Get/SetInteger
-                v.type = "Integer"
         self.vars = {v.name: v for v in md.modelVariables}
         self._sink: list[tuple[int, str, str]] = []
         # the FMU passes every message as data ("%s"): fmpy's proxy formats it, fmpy_callbacks routes it

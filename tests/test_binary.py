@@ -4,7 +4,6 @@ in one process give the results of a sequential run; sys.path and the interprete
 freeing and unloading; a C host under valgrind makes no invalid memory access in the binary."""
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import shutil
@@ -33,11 +32,8 @@ pytestmark = pytest.mark.skipif(CC is None or not sys.platform.startswith("linux
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
-    return {p.stem: p for p in build.build_all(tmp_path_factory.mktemp("fmus"), names=[RIGID, FLEX])}
+def fmus(built_fmus):
+    return built_fmus
 
 
 def test_binary_compiles_without_warnings(tmp_path):
@@ -162,12 +158,10 @@ def test_c_host_under_valgrind_has_no_invalid_access_in_the_binary(fmus, tmp_pat
     assert not [r for r in errors if "Invalid write" in r], errors
 
 
-def test_missing_compiler_is_one_clear_error(monkeypatch, tmp_path):
+def test_missing_compiler_is_one_clear_error(monkeypatch, tmp_path, build_module):
     """No C compiler: build_fmu stops with one message naming what to install (exit code 1 on the command
     line), before any FMU is written."""
-    spec = importlib.util.spec_from_file_location("build_fmu_nocc", ROOT / "build_fmu.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
+    build = build_module
     monkeypatch.delenv("CC", raising=False)
     monkeypatch.setenv("PATH", str(tmp_path))  # nothing to find there
     with pytest.raises(build.BuildError, match=r"no C compiler found.*apt install gcc.*set CC"):

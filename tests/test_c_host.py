@@ -7,7 +7,6 @@ PATH and HOME), without LD_PRELOAD or PYTHONPATH. Skipped without a C compiler o
 """
 from __future__ import annotations
 
-import importlib.util
 import os
 import platform
 import shutil
@@ -58,12 +57,8 @@ def host(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    dest = tmp_path_factory.mktemp("fmus_c")
-    return {p.stem: p for p in module.build_all(dest, names=["RigidRockingBlock", "FlexibleRockingOscillator"])}
+def fmus(built_fmus):
+    return built_fmus
 
 
 def run_host(host: Path, fmu: Path, tmp: Path, ag: float, t_end: float, dt: float, folder: str = "",

@@ -1,7 +1,6 @@
 """Cross-check folders written by build_fmu.py (FMI cross-check layout) and their re-simulation with fmpy."""
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -17,17 +16,16 @@ NAMES = ["RigidRockingBlock", "FlexibleRockingOscillator", "GroundMotionSource",
 
 
 @pytest.fixture(scope="module")
-def build():
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def build(build_module):
+    return build_module
 
 
 @pytest.fixture(scope="module")
-def dist(build, tmp_path_factory):
+def dist(build, built_fmus, tmp_path_factory):
+    """The cross-check folders of the session's FMUs, as ``build_all(cross_check=True)`` writes them."""
     dest = tmp_path_factory.mktemp("dist_cc")
-    build.build_all(dest, cross_check=True)
+    for name in NAMES:
+        build.write_cross_check(built_fmus[name], dest / build.CROSS_CHECK_DIR)
     return dest
 
 

@@ -52,17 +52,12 @@ JOBS = int(os.environ.get("FAULT_SUITE_JOBS", "0")) or max(2, min(4, os.cpu_coun
 
 # ---------------------------------------------------------------------------------------------- running
 @pytest.fixture(scope="session")
-def fault_config(tmp_path_factory):
-    """Build the four FMUs once, extract each once (the cases share the read-only folders)."""
-    import importlib.util
-
+def fault_config(built_fmus, tmp_path_factory):
+    """The session's FMUs, each extracted once (the cases share the read-only folders)."""
     from fmpy import extract
 
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
     dest = tmp_path_factory.mktemp("fault_fmus")
-    paths = build.build_all(dest, names=list(fh.FMUS))
+    paths = [built_fmus[name] for name in fh.FMUS]
     fmus = {p.stem: {"path": str(p), "unzip": str(extract(str(p), unzipdir=str(dest / f"{p.stem}_unzipped")))}
             for p in paths}
     config = dest / "fmus.json"

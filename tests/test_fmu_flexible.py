@@ -1,7 +1,6 @@
 """FlexibleRockingOscillator FMU: validation, equivalence with the Python Simulator, both FMUs in one process."""
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -21,13 +20,8 @@ OUTPUTS = ["u", "u_dot", "phi", "phi_dot", "x", "y", "x_dot", "y_dot", "top_disp
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    dest = tmp_path_factory.mktemp("fmus_flex")
-    built = module.build_all(dest, names=["FlexibleRockingOscillator", "RigidRockingBlock"])
-    return {p.stem: p for p in built}
+def fmus(built_fmus):
+    return built_fmus
 
 
 def pulse_table(amplitude, t_end=2.0, period=1.0, n=201):

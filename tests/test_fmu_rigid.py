@@ -26,19 +26,9 @@ PARAMS = dict(b=0.2, h=1.0, m=1.0, g=9.81, e_N=0.0, phi_0=0.0, phi_dot_0=0.0, dt
 OUTPUTS = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"]
 
 
-def _load_build_module():
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="session")
-def fmu(tmp_path_factory) -> Path:
-    dest = tmp_path_factory.mktemp("fmus")
-    built = _load_build_module().build_all(dest, names=["RigidRockingBlock"])
-    assert [p.name for p in built] == ["RigidRockingBlock.fmu"]
-    return built[0]
+def fmu(built_fmus) -> Path:
+    return built_fmus["RigidRockingBlock"]
 
 
 def pulse_table(amplitude, t_end=2.0, period=1.0, n=201):
@@ -84,8 +74,8 @@ def test_validate_fmu_reports_no_problems(fmu):
 
 def test_model_description_units_variability_structure(fmu):
     root = model_description(fmu)
-    assert [c.tag for c in root] == ["CoSimulation", "UnitDefinitions", "TypeDefinitions", "LogCategories",
-                                     "DefaultExperiment", "ModelVariables", "ModelStructure"]
+    assert [c.tag for c in root] == ["CoSimulation", "UnitDefinitions", "LogCategories", "DefaultExperiment",
+                                     "ModelVariables", "ModelStructure"]
     assert root.get("description")
     cs = root.find("CoSimulation")
     assert cs.get("canInterpolateInputs") == "true"  # fmi2SetRealInputDerivatives of order 1
@@ -114,12 +104,12 @@ def test_model_description_units_variability_structure(fmu):
         assert variables[name][2].get("start") is not None
     assert float(variables["b"][2].get("start")) == 0.2
     assert float(variables["g"][2].get("start")) == 9.81
-    # scheme is an Enumeration (issue 14): tools show the names; its items are the registered schemes
-    assert variables["scheme"][2].tag == "Enumeration"
-    declared = variables["scheme"][2].get("declaredType")
-    (enum,) = [t.find("Enumeration") for t in root.find("TypeDefinitions") if t.get("name") == declared]
-    assert [(i.get("name"), i.get("value")) for i in enum] == [("moreau_jean", "0"), ("event_driven", "1")]
-    assert variables["scheme"][2].get("start") == "1"
+    # scheme: an Integer (libcosim ignores FMI Enumerations) whose range and description come from the
+    # registered schemes
+    assert variables["scheme"][2].tag == "Integer" and variables["scheme"][2].get("start") == "1"
+    assert (variables["scheme"][2].get("min"), variables["scheme"][2].get("max")) == ("0", "1")
+    assert "0 moreau_jean (" in variables["scheme"][1].get("description")
+    assert "1 event_driven (" in variables["scheme"][1].get("description")
     # start values, ranges and descriptions come from the model's declarations (one source of truth)
     from rocking_model.models import RigidBlock
     for p in RigidBlock.parameters() + RigidBlock.INITIAL:
@@ -193,8 +183,8 @@ def test_default_start_values_run(fmu):
 @pytest.mark.parametrize("start_values, pattern, call", [
     ({"b": -1.0}, r"b = -1 is out of range; allowed range \[1e-06, 1000\]", "fmi2ExitInitializationMode"),
     # an Enumeration value that is none of its items is refused where it is set
-    ({"scheme": 5}, r"scheme = 5 is not supported; allowed values: 0 \(moreau_jean\), 1 \(event_driven\)",
-     "fmi2SetInteger"),
+    ({"scheme": 5}, r"scheme = 5 is not supported; allowed values: 'moreau_jean', 0, 'event_driven', 1",
+     "fmi2ExitInitializationMode"),
     ({"e_N": 1.5}, r"e_N = 1.5 is out of range; allowed range \[0, 1\]", "fmi2ExitInitializationMode"),
     ({"phi_0": 2.0}, r"phi_0 = 2 is out of range", "fmi2ExitInitializationMode"),
 ])
@@ -219,9 +209,9 @@ def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern, call)
 
 
 def test_enumeration_start_values_by_name(fmu):
-    """scheme is an FMI Enumeration (issue 14): run_fmu takes its item names (fmpy itself passes start values
-    through int(), so fmpy.simulate_fmu(start_values={"scheme": "moreau_jean"}) cannot), and a misspelt name
-    is an FMUError listing the items."""
+    """scheme is a choice (issue 14): run_fmu takes its names (fmpy itself passes start values through int(),
+    so fmpy.simulate_fmu(start_values={"scheme": "moreau_jean"}) cannot), and a misspelt name is an FMUError
+    listing the choices."""
     by_name = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "moreau_jean",
                                                                               "phi_0": 0.05})
     by_code = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": 0, "phi_0": 0.05})
@@ -229,7 +219,7 @@ def test_enumeration_start_values_by_name(fmu):
     event = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "event_driven",
                                                                             "phi_0": 0.05})
     assert event["phi"].tobytes() != by_code["phi"].tobytes()
-    with pytest.raises(FMUError, match=r"scheme = 'moreau-jean' is not one of its items: moreau_jean, event_driven"):
+    with pytest.raises(FMUError, match=r"scheme = 'moreau-jean' is not one of its choices: moreau_jean, event_driven"):
         run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "moreau-jean"})
 
 

@@ -11,7 +11,6 @@ import pytest
 
 fmpy = pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
-from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
 
 from fmu_instance import Instance  # noqa: E402
@@ -23,13 +22,8 @@ RIGID, FLEX = "RigidRockingBlock", "FlexibleRockingOscillator"
 
 # ---------------------------------------------------------------------------------------------- helpers
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
-    dest = tmp_path_factory.mktemp("fmus")
-    paths = build.build_all(dest, names=[RIGID, FLEX])
-    return {p.stem: (p, read_model_description(str(p)), extract(str(p))) for p in paths}
+def fmus(extracted_fmus):
+    return extracted_fmus
 
 
 OUT = {RIGID: ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"),

@@ -4,7 +4,6 @@ slope, the FMU reproduces `simulate(..., hold="exact")` to round-off, where a ze
 O(dt). Also: bad orders, references and rates are fmi2Error; the rate is part of the FMU state."""
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -12,7 +11,6 @@ import numpy as np
 import pytest
 
 fmpy = pytest.importorskip("fmpy")
-from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
 
 from fmu_instance import FMI2_DISCARD, FMI2_ERROR, Instance  # noqa: E402
@@ -27,12 +25,8 @@ DT = 0.01
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
-    paths = build.build_all(tmp_path_factory.mktemp("fmus"), names=[RIGID, STOREY])
-    return {p.stem: (p, read_model_description(str(p)), extract(str(p))) for p in paths}
+def fmus(extracted_fmus):
+    return extracted_fmus
 
 
 def record(peak: float, seed: int = 3, duration: float = 3.0):

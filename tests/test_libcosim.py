@@ -7,7 +7,6 @@ fmpy.simulate_fmu (whose time grid start + n h differs from libcosim's in the la
 """
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -29,19 +28,9 @@ RIGID_OUT = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", 
 FLEX_OUT = ["u", "u_dot", "phi", "phi_dot", "x", "y", "top_displacement", "energy", "contact", "impacts"]
 
 
-def _load_build_module():
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    dest = tmp_path_factory.mktemp("fmus_libcosim")
-    built = _load_build_module().build_all(dest, names=["RigidRockingBlock", "FlexibleRockingOscillator",
-                                                        "GroundMotionSource"])
-    return {p.stem: p for p in built}
+def fmus(built_fmus):
+    return built_fmus
 
 
 def pulse(A, period=1.0):

@@ -166,7 +166,5 @@ def test_fmu_agrees_with_python_api(fmus, case, scheme, amplitude):
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    import test_bad_input
-
-    return test_bad_input.fmus.__wrapped__(tmp_path_factory)
+def fmus(extracted_fmus):
+    return extracted_fmus

@@ -32,9 +32,8 @@ def _load(name, path):
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    dest = tmp_path_factory.mktemp("fmus_system")
-    return {p.stem: p for p in _load("build_fmu", ROOT / "build_fmu.py").build_all(dest, names=NAMES)}
+def fmus(built_fmus):
+    return built_fmus
 
 
 def _libcosim():

@@ -104,23 +104,29 @@ def collect_fmu_messages():
         fmpy_callbacks()
 
 
-def enumeration_codes(filename, values: Dict[str, Any]) -> Dict[str, Any]:
-    """``values`` with the item names of Enumeration variables (``{"scheme": "moreau_jean"}``) replaced by
-    their codes, which is what fmpy passes on (it converts start values with int()); FMUError for a name that
-    is none of the items."""
+def choice_codes(filename, values: Dict[str, Any]) -> Dict[str, Any]:
+    """``values`` with the names of choice parameters (``{"scheme": "moreau_jean"}``, ``impact_rule``) replaced
+    by their integer codes, read from the declarations of the FMU's model (`rocking_model.models.MODELS`,
+    `rocking_model.simulation.SOLVER_PARAMETERS`); fmpy passes start values through int(). FMUError for a
+    name that is none of the choices."""
     if not any(isinstance(v, str) for v in values.values()):
         return dict(values)
     from fmpy import read_model_description
 
+    from ..models import MODELS
+    from ..simulation import SOLVER_PARAMETERS
+
+    name = read_model_description(str(filename)).modelName
+    model = next((cls for cls in MODELS.values() if cls.fmu_name == name), None)
+    declared = list(SOLVER_PARAMETERS) + (list(model.parameters()) if model is not None else [])
     out = dict(values)
-    for var in read_model_description(str(filename)).modelVariables:
-        value = out.get(var.name)
-        if var.type == "Enumeration" and isinstance(value, str) and var.declaredType is not None:
-            items = {item.name: int(item.value) for item in var.declaredType.items}
-            if value not in items:
-                raise FMUError(f"{filename}: {var.name} = {value!r} is not one of its items: "
-                               + ", ".join(items))
-            out[var.name] = items[value]
+    for p in declared:
+        value = out.get(p.name)
+        if p.items and isinstance(value, str):
+            codes = {item: code for item, code, _ in p.items}
+            if value not in codes:
+                raise FMUError(f"{filename}: {p.name} = {value!r} is not one of its choices: " + ", ".join(codes))
+            out[p.name] = codes[value]
     return out
 
 
@@ -130,13 +136,13 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
     fails (fmi2Error: invalid parameters, inputs, ...), the FMU logged an error, or the run ended before
     ``stop_time`` (a refused step: fmi2Discard with fmi2Terminated, which fmpy treats as an early end).
     ``output_interval`` is the co-simulation step (always pass it: fmpy coarsens the default one).
-    Enumeration parameters (``scheme``, ``impact_rule``) take their item names or codes. Returns
+    Choice parameters (``scheme``, ``impact_rule``) take their names or codes. Returns
     the fmpy result (structured array with a 'time' column).
     """
     import fmpy
     from fmpy.fmi1 import FMICallException
 
-    start_values = enumeration_codes(filename, start_values or {})
+    start_values = choice_codes(filename, start_values or {})
     with collect_fmu_messages() as messages:
         try:
             result = fmpy.simulate_fmu(str(filename), start_time=start_time, stop_time=stop_time,

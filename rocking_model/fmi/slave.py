@@ -16,8 +16,7 @@ from ..fmi_state import decode_state, encode_state
 from ..ground_motion import LinearMotion
 from ..simulation import Simulator, report_summary
 from ..validation import AG_MAX, WorkLimitError, check_real, check_state_keys, state_bool
-from .variables import (_CAUSALITIES, _PY_TYPES, _VARIABILITIES, UNITS, EnumerationInteger, RangedInteger, UnitReal,
-                        Var, type_definitions)
+from .variables import _CAUSALITIES, _PY_TYPES, _VARIABILITIES, UNITS, RangedInteger, UnitReal, Var
 
 # ----------------------------------------------------------------------------------------------------
 def _package_version() -> Optional[str]:
@@ -113,8 +112,6 @@ class RockingSlave(Fmi2Slave):
             return UnitReal(spec.name, unit=spec.unit, min=spec.min, max=spec.max, **kwargs)
         if spec.type == "String":
             return String(spec.name, **kwargs)
-        if spec.type == "Enumeration":
-            return EnumerationInteger(spec.name, spec.declared_type, min=spec.min, max=spec.max, **kwargs)
         if spec.type == "Integer":
             return RangedInteger(spec.name, min=spec.min, max=spec.max, **kwargs)
         return Boolean(spec.name, **kwargs)
@@ -166,13 +163,6 @@ class RockingSlave(Fmi2Slave):
             children = list(root)
             position = children.index(cosim) + 1 if cosim is not None else 0
             root.insert(position, unit_defs)
-        # <TypeDefinitions> next (the enumerations: scheme, impact_rule)
-        types = type_definitions(self.variables)
-        if types is not None:
-            children = list(root)
-            anchor = root.find("UnitDefinitions")
-            anchor = anchor if anchor is not None else cosim
-            root.insert(children.index(anchor) + 1 if anchor is not None else 0, types)
         # ModelStructure: outputs have no direct feed-through from inputs (co-simulation); every output is
         # an initial unknown (initial="calculated")
         structure = root.find("ModelStructure")
@@ -381,7 +371,7 @@ class RockingSlave(Fmi2Slave):
         values = slave["values"]
         check_state_keys(values, tuple(self._specs))
         for name, spec in self._specs.items():
-            values[name] = _check_value(name, spec.access_type, values[name])
+            values[name] = _check_value(name, spec.type, values[name])
         sim = None
         if doc["simulator"] is not None:
             if not isinstance(doc["simulator"], dict):
@@ -463,9 +453,6 @@ class RockingSlave(Fmi2Slave):
             value = _PY_TYPES[spec.type](value)
         except Exception:
             return f"{name}: cannot convert {str(value)[:64]!r} to {spec.type}", None
-        if not spec.allows(value):
-            return (f"{name} = {value!r} is not supported; allowed values: "
-                    + ", ".join(f"{code} ({item})" for item, code, _ in spec.items)), None
         if spec.type == "String" and len(value) > _MAX_TEXT:
             return f"{name}: a text of {len(value)} characters is too long; at most {_MAX_TEXT}", None
         if spec.causality == "input" and spec.type == "Real":

@@ -41,7 +41,7 @@ _CAUSALITIES = {"parameter": Fmi2Causality.parameter, "input": Fmi2Causality.inp
                 "output": Fmi2Causality.output}
 _VARIABILITIES = {"fixed": Fmi2Variability.fixed, "tunable": Fmi2Variability.tunable,
                   "discrete": Fmi2Variability.discrete, "continuous": Fmi2Variability.continuous}
-_PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str, "Enumeration": int}
+_PY_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
 @dataclass(frozen=True)
@@ -58,8 +58,8 @@ class Var:
         otherwise. A "tunable" parameter may be changed after initialization (the subclass must read it
         from ``self.parameter_values`` itself); "fixed" ones may not.
     min, max: optional declared range (written to the XML; inputs are checked against it in do_step).
-    items: for type "Enumeration" (an Integer with named values, accessed with fmi2Get/SetInteger), the
-        (name, code, description) of its values; ``declared_type`` names its type definition.
+    items: for an Integer that is a choice, the (name, code, description) of its values (named in the
+        description; `rocking_model.fmi.run_fmu` takes the names as start values).
     """
 
     name: str
@@ -72,11 +72,10 @@ class Var:
     min: Optional[float] = None
     max: Optional[float] = None
     items: tuple = ()
-    declared_type: Optional[str] = None
 
     def __post_init__(self):
-        if (self.type == "Enumeration") != bool(self.items) or (self.items and not self.declared_type):
-            raise ValueError(f"Var {self.name!r}: an Enumeration needs items and a declared_type, and only it")
+        if self.items and self.type != "Integer":
+            raise ValueError(f"Var {self.name!r}: only an Integer can be a choice (items)")
         if self.causality not in _CAUSALITIES:
             raise ValueError(f"Var {self.name!r}: causality must be one of {sorted(_CAUSALITIES)}")
         if self.type not in _PY_TYPES:
@@ -110,14 +109,6 @@ class Var:
         py = _PY_TYPES[self.type]
         return py(0) if self.start is None else py(self.start)
 
-    @property
-    def access_type(self) -> str:
-        """The FMI type of the get/set functions (an Enumeration is read and written as Integer)."""
-        return "Integer" if self.type == "Enumeration" else self.type
-
-    def allows(self, value) -> bool:
-        """Whether ``value`` (already converted) is one of an Enumeration's codes (True for other types)."""
-        return not self.items or value in {code for _, code, _ in self.items}
 
     def range_text(self) -> str:
         lo = "-inf" if self.min is None else f"{self.min:g}"
@@ -187,47 +178,15 @@ class RangedInteger(_ExtraAttrs, Integer):
                         max=None if max is None else _fmt(max, "Integer"))
 
 
-class EnumerationInteger(RangedInteger):
-    """An Integer written as ``<Enumeration declaredType=...>`` (FMI 2.0: read and set with fmi2Get/SetInteger)."""
-
-    def __init__(self, name: str, declared_type: str, **kwargs):
-        super().__init__(name, **kwargs)
-        self.declared_type = declared_type
-
-    def to_xml(self) -> Element:
-        node = super().to_xml()
-        child = node.find("Integer")
-        child.tag = "Enumeration"
-        child.set("declaredType", self.declared_type)
-        return node
-
-
-def type_definitions(variables) -> Optional[Element]:
-    """``<TypeDefinitions>`` with one ``<SimpleType>`` per Enumeration of ``variables`` (None if none)."""
-    from xml.etree.ElementTree import SubElement
-
-    seen: Dict[str, tuple] = {}
-    for v in variables:
-        if v.type == "Enumeration":
-            if seen.setdefault(v.declared_type, v.items) != v.items:
-                raise ValueError(f"declared type {v.declared_type!r} is defined with two different item lists")
-    if not seen:
-        return None
-    root = Element("TypeDefinitions")
-    for name, items in seen.items():
-        enum = SubElement(SubElement(root, "SimpleType", {"name": name}), "Enumeration")
-        # FMI 2.0: the items are listed by value 1, 2, ... in the order given; "value" states the code
-        for item, code, description in sorted(items, key=lambda it: it[1]):
-            SubElement(enum, "Item", {"name": item, "value": str(code), "description": description})
-    return root
-
-
-def param_variable(p, causality: str = "parameter", declared_prefix: str = "rocking_model") -> Var:
+def param_variable(p, causality: str = "parameter") -> Var:
     """The FMU variable of a declared `rocking_model.params.Param`: start value, unit, min/max and description
-    from the declaration (choices become Enumerations)."""
+    from the declaration (a choice becomes an Integer whose description names the choices)."""
     if p.items:
-        return Var(p.name, causality, p.check(p.default), type="Enumeration", items=tuple(p.items),
-                   declared_type=f"{declared_prefix}.{p.name}", min=p.fmu_min(), max=p.fmu_max(),
+        # an Integer with the choices named in its description, not an FMI Enumeration: libcosim 0.10 ignores
+        # Enumeration variables (libcosim issues 246, 670), so the scheme could not be set there, and fmpy
+        # converts Enumeration start values with int() as well (`run_fmu` takes the names)
+        return Var(p.name, causality, p.check(p.default), type="Integer", items=tuple(p.items),
+                   min=p.fmu_min(), max=p.fmu_max(),
                    description=f"{p.description}: " + "; ".join(f"{code} {name} ({d})" for name, code, d in p.items))
     if causality == "output":
         return Var(p.name, "output", unit=p.unit, description=p.description)

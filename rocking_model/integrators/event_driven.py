@@ -473,8 +473,7 @@ class EventDriven(Integrator):
         """Why the step is refused (`WorkLimitError`) and how to get it through."""
         t0, t_end = self._span
         model = self.model
-        omega = getattr(model, "omega", None)
-        stiff = f", column omega = {omega:.6g} rad/s" if omega is not None else ""
+        stiff = f", {model.work_note}" if model.work_note else ""
         return (f"event_driven: advancing from t = {t0:.17g} s by {t_end - t0:.6g} s needs more than "
                 f"max_steps = {self._max_work} internal steps (Runge-Kutta steps, each event counting "
                 f"{EVENT_WORK}); {self.impacts - self._impacts0} impacts so far in this step; stopped at "

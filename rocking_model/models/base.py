@@ -206,6 +206,12 @@ class RockingModel(ABC):
         return mode_forces(self, mode, q, v, ag)
 
     @property
+    def work_note(self) -> str:
+        """What drives the cost of a step of this model, for the messages of a refused step (e.g. a stiff
+        column's frequency); "" when nothing particular."""
+        return ""
+
+    @property
     def dof_scales(self) -> tuple:
         """Scale of each coordinate of q for the error control of the smooth phases: 1 [rad] for phi,
         length_scale [m] for the others (velocities are scaled by 1 / time_scale on top)."""

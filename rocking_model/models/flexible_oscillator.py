@@ -156,6 +156,10 @@ class FlexibleOscillator(RockingModel):
         return math.sqrt(self.k_tilde / self.m_tilde)
 
     @property
+    def work_note(self) -> str:
+        return f"column omega = {self.omega:.6g} rad/s"
+
+    @property
     def step_limit(self) -> float:
         """0.25/omega [s]: Moreau-Jean with an unresolved column (omega dt >~ 0.6) lets the pivot impulses pump
         the column until it flies off and "overturns" (measured with a column at 100 p, theta = 1/2 and 1);
