@@ -88,12 +88,12 @@ def scene(name: str):
 
 # --------------------------------------------------------------------------------------------- verdicts
 def summarize(tr, checks: dict | None = None) -> dict:
-    """``{"verdict": {...}, "figures": {...}}`` of a finished `Trace` (test_hard_cases).
+    """``{"verdict": {...}, "figures": {...}}`` of a finished `Trace` (tests/hard_cases.py).
 
     checks (all optional): ``rest_after`` [s]: from this time on the body must be exactly at rest (full
     contact, phi = phi_dot = 0); ``log_size``: the bounded impact log's length; ``pen`` [m]: penetration
     tolerance (default `pen_tol`)."""
-    from test_hard_cases import sanity_report
+    from hard_cases import sanity_report
     from rocking_model.modes import Mode
     from rocking_model import RigidBlock
 

@@ -1,6 +1,6 @@
 """Hard cases of issue 5 about the input: long records, extreme input (5 g peaks, short impulses), variable
 communication steps and non-uniformly sampled records. Helpers (Trace, assert_sane, ...) are those of
-test_hard_cases.py; the documented tolerances are stated there.
+tests/hard_cases.py; the documented tolerances are stated there.
 
 Round-off (issue 12): the long and violent scenes below are registered with `roundoff.scene`; each asserts
 invariants on a scene whose verdict is far from a decision boundary, and is run again with a 1-ulp
@@ -20,7 +20,7 @@ from rocking_model.ground_motion import ConstantMotion, RectangularPulse
 from rocking_model.modes import Mode
 from rocking_model.records import synthetic_record
 from roundoff import Perturbation, check_bounds, describe_mismatch, scene
-from test_hard_cases import G, SCHEMES, SLENDER, Trace, assert_sane, grid
+from hard_cases import G, SCHEMES, SLENDER, Trace, assert_sane, grid
 
 MOD = __name__
 

@@ -1,0 +1,183 @@
+"""Hard cases (issue 5): near the overturning boundary the schemes agree outside a band, and the README
+quickstart that overturns sinks a corner only as documented. Helpers and tolerances: tests/hard_cases.py."""
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+from rocking_model import ConstantMotion, RigidBlock, Simulator, SinePulse
+from rocking_model.contact import inverse_mass
+from rocking_model.modes import Mode
+
+import roundoff
+from hard_cases import SCHEMES, SLENDER, Trace, assert_sane, nominal, roundoff_tests, sane_horizon
+from roundoff import Perturbation, check_bounds, describe_mismatch, scene
+
+MOD = __name__
+
+#: verdicts of the scenes of this module that are re-run 1 ulp off and under other kernels, and the
+#: documented margins of their figures (filled next to each scene)
+VERDICTS: dict[str, dict] = {}
+BOUNDS: dict[str, dict] = {}
+kernel_rerun = roundoff.kernel_rerun_fixture(VERDICTS)
+
+
+# ================================================================================================
+# 4. Near the overturning boundary: classification agrees between the schemes outside a band
+# ================================================================================================
+# One-sine pulses on b = 0.2, h = 1 (p = 2.69 rad/s), amplitude f g tan(alpha). Boundaries of the
+# event-driven scheme (tolerance 1e-10, bisection to 2e-4) and of Moreau-Jean at dt = 2e-3 / 1e-3 / 5e-4 s:
+#   omega_p = 2p: 1.2198 (MJ +0.65 / +0.39 / +0.14 %), 2.3366 (-0.35 / -0.15 / -0.08 %),
+#                 3.6810 (+0.36 / +0.17 / +0.08 %)   [overturn in (1.22, 2.34) and above 3.68: not monotone]
+#   omega_p = 4p: 1.7255 (MJ dt 1e-3 +2.0 %, 5e-4 +1.1 %), 5.1048 (-1.3 %, -0.6 %)  [overturn in between]
+#   omega_p = 6p: 4.0991 (MJ dt 1e-3 +7.1 %, 5e-4 +2.5 %)
+# The band where the schemes disagree shrinks with dt (first order); at dt = 1e-3 s it is documented as
+# BAND[k] (relative), about twice the measured offset.
+OVERTURN_BLOCK = SLENDER
+ED_BOUNDARIES = {2: (1.2198, 2.3366, 3.6810), 4: (1.7255, 5.1048), 6: (4.0991,)}
+BAND = {2: 0.01, 4: 0.04, 6: 0.12}
+
+
+def classify_overturn(scheme, f, k, pert: Perturbation = Perturbation(), **kw):
+    """(overturned, sanity message or None) of a one-sine pulse f g tan(alpha), omega_p = k p (``pert``:
+    1 ulp on the amplitude and the frequency). Safe once the pulse is over and the block is in full contact
+    or its energy is below the overturning energy m g R (1 - cos alpha) (no input, e_N = 0: the energy
+    cannot grow)."""
+    block = RigidBlock(**OVERTURN_BLOCK)
+    gm = SinePulse(pert.scalar(f * block.g * math.tan(block.alpha), 1), pert.scalar(k * block.p, 2))
+    e_crit = block.m * block.g * block.R * (1 - math.cos(block.alpha))
+    name, opts = SCHEMES[scheme]
+    sim = Simulator(block, name, **dict(opts, **kw))
+    tol = 1e-9 if scheme == "ED" else 2e-3 * 2 * block.b * 5
+    t = 0.0
+    times, phi, modes, gaps, over = [], [], [], [], []
+    while t < gm.t1 + 10.0:
+        t += 0.05
+        sim.advance(t, gm)
+        q, v = sim.state()
+        I = sim.integrator
+        times.append(t)
+        phi.append(q[2])
+        modes.append(int(I.mode))
+        gaps.append(float(block.gaps(q).min()))
+        over.append(I.overturned)
+        done = I.overturned or (t > gm.t1 and (I.mode == Mode.FULL or block.energy(q, v) < e_crit * (1 - 1e-6)))
+        if done:
+            # the geometric check stops where the documented limitation starts (sane_horizon)
+            n = sane_horizon(phi, modes, over, block.alpha)
+            bad = [j for j in range(n) if gaps[j] < -tol]
+            if bad:
+                return None, f"penetration {gaps[bad[0]]:.3g} m at t = {times[bad[0]]:.2f} s"
+            return I.overturned, None
+    raise AssertionError(f"no classification for f = {f}, omega_p = {k} p")
+
+
+@pytest.mark.parametrize("k", [2, 4, 6], ids=["wp=2p", "wp=4p", "wp=6p"])
+def test_overturning_boundaries_are_far_from_round_off(k):
+    """The regression points of the next test sit 3e-4 (in units of g tan(alpha)) on either side of the
+    measured ED boundaries: a margin round-off cannot cross. 1 ulp off (pulse amplitude and frequency) they
+    classify the same. (Measured: 1-ulp seeds 1 to 4, and the generic kernels of `roundoff.kernel_env`
+    without and with seeds 1 to 4: all 9 perturbed runs classify the 12 points as the nominal run.)"""
+    pert = Perturbation(roundoff.ULP_SEED)
+    for fb in ED_BOUNDARIES[k]:
+        for f in (fb - 3e-4, fb + 3e-4):
+            ref, got = classify_overturn("ED", f, k), classify_overturn("ED", f, k, pert)
+            assert got == ref and ref[1] is None, (k, f, ref, got)
+
+
+@pytest.mark.parametrize("k", [2, 4, 6], ids=["wp=2p", "wp=4p", "wp=6p"])
+def test_overturning_classification_agrees_outside_band(k):
+    bounds = ED_BOUNDARIES[k]
+    band = BAND[k]
+    # the event-driven boundaries are where they were measured (regression, +-3e-4)
+    for fb in bounds:
+        lo, hi = classify_overturn("ED", fb - 3e-4, k)[0], classify_overturn("ED", fb + 3e-4, k)[0]
+        assert lo is not None and hi is not None and lo != hi, (k, fb)
+    # points just outside the band on both sides of each boundary, and one inside each region
+    edges = [0.85] + list(bounds) + [bounds[-1] * 1.4]
+    points = sorted({fb * (1 - band) for fb in bounds} | {fb * (1 + band) for fb in bounds}
+                    | {0.5 * (a + b) for a, b in zip(edges[:-1], edges[1:])} - {0.85})
+    points = [f for f in points if f > 1.0]
+    for f in points:
+        ed, msg_ed = classify_overturn("ED", f, k)
+        mj, msg_mj = classify_overturn("MJ", f, k)
+        assert msg_ed is None and msg_mj is None, (f, msg_ed, msg_mj)
+        assert ed == mj, f"omega_p = {k} p, A = {f:.4f} g tan(alpha): ED overturned = {ed}, MJ = {mj}"
+
+
+# ================================================================================================
+# 7. The README quickstart that overturns: the lift-off sinks a corner only as documented
+# ================================================================================================
+#: the README's FMU quickstart: b = 0.2, h = 1, ag = 3 sin(2 pi t) m/s2 for t < 1 s (a table on a 0.01 s
+#: grid, held per 0.01 s communication step as fmpy does), 5 s; the FMU's default settings
+QUICKSTART_T = np.linspace(0.0, 5.0, 501)
+QUICKSTART_AG = 3.0 * np.sin(2 * np.pi * QUICKSTART_T) * (QUICKSTART_T < 1)
+QUICKSTART_SCHEMES = {"ED": ("event_driven", dict(tolerance=1e-8)), "MJ": ("moreau_jean", dict(dt_max=1e-3))}
+#: [m] how deep a corner sinks after the pivot's lift-off in the final fall (docs/limitations.md), as
+#: measured (ED 20.42 mm at the frozen state; MJ 0.277 mm, then projected back onto the ground), +-25 %
+QUICKSTART_SINK = {"ED": (0.0153, 0.0255), "MJ": (0.21e-3, 0.35e-3)}
+
+
+def quickstart_scene(scheme: str, pert: Perturbation):
+    a = pert.array(QUICKSTART_AG, 1)
+    tr = Trace(RigidBlock(**SLENDER), QUICKSTART_SCHEMES[scheme], 0.0, [], phi_0=pert.scalar(0.0))
+    for k in range(1, QUICKSTART_T.size):
+        tr.extend(ConstantMotion(float(a[k - 1])), [QUICKSTART_T[k]])
+    tr.ag = a
+    return tr, {}
+
+
+for _s in ("ED", "MJ"):
+    scene(f"quickstart_{_s}")(functools.partial(quickstart_scene, _s))
+    VERDICTS[f"{MOD}:quickstart_{_s}"] = dict(finite=True, no_penetration=True, right_side=True,
+                                              bounded_rotation=True, overturned=True,
+                                              frozen_after_overturning=True)
+    # overturns at 2.05 s (1 s after the pulse); the sink is deterministic (no chaos in 2 s)
+    BOUNDS[f"{MOD}:quickstart_{_s}"] = dict(t_overturn=(1.9, 2.2), sink_after_horizon=QUICKSTART_SINK[_s])
+
+
+@pytest.mark.parametrize("scheme", ["ED", "MJ"])
+def test_overturning_lift_off_sinks_a_corner_as_documented(scheme, record_property):
+    """The documented limitation, measured (docs/limitations.md). The README quickstart overturns the block
+    at 2.05 s. In its final fall the pivot's normal force reaches 0 at phi = -1.34 rad while the pivot's free
+    normal acceleration is -6 m/s2 (the sticking force is not 0): with no sliding there is no consistent
+    contact state (physics.md section 6). Up to that lift-off the run is sane (`sane_horizon`); after it the
+    schemes take flight and the pivot corner sinks: ED 20.4 mm at the frozen state, MJ 0.28 mm (then
+    projected back). The figures are pinned (+-25 %) so that the day friction lands (issue 15) this test
+    fails, and the document and `sane_horizon` get updated."""
+    key = f"{MOD}:quickstart_{scheme}"
+    tr, summary = nominal(key)
+    block = tr.model
+    rep = assert_sane(tr, overturn_ok=True)
+    assert summary["verdict"] == VERDICTS[key], describe_mismatch(summary["verdict"], VERDICTS[key])
+    # where the checks stop: the last sample on the pivot, in the final fall, its normal force nearly gone
+    k = rep["horizon"] - 1
+    q, v = tr.q[k], tr.v[k]
+    pivot = tr.modes[k]
+    assert pivot == Mode.RIGHT and abs(tr.phi[k]) > block.alpha and tr.phi[k] * tr.phi_dot[k] > 0
+    ag = float(tr.ag[k])
+    i = 1                                                     # right corner
+    lam = float(block.contact_forces(Mode.RIGHT, q, v, ag)[i]) / block.force_scale
+    acc = inverse_mass(block, q) @ block.forces(q, v, ag)
+    a_free = float(block.contact_jacobians(q)[0][:, i] @ acc + block.contact_drift(q, v)[0][i])
+    print(f"{scheme}: last sample on the pivot t = {tr.T[k]:.2f} s, phi = {tr.phi[k]:.4f} rad, "
+          f"lambda_N / (m g) = {lam:.4f}, free a_N = {a_free:.3f} m/s2")
+    # measured at the last sample on the pivot (ED 1.96 s, MJ 1.98 s): lambda_N / (m g) = 0.004 (ED; MJ
+    # -0.008: its last step on the pivot already needed a pull), free normal acceleration -6.1 (ED) / -6.2
+    # (MJ) m/s2
+    assert lam < 0.05 and a_free < -0.5 * block.g, (lam, a_free)
+    # and beyond it the contact law does not hold: the corner is found below the ground
+    sink = summary["figures"]["sink_after_horizon"]
+    record_property("phi_lift_off_rad", float(tr.phi[k]))
+    record_property("sink_after_lift_off_m", sink)
+    check_bounds(summary["figures"], BOUNDS[key], key)
+
+
+
+# ================================================================================================
+# Round-off: the re-run scenes of this module give the same verdicts 1 ulp off and under other kernels
+# ================================================================================================
+test_same_verdicts_one_ulp_off, test_same_verdicts_under_other_kernels = roundoff_tests(VERDICTS, BOUNDS)
