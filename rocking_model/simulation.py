@@ -129,7 +129,7 @@ class Simulator:
                                 impact_log_size=impact_log_size, tolerances=tolerances)
         self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
         # the attribute replaced (never mutated) whenever the state changes: caches key on its identity
-        self._token = "v" if self.scheme == "moreau_jean" else "y"
+        self._token = self.integrator.STATE_TOKEN
         #: `Report`s of the last advance
         self.last_reports: list[Report] = []
         self._out = None              # (state token, model outputs) of the last checked state

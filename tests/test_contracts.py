@@ -39,7 +39,7 @@ def test_integrator_contract(name):
     """Every registered scheme provides what `Integrator` says a subclass must, and keeps the attributes
     current through an advance (both used by the Simulator only through that interface)."""
     cls = SCHEMES[name]
-    assert issubclass(cls, Integrator) and cls.name == name and cls.summary and cls.STATE_KEYS
+    assert issubclass(cls, Integrator) and cls.name == name and cls.summary and cls.STATE_KEYS and cls.STATE_TOKEN
     for method in ("from_options", "advance", "state", "outputs", "get_state", "set_state"):
         assert getattr(cls, method) is not getattr(Integrator, method), f"{name} lacks {method}"
     sim = Simulator(RigidBlock(), name, phi_0=0.1)

@@ -10,6 +10,8 @@ A subclass must provide:
     code : int                  integer code of the scheme (the FMU parameter ``scheme``)
     summary : str               one line describing it
     STATE_KEYS : tuple          fields of `get_state`
+    STATE_TOKEN : str           an attribute that is replaced (never mutated) whenever the state changes:
+                                the Simulator keys its cache of the outputs on its identity
     from_options(model, mode, q, v, t0, options) -> Integrator
                                 a new integrator from the user's solver options (`SolverOptions`), checking
                                 those that concern it (ValueError naming the option and its range)
@@ -88,6 +90,7 @@ class Integrator(Checkpointed):
     #: one line for documentation and tools (the FMU's enumeration item)
     summary: ClassVar[str] = ""
     STATE_KEYS: ClassVar[tuple] = ()
+    STATE_TOKEN: ClassVar[str] = ""
 
     #: reports of the current advance (cleared by the Simulator before each one)
     reports: list

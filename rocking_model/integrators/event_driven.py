@@ -44,7 +44,7 @@ from ..validation import WorkLimitError, check_choice, check_real, state_bool, s
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .events import bounce_search, dip_search, first_negative, locate, with_overturn
+from .events import bounce_search, dip_search, earliest_root, first_negative, with_overturn
 from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
@@ -74,6 +74,7 @@ class EventDriven(Integrator):
     name = "event_driven"
     code = 1
     summary = "event-driven: Runge-Kutta phases in reduced coordinates, LCPs at events (the faster at equal error, see docs/performance.md)"
+    STATE_TOKEN = "y"
     LOGS = ("impact_times", "impact_log")
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
@@ -427,26 +428,14 @@ class EventDriven(Integrator):
         if dense is None:
             dense = stepper.dense_output()
         xtol = 4.0 * math.ulp(max(abs(stepper.t), 1.0))
-
-        def earliest(ids, ta, ga, tb, gb):
-            best = None
-            for i in ids:
-                shift = 0.0 if armed[i] else tol
-
-                def gi(t, i=i, shift=shift):
-                    return G(t, dense(t))[i] + shift
-                ta_i, ga_i = rose[i] if i in rose and rose[i][0] > ta else (ta, ga)
-                te = locate(gi, ta_i, ga_i[i] + shift, tb, gb[i] + shift, xtol)
-                if best is None or te < best[0]:
-                    best = (te, i)
-            return best
-        te, i = earliest(hits, t0, g_a, t_hit, g_b)
+        shifts = [0.0 if a else tol for a in armed]
+        te, i = earliest_root(G, dense, hits, shifts, rose, t0, g_a, t_hit, g_b, xtol)
         others = [j for j in range(len(g_new) - 1) if armed[j] and j not in hits]
         if others and te > t0:
             found = first_negative(G, dense, t0, g_a, te, others, n_sub)
             if found is not None:
                 neg, ta, ga, tn, gn = found
-                te, i = earliest(neg, ta, ga, tn, gn)
+                te, i = earliest_root(G, dense, neg, shifts, rose, ta, ga, tn, gn, xtol)
         return te, i, dense
 
     def _stepper(self, mode, rhs, max_step):

@@ -6,6 +6,7 @@ pi/2 - |phi|; `with_overturn` builds it from a model's monitors. A function *fir
 from above.
 
 - `locate`: the root of one function in a bracket, to round-off in time (regula falsi, Anderson-Bjorck);
+- `earliest_root`: the first of several functions to reach zero in a bracket;
 - `first_negative`: the sub-sampling loop (the one place a step is cut into ``n`` sub-intervals): the
   first sub-interval at whose end one of the given functions is at or below zero;
 - `dip_search`: a function positive at both ends of a step that may dip below zero inside it;
@@ -73,6 +74,25 @@ def locate(fun: Callable, a: float, ga: float, b: float, gb: float, xtol: float)
             n_slow += 1
         bisect = clamped or n_slow >= 2
     return b
+
+
+def earliest_root(G: Callable, dense: Callable, ids, shifts, starts: dict, ta: float, ga: list, tb: float,
+                  gb: list, xtol: float) -> tuple[float, int]:
+    """(t, i): the earliest root on [ta, tb] among the functions ``ids`` of G on the dense output, function i
+    shifted up by ``shifts[i]`` (a disarmed function fires at -shift), each located to ``xtol`` (`locate`);
+    ``starts`` gives a later left end (t, G(t)) for functions known to be positive only from there (a
+    bounce found by `bounce_search`)."""
+    best = None
+    for i in ids:
+        shift = shifts[i]
+
+        def gi(t, i=i, shift=shift):
+            return G(t, dense(t))[i] + shift
+        ta_i, ga_i = starts[i] if i in starts and starts[i][0] > ta else (ta, ga)
+        te = locate(gi, ta_i, ga_i[i] + shift, tb, gb[i] + shift, xtol)
+        if best is None or te < best[0]:
+            best = (te, i)
+    return best
 
 
 def first_negative(G: Callable, dense: Callable, t0: float, g0: list, t1: float, ids, n: int):

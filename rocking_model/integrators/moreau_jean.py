@@ -41,6 +41,7 @@ class MoreauJean(Integrator):
     name = "moreau_jean"
     code = 0
     summary = "Moreau-Jean time-stepping: one velocity-level LCP per step, order 1"
+    STATE_TOKEN = "v"
     LOGS = ("impact_times",)
 
     @classmethod
