@@ -44,7 +44,7 @@ from ..validation import WorkLimitError, check_choice, check_real, state_bool, s
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .events import bounce_search, dip_search, earliest_root, first_negative, with_overturn
+from .events import bounce_search, dip_search, earliest_root, first_negative
 from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
@@ -139,15 +139,14 @@ class EventDriven(Integrator):
         return self.model.mode_outputs(self.mode, self.y)
 
     def _functions(self, mode, ag):
-        """(rhs, monitors, G) of model.mode_functions(mode, ag), G the event function vector
-        (`events.with_overturn`); reused while the mode and a constant input stay the same (each
-        co-simulation step would otherwise build them twice)."""
+        """(rhs, G) of model.mode_functions(mode, ag), G the event function vector (contacts, then the
+        overturning margin); reused while the mode and a constant input stay the same (each co-simulation
+        step would otherwise build them twice)."""
         key = (mode, ag.value) if ag.constant else (mode, id(ag))
         cached = self.__dict__.get("_fn_cache")
         if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
             return cached[2]
-        rhs, monitors = self.model.mode_functions(mode, ag)
-        fns = (rhs, monitors, with_overturn(monitors))
+        fns = self.model.mode_functions(mode, ag)
         self._fn_cache = (key, ag, fns)
         return fns
 
@@ -305,7 +304,7 @@ class EventDriven(Integrator):
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
         mode = self.mode
         closed = self.model.closed_of(mode)
-        _, monitors, _ = self._functions(mode, ag)
+        _, monitors = self._functions(mode, ag)
         e = monitors(t, self.y)
         nc = self.model.n_contacts
         # fast path: closed corners loaded, open corners clearly open (then the active set still holds)
@@ -338,7 +337,7 @@ class EventDriven(Integrator):
                 out.append((mode, list(self.y), self.impacts, False))
             self._full = None
             return False
-        rhs, _, G = self._functions(mode, ag)
+        rhs, G = self._functions(mode, ag)
         nc = self.model.n_contacts
         closed = self.model.closed_of(mode)
         kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(nc)] + [_KIND_OVERTURN]

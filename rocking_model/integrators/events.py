@@ -1,9 +1,9 @@
 """Event location on the dense output of a step, as small pure functions (used by the event-driven scheme).
 
-An event function vector ``G(t, y)`` has one entry per contact (positive inside the mode: the opening of an
-open contact, the normal force of a closed one, normalised) and, last, the overturning margin
-pi/2 - |phi|; `with_overturn` builds it from a model's monitors. A function *fires* when it reaches zero
-from above.
+An event function vector ``G(t, y)`` (a model's monitors, `RockingModel.mode_functions`) has one entry per
+contact (positive inside the mode: the opening of an open contact, the normal force of a closed one,
+normalised) and, last, the overturning margin pi/2 - |phi|. A function *fires* when it reaches zero from
+above.
 
 - `locate`: the root of one function in a bracket, to round-off in time (regula falsi, Anderson-Bjorck);
 - `earliest_root`: the first of several functions to reach zero in a bracket;
@@ -16,19 +16,6 @@ from __future__ import annotations
 
 import math
 from typing import Callable
-
-HALF_PI = 0.5 * math.pi
-
-
-def with_overturn(monitors: Callable) -> Callable:
-    """The event function vector of ``monitors`` (a model's [e_0, .., e_{n-1}, phi]): the last entry becomes
-    the overturning margin pi/2 - |phi| [rad]."""
-    def G(t, y):
-        g = monitors(t, y)
-        g[-1] = HALF_PI - abs(g[-1])
-        return g
-    return G
-
 
 def locate(fun: Callable, a: float, ga: float, b: float, gb: float, xtol: float) -> float:
     """Regula falsi with the Anderson-Bjorck modification on a bracket with ga > 0 >= gb; returns a time t

@@ -55,6 +55,9 @@ from ..contact import mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, Mode, mode_from_closed
 from ..params import declared_parameters
 
+#: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
+HALF_PI = 0.5 * math.pi
+
 #: the keyword arguments of `rocking_model.simulation.Simulator` besides the initial values (named in the
 #: message of a misspelt keyword)
 SOLVER_KEYWORDS = ("scheme", "dt_max", "tolerance", "theta", "zeno_tol", "t0", "method", "impact_log_size",
@@ -234,7 +237,8 @@ class RockingModel(ABC):
         """(rhs, monitors) of ``mode`` under the ground motion ``ag`` (a GroundMotion), on lists of floats.
 
         rhs(t, y) -> [r_dot..., r_ddot...] for the reduced state y = [r..., r_dot...];
-        monitors(t, y) -> [e_0, .., e_{n-1}, phi]: e_i of a closed corner is its normal force / force_scale, of an
+        monitors(t, y) -> [e_0, .., e_{n-1}, pi/2 - |phi|]: the event functions, positive inside the mode (the
+        last one is the overturning margin [rad]); e_i of a closed corner is its normal force / force_scale, of an
         open corner a measure of its opening, positive while open (gap / length_scale; while rocking, the
         tilt -s phi [rad] of the lifted corner, exact where the gap loses digits).
 
@@ -265,7 +269,7 @@ class RockingModel(ABC):
                     out.append(float(g[i]) / L)
                 else:
                     out.append(-phi if mode == Mode.RIGHT else phi)
-            return out + [phi]
+            return out + [HALF_PI - abs(phi)]
         return rhs, monitors
 
     def mode_outputs(self, mode: Mode, y) -> dict[str, float]:

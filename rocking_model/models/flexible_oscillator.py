@@ -30,7 +30,7 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import RockingModel
+from .base import HALF_PI, RockingModel
 from .flexible_impact import classical_impact
 
 
@@ -444,7 +444,7 @@ class FlexibleOscillator(RockingModel):
             def monitors(t, y):
                 yc, phi = y[2], y[3]
                 bs = b * math.sin(phi)
-                return [(yc - bs) / L, (yc + bs) / L, phi]
+                return [(yc - bs) / L, (yc + bs) / L, HALF_PI - abs(phi)]
             return rhs, monitors
         if mode == Mode.FULL:
             def rhs(t, y):
@@ -457,7 +457,7 @@ class FlexibleOscillator(RockingModel):
                 udd = (-c * ud - kt * u - D * a) / mt
                 # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g D u)
                 d = (-C * udd - A_h * a + g * D * u) / b
-                return [0.5 * (W - d) / W, 0.5 * (W + d) / W, 0.0]
+                return [0.5 * (W - d) / W, 0.5 * (W + d) / W, HALF_PI]
             return rhs, monitors
         s = pivot_sign(mode)
         sb = s * b
@@ -486,7 +486,8 @@ class FlexibleOscillator(RockingModel):
             ydd = -sb * cp * wd + sb * sp * w * w
             Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
             lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
-            return [lam / W, -s * phi, phi] if pivot_first else [-s * phi, lam / W, phi]
+            margin = HALF_PI - abs(phi)
+            return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
         return rhs, monitors
 
     def mode_outputs_array(self, mode, Y):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
-from .base import RockingModel
+from .base import HALF_PI, RockingModel
 
 _S = (-1.0, 1.0)
 
@@ -225,7 +225,7 @@ class RigidBlock(RockingModel):
 
             def monitors(t, y):
                 d = 0.5 * (a0 if const else ag(t)) * h / b / g
-                return [0.5 + d, 0.5 - d, 0.0]
+                return [0.5 + d, 0.5 - d, HALF_PI]
             return rhs, monitors
         if mode == Mode.FLIGHT:
             def rhs(t, y):
@@ -235,7 +235,7 @@ class RigidBlock(RockingModel):
                 yc, phi = y[1], y[2]
                 bs, hc = b * math.sin(phi), h * math.cos(phi)
                 L = self._R
-                return [(yc - bs - hc) / L, (yc + bs - hc) / L, phi]
+                return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
             return rhs, monitors
         s = pivot_sign(mode)
         p2, al = self._p ** 2, self._alpha
@@ -253,7 +253,8 @@ class RigidBlock(RockingModel):
             sp, cp = math.sin(phi), math.cos(phi)
             # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + 1
             lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
-            return [lam, -s * phi, phi] if pivot_first else [-s * phi, lam, phi]
+            margin = HALF_PI - abs(phi)
+            return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
         return rhs, monitors
 
     def mode_outputs_array(self, mode, Y):
