@@ -25,8 +25,6 @@ from .ground_motion import PULSES
 ROOT = Path(__file__).resolve().parent.parent
 UNITS_OF = {"phi": "rad", "phi_dot": "rad/s", "x": "m", "y": "m", "x_dot": "m/s", "y_dot": "m/s", "energy": "J",
             "u": "m", "u_dot": "m/s", "top_displacement": "m", "contact": "0 full/1 left/2 right/3 flight"}
-RIGID_PARAMS = ("b", "h", "m", "g", "e_N")
-FLEX_PARAMS = ("b", "h", "m", "g", "e_N", "m_c", "m_b", "rho", "EI", "zeta", "impact_rule")
 
 
 class UsageError(ValueError):
@@ -59,17 +57,53 @@ def _repo_root() -> Path:
     return ROOT
 
 
-def _model(args):
-    from .models.flexible_oscillator import FlexibleOscillator
-    from .models.rigid_block import RigidBlock
+def _declared() -> dict:
+    """{name: {kind: Param}} of the parameters of the registered models."""
+    from .models import MODELS
 
-    allowed = RIGID_PARAMS if args.model == "rigid" else FLEX_PARAMS
-    given = {k: getattr(args, k) for k in FLEX_PARAMS if getattr(args, k, None) is not None}
+    out: dict = {}
+    for k, cls in MODELS.items():
+        for p in cls.parameters():
+            out.setdefault(p.name, {})[k] = p
+    return out
+
+
+def _declared_initial() -> dict:
+    """{name: {kind: Param}} of the initial values of the registered models."""
+    from .models import MODELS
+
+    out: dict = {}
+    for k, cls in MODELS.items():
+        for p in cls.INITIAL:
+            out.setdefault(p.name, {})[k] = p
+    return out
+
+
+def _help(per_kind: dict, n_models: int) -> str:
+    """Help text of an option declared by the models in ``per_kind`` ({kind: Param})."""
+    def one(p):
+        if p.items:
+            return f"{p.description}: " + ", ".join(f"{code} or {item} ({d})" for item, code, d in p.items)
+        unit = f" [{p.unit}]" if p.unit else ""
+        return f"{p.description}{unit}, default {p.default:g}"
+    texts = {k: one(p) for k, p in per_kind.items()}
+    if len(set(texts.values())) == 1:
+        (text,) = set(texts.values())
+        return text if len(per_kind) == n_models else f"{', '.join(per_kind)}: {text}"
+    return "; ".join(f"{k}: {t}" for k, t in texts.items())
+
+
+def _model(args):
+    from .models import model_class
+
+    cls = model_class(args.model)
+    allowed = [p.name for p in cls.parameters()]
+    given = {k: getattr(args, k) for k in _declared() if getattr(args, k, None) is not None}
     extra = sorted(set(given) - set(allowed))
     if extra:
         raise UsageError(f"--{extra[0].replace('_', '-')} is not a parameter of the {args.model} model; "
                          f"allowed: " + ", ".join("--" + k.replace("_", "-") for k in allowed))
-    return (RigidBlock if args.model == "rigid" else FlexibleOscillator)(**given)
+    return cls(**given)
 
 
 def _motion(args):
@@ -118,15 +152,15 @@ def cmd_simulate(args) -> int:
     model = _model(args)
     motion, desc, t_default = _motion(args)
     t_end = args.t_end if args.t_end is not None else t_default
-    kw = {}
+    kw = {"tolerance": args.tolerance}         # (the Moreau-Jean scheme has no tolerance: it ignores it)
     if args.dt_max is not None:
         kw["dt_max"] = args.dt_max
-    if args.scheme == "event_driven":
-        kw["tolerance"] = args.tolerance
-    for k in ("phi_0", "phi_dot_0", "u_0", "u_dot_0"):
+    own = {p.name for p in type(model).INITIAL}
+    for k in _declared_initial():
         if getattr(args, k) is not None:
-            if k.startswith("u") and args.model == "rigid":
-                raise UsageError(f"--{k.replace('_', '-')} applies to the flexible model")
+            if k not in own:
+                raise UsageError(f"--{k.replace('_', '-')} is not an initial value of the {args.model} model; "
+                                 "allowed: " + ", ".join("--" + n.replace("_", "-") for n in sorted(own)))
             kw[k] = getattr(args, k)
     t0 = time.perf_counter()
     res = simulate(model, motion, t_end, scheme=args.scheme, output_interval=args.output_interval, **kw)
@@ -238,7 +272,10 @@ def cmd_ensemble(args) -> int:
 # --------------------------------------------------------------------------------------------- parser
 def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
     g = p.add_argument_group("model")
-    g.add_argument("--model", choices=("rigid", "flexible"), default="rigid", help="default: rigid")
+    from .models import MODELS
+
+    g.add_argument("--model", choices=tuple(MODELS), default="rigid",
+                   help="; ".join(f"{k}: the {cls.title}" for k, cls in MODELS.items()) + " (default: rigid)")
     if lists:
         g.add_argument("--b", type=_values, nargs="+", metavar="B",
                        help="half-widths [m] (grid; default: the model's, 0.2 rigid, 0.25 flexible)")
@@ -246,27 +283,28 @@ def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
                        help="half-heights / column heights [m] (grid; default 1.0 rigid, 1.5 flexible)")
         g.add_argument("--e-N", dest="e_N", type=float, default=0.0, help="coefficient of restitution [1]")
         return
-    g.add_argument("--b", type=float, help="half-width of the block / base [m]")
-    g.add_argument("--h", type=float, help="half-height of the block / column height [m]")
-    g.add_argument("--m", type=float, help="mass of the block / top mass [kg]")
-    g.add_argument("--g", type=float, help="gravity [m/s2]")
-    g.add_argument("--e-N", dest="e_N", type=float, help="Newton's coefficient of restitution [1]")
-    for k, h in (("m_c", "column mass [kg]"), ("m_b", "base mass [kg]"), ("rho", "base radius of gyration [m]"),
-                 ("EI", "flexural rigidity [N m2]"), ("zeta", "damping ratio [1]")):
-        g.add_argument(f"--{k.replace('_', '-')}", dest=k, type=float, help=f"flexible: {h}")
-    g.add_argument("--impact-rule", dest="impact_rule", type=int, choices=(0, 1), help="flexible: 0 LCP, 1 classical")
-    g.add_argument("--phi-0", dest="phi_0", type=float, help="initial rotation [rad]")
-    g.add_argument("--phi-dot-0", dest="phi_dot_0", type=float, help="initial angular velocity [rad/s]")
-    g.add_argument("--u-0", dest="u_0", type=float, help="flexible: initial flexural coordinate [m]")
-    g.add_argument("--u-dot-0", dest="u_dot_0", type=float, help="flexible: initial flexural velocity [m/s]")
+    # the options and their help come from the models' declarations (rocking_model.params)
+    for name, per_kind in list(_declared().items()) + list(_declared_initial().items()):
+        choice = any(p.items for p in per_kind.values())
+        g.add_argument(f"--{name.replace('_', '-')}", dest=name, type=_choice if choice else float,
+                       help=_help(per_kind, len(MODELS)).replace("%", "%%"))
+
+
+def _choice(text: str):
+    """A choice given by code (an integer) or by name."""
+    return int(text) if text.lstrip("-").isdigit() else text
 
 
 def _solver_options(p: argparse.ArgumentParser, many: bool = False) -> None:
+    from .integrators import SCHEMES
+
     g = p.add_argument_group("solver")
+    names = tuple(sorted(SCHEMES, key=lambda n: -SCHEMES[n].code))       # event_driven first: the default
     if many:
-        g.add_argument("--scheme", nargs="+", choices=("event_driven", "moreau_jean"), default=["event_driven"])
+        g.add_argument("--scheme", nargs="+", choices=names, default=["event_driven"])
     else:
-        g.add_argument("--scheme", choices=("event_driven", "moreau_jean"), default="event_driven")
+        g.add_argument("--scheme", choices=names, default="event_driven",
+                       help="; ".join(f"{n}: {SCHEMES[n].summary}" for n in names))
     g.add_argument("--tolerance", type=float, default=1e-8, help="event-driven tolerance [1] (default 1e-8)")
     g.add_argument("--dt-max", dest="dt_max", type=float, help="Moreau-Jean step [s] (default 1e-3)")
     g.add_argument("--t-end", dest="t_end", type=float, help="end time [s] (default: end of the motion + 5 s)")

@@ -98,3 +98,23 @@ def test_console_script_entry_point():
     r = subprocess.run([sys.executable, "-m", "rocking_model.cli", "simulate", "--h", "x"], capture_output=True,
                        text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr
+
+
+def test_model_options_come_from_the_declarations(tmp_path, capsys):
+    """Issue 14: the model options, their help and the allowed ones per model are read from the registered
+    models' declarations: a choice takes its name, an option of another model is refused by name."""
+    from rocking_model.models import MODELS
+
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = capsys.readouterr().out
+    for cls in MODELS.values():
+        for p in cls.parameters() + cls.INITIAL:
+            assert f"--{p.name.replace('_', '-')}" in text, p.name
+    assert main(["simulate", "--model", "flexible", "--impact-rule", "classical", "--phi-0", "0.02",
+                 "--t-end", "0.5", "--out", str(tmp_path), "--name", "f"]) == 0
+    capsys.readouterr()
+    assert main(["simulate", "--model", "rigid", "--u-0", "0.01", "--out", str(tmp_path)]) == 2
+    assert "--u-0 is not an initial value of the rigid model; allowed: --phi-0, --phi-dot-0" in capsys.readouterr().err
+    assert main(["simulate", "--model", "rigid", "--EI", "1e5", "--out", str(tmp_path)]) == 2
+    assert "--EI is not a parameter of the rigid model" in capsys.readouterr().err
