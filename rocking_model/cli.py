@@ -1,6 +1,7 @@
 """The ``rocking`` command line.
 
     rocking simulate --model rigid --b 0.2 --h 1.0 --pulse sine --amplitude 3 --frequency 2 --out results/
+        (writes results/rigid_b0.2_h1_sine-A3ms2-f2Hz.csv and .png; --name to choose, --force to overwrite)
     rocking simulate --record RSN6_IMPVALL.I_I-ELC180.AT2 --scale 1.5 --scheme moreau_jean
     rocking ensemble --pulse sine --amplitude-ratios 1:6:11 --frequency-ratios 1:10:10 --workers 2
     rocking build-fmu [--dest dist]          (source checkout only)
@@ -106,6 +107,40 @@ def _model(args):
     return cls(**given)
 
 
+def scene_name(args) -> str:
+    """The default file stem of `rocking simulate`: the model, the parameters and initial values given, the
+    motion and a scheme other than the default, e.g. ``rigid_b0.3_h1.2_sine-A3ms2-f2Hz`` (the same scene
+    gives the same name; a second run of it is refused without --force)."""
+    parts = [args.model]
+    for name in list(_declared()) + list(_declared_initial()):
+        value = getattr(args, name, None)
+        if value is not None:
+            parts.append(f"{name}{value:g}" if isinstance(value, (int, float)) else f"{name}-{value}")
+    if args.record:
+        rec = str(args.record)
+        parts.append(rec.replace(":", "-") if rec.startswith("synthetic") else Path(rec).stem)
+    elif args.pulse:
+        unit = (args.amplitude_units or "").replace("/", "").replace("2", "2")
+        motion = f"{args.pulse}-A{args.amplitude:g}{unit}" if args.amplitude is not None else args.pulse
+        if args.frequency is not None:
+            motion += f"-f{args.frequency:g}Hz"
+        if args.duration is not None:
+            motion += f"-T{args.duration:g}s"
+        if args.t0 is not None:
+            motion += f"-t{args.t0:g}s"
+        parts.append(motion)
+    else:
+        parts.append("free")
+    if args.scale != 1.0:
+        parts.append(f"x{args.scale:g}")
+    if args.resample:
+        parts.append(f"dt{args.resample:g}")
+    if args.scheme != "event_driven":
+        parts.append(args.scheme)
+    text = "_".join(parts)
+    return "".join(c if c.isalnum() or c in "._-+" else "_" for c in text)
+
+
 def _motion(args):
     """(GroundMotion, description, default t_end [s])."""
     from . import ground_motion as gm
@@ -167,8 +202,14 @@ def cmd_simulate(args) -> int:
     wall = time.perf_counter() - t0
 
     out = Path(args.out)
+    name = args.name or scene_name(args)
+    targets = [out / f"{name}.csv"] + ([] if args.no_plot else [out / f"{name}.png"])
+    existing = [str(t) for t in targets if t.exists()]
+    if existing and not args.force:
+        raise UsageError(f"{' and '.join(existing)} already exist(s): give --force to overwrite, or --name for "
+                         "another name (nothing was written)")
     out.mkdir(parents=True, exist_ok=True)
-    csv_path = out / f"{args.name}.csv"
+    csv_path = targets[0]
     names = list(res.values)
     ag = np.array([motion(float(t)) for t in res.t])
     cols = [res.t, ag] + [np.asarray(res.values[n], dtype=float) for n in names]
@@ -195,7 +236,7 @@ def cmd_simulate(args) -> int:
     if not args.no_plot:
         from .plotting import plot_response
         title = f"{geo}\n{desc}, {res.scheme}"
-        written.append(plot_response(res, motion, out / f"{args.name}.png", title=title, alpha=alpha,
+        written.append(plot_response(res, motion, targets[1], title=title, alpha=alpha,
                                      g=model.g))
     print("wrote " + ", ".join(map(str, written)))
     return 0
@@ -208,9 +249,9 @@ def cmd_build_fmu(args) -> int:
     spec = importlib.util.spec_from_file_location("_rocking_build_fmu", root / "build_fmu.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    for p in mod.build_all(dest=args.dest, names=args.names or None):
-        print(f"built and validated {p}")
-    return 0
+    # the same entry point as `python build_fmu.py`: FMUs and their cross-check folders
+    argv = ["--dest", args.dest] + (["--no-cross-check"] if args.no_cross_check else []) + list(args.names)
+    return mod.main(argv)
 
 
 def cmd_benchmark(args, extra: list[str]) -> int:
@@ -335,11 +376,15 @@ def build_parser() -> argparse.ArgumentParser:
     _solver_options(s)
     g = s.add_argument_group("output")
     g.add_argument("--out", default="results", help="output directory (default results/)")
-    g.add_argument("--name", default="rocking", help="file name stem (default rocking)")
+    g.add_argument("--name", help="file name stem (default: named after the scene, e.g. "
+                                  "rigid_b0.3_sine-A3ms2-f2Hz; see also --force)")
+    g.add_argument("--force", action="store_true", help="overwrite existing output files (refused otherwise)")
     g.add_argument("--no-plot", action="store_true", help="skip the PNG (no matplotlib needed)")
 
     b = sub.add_parser("build-fmu", help="build and validate the FMUs (source checkout)")
     b.add_argument("--dest", default="dist", help="output directory (default dist/)")
+    b.add_argument("--no-cross-check", action="store_true",
+                   help="do not write the cross-check folders (dest/cross-check), as python build_fmu.py")
     b.add_argument("names", nargs="*", help="FMU names (default: all in fmu_src/)")
 
     k = sub.add_parser("benchmark", help="run the benchmark suite (python -m benchmarks; source checkout)",
@@ -390,7 +435,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "benchmark":
             return cmd_benchmark(args, extra)
         return cmd_ensemble(args)
-    except (UsageError, ValueError) as exc:
+    except (UsageError, ValueError, FileNotFoundError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except (ImportError, OSError) as exc:

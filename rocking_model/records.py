@@ -3,7 +3,7 @@ unit conversion, and a fixed-seed synthetic accelerogram.
 
 Every reader returns a `Record`: a `SampledMotion` (t [s], ag [m/s2], linear between samples, zero outside
 the record, breakpoints at the samples) that also carries its name, source file and the header lines.
-A malformed file raises ValueError naming the file and the line.
+A malformed file raises ValueError naming the file and the line; a missing one FileNotFoundError.
 
 Unit "g" is standard gravity g_n = 9.80665 m/s2 (the unit PEER records use); a model's own ``g`` parameter
 (9.81 by default) is physics, not a unit, and is not used for conversion.
@@ -136,8 +136,8 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     path = Path(path)
     try:
         lines = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read the record ({exc.strerror or exc})") from None
+    except OSError as exc:       # FileNotFoundError, PermissionError, IsADirectoryError: kept, with the path
+        raise type(exc)(f"{path}: cannot read the record ({exc.strerror or exc})") from None
     if len(lines) < 4:
         raise ValueError(f"{path}: not a PEER AT2 file: {len(lines)} lines, expected 4 header lines and data")
     npts = dt = None
@@ -218,8 +218,8 @@ def read_csv(path, units: str | None = None, name: str | None = None,
     path = Path(path)
     try:
         lines = path.read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read the record ({exc.strerror or exc})") from None
+    except OSError as exc:       # FileNotFoundError, PermissionError, IsADirectoryError: kept, with the path
+        raise type(exc)(f"{path}: cannot read the record ({exc.strerror or exc})") from None
     stated = None
     t, a = [], []
     header_seen = False
@@ -349,5 +349,5 @@ def load_motion(spec: str, units: str | None = None, default_units: str | None =
         except ValueError:
             raise ValueError(f"record {s!r}: the seed must be an integer (synthetic:2017)") from None
     if not Path(s).exists():
-        raise ValueError(f"record {s!r}: no such file")
+        raise FileNotFoundError(f"record {s!r}: no such file")
     return read_record(s, units, default_units=default_units)

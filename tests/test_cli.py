@@ -39,9 +39,9 @@ def test_simulate_record_scaled(tmp_path, capsys):
     assert rc == 0
     out = capsys.readouterr().out
     assert "PGA = 5.88 m/s2" in out                    # 0.6 g
-    data = np.loadtxt(tmp_path / "rocking.csv", delimiter=",", skiprows=1)
+    data = np.loadtxt(tmp_path / "rigid_rec_x2_moreau_jean.csv", delimiter=",", skiprows=1)
     assert data[25, 1] == pytest.approx(0.6 * 9.80665, rel=1e-9)
-    assert not (tmp_path / "rocking.png").exists()
+    assert not (tmp_path / "rigid_rec_x2_moreau_jean.png").exists()
 
 
 @pytest.mark.parametrize("argv, msg", [
@@ -118,3 +118,38 @@ def test_model_options_come_from_the_declarations(tmp_path, capsys):
     assert "--u-0 is not an initial value of the rigid model; allowed: --phi-0, --phi-dot-0" in capsys.readouterr().err
     assert main(["simulate", "--model", "rigid", "--EI", "1e5", "--out", str(tmp_path)]) == 2
     assert "--EI is not a parameter of the rigid model" in capsys.readouterr().err
+
+
+def test_outputs_are_named_after_the_scene_and_never_overwritten(tmp_path, capsys):
+    """Issue 14: without --name the files are named after the scene (two scenes, two names); running the same
+    scene again is refused (exit 2, nothing touched) unless --force is given."""
+    base = ["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--t-end", "1", "--no-plot",
+            "--out", str(tmp_path)]
+    assert main(base + ["--b", "0.3"]) == 0
+    assert main(base + ["--b", "0.25"]) == 0
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["rigid_b0.25_sine-A3ms2-f2Hz.csv", "rigid_b0.3_sine-A3ms2-f2Hz.csv"]
+    first = tmp_path / names[1]
+    stamp = first.stat().st_mtime_ns
+    capsys.readouterr()
+    assert main(base + ["--b", "0.3"]) == 2
+    err = capsys.readouterr().err
+    assert f"{first} already exist(s): give --force to overwrite" in err and "Traceback" not in err
+    assert first.stat().st_mtime_ns == stamp
+    first.write_text("a user's edits\n")
+    assert main(base + ["--b", "0.3", "--force"]) == 0
+    assert first.read_text().startswith("time [s],ag [m/s2],phi [rad]")
+    assert main(base + ["--b", "0.3", "--name", "mine"]) == 0 and (tmp_path / "mine.csv").exists()
+
+
+def test_build_fmu_command_writes_the_cross_check_folders(tmp_path, capsys):
+    """Issue 14: `rocking build-fmu` does what `python build_fmu.py` does, cross-check folders included."""
+    import build_fmu
+
+    assert main(["build-fmu", "--dest", str(tmp_path), "RigidRockingBlock"]) == 0
+    out = capsys.readouterr().out
+    assert f"built and validated {tmp_path / 'RigidRockingBlock.fmu'}" in out and "cross-check folders in" in out
+    folder = build_fmu.cross_check_dir(tmp_path / build_fmu.CROSS_CHECK_DIR, "RigidRockingBlock")
+    assert (folder / "RigidRockingBlock_ref.csv").is_file() and (folder / "RigidRockingBlock.fmu").is_file()
+    assert main(["build-fmu", "--dest", str(tmp_path / "plain"), "--no-cross-check", "RigidRockingBlock"]) == 0
+    assert not (tmp_path / "plain" / build_fmu.CROSS_CHECK_DIR).exists()

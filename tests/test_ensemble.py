@@ -133,5 +133,5 @@ def test_record_cases(tmp_path):
     assert rows[1]["A"] == pytest.approx(2.0 * np.max(np.abs(a)), rel=1e-14)
     # scale 0.4 of a 0.4 g record (0.16 g) stays below uplift (g tan(alpha) = 0.2 g): no rocking at all
     assert rows[0]["max_abs_phi"] == 0.0 and rows[0]["impacts"] == 0
-    with pytest.raises(ValueError, match="no such file"):
+    with pytest.raises(FileNotFoundError, match="no such file"):
         record_cases([str(tmp_path / "missing.AT2")])
