@@ -2,7 +2,7 @@
 output grid, the documented penetration tolerances and the sanity checks, and the round-off machinery
 (`nominal`, `roundoff_tests`) of the named scenes. The topics: test_hard_rest.py (impact accumulation, exact
 rest, communication steps), test_hard_blocks.py (slender and squat blocks, grazing uplift, scale),
-test_hard_overturning.py (the overturning boundary, the README quickstart), test_hard_columns.py (stiff
+test_hard_overturning.py (the overturning boundary, a pulse that overturns), test_hard_columns.py (stiff
 columns, large steps, records, tilts and steps).
 
 Every test checks physical invariants on the output grid (finite values, no penetration beyond a measured
@@ -12,7 +12,7 @@ integrator bug keep their strict assertion and are marked ``xfail(strict=True)``
 (the list in the issue / the report), so that a fix shows up as XPASS.
 
 Round-off (issue 12): the long and violent scenes (free rocking to rest under a long quiet input, large
-steps, the stored 30 s record, the README quickstart that overturns) are named scenes of `roundoff`; they
+steps, the stored 30 s record, a one-sine pulse that overturns) are named scenes of `roundoff`; they
 are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
 that overturn are checked up to `sane_horizon`, where the documented limitation starts (docs/limitations.md).
 

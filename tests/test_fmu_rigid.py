@@ -288,3 +288,25 @@ def test_max_steps_parameter_bounds_the_work_of_a_step(fmu):
     assert math.isclose(res["time"][-1], 1.0) and res["impacts"][-1] >= 1
     with pytest.raises(FMUError, match=r"max_steps = 0 is out of range"):
         run_fmu(fmu, stop_time=1.0, output_interval=0.5, start_values={"max_steps": 0})
+
+
+def test_readme_quickstart_shows_what_it_says(fmu):
+    """Issue 14: the README's fmpy quickstart, run as written (with the session's FMU), shows what the README
+    says it shows: uplift, a peak of about 0.34 alpha near 0.75 s, 9 impacts, no overturning (far from the
+    boundary: the same pulse overturns between 4.0 and 4.5 m/s2)."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = text.split("## Quickstart: FMU with fmpy", 1)[1].split("```python", 1)[1].split("```", 1)[0]
+    code = block.replace('"dist/RigidRockingBlock.fmu"', repr(str(fmu)))
+    scope: dict = {}
+    exec(compile(code, "README quickstart", "exec"), scope)
+    res = scope["res"]
+    k = int(np.argmax(np.abs(res["phi"])))
+    said = text.split("## Quickstart: FMU with fmpy", 1)[1].split("### RigidRockingBlock.fmu variables", 1)[0]
+    peak = float(re.search(r"peak \|φ\| = ([0-9.]+) rad", said).group(1))
+    t_peak = float(re.search(r"at t = ([0-9.]+) s", said).group(1))
+    impacts = int(re.search(r"(\d+) impacts in the 5 s", said).group(1))
+    assert abs(abs(res["phi"][k]) - peak) < 0.0005 and abs(res["time"][k] - t_peak) < 0.015
+    assert int(res["impacts"][-1]) == impacts
+    assert not res["overturned"].any() and set(np.unique(res["contact"])) >= {1, 2}

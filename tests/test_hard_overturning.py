@@ -109,9 +109,10 @@ def test_overturning_classification_agrees_outside_band(k):
 
 
 # ================================================================================================
-# 7. The README quickstart that overturns: the lift-off sinks a corner only as documented
+# 7. A one-sine pulse that overturns (the quickstart of earlier READMEs): the lift-off sinks a corner only as
+#    documented
 # ================================================================================================
-#: the README's FMU quickstart: b = 0.2, h = 1, ag = 3 sin(2 pi t) m/s2 for t < 1 s (a table on a 0.01 s
+#: the FMU quickstart of earlier READMEs: b = 0.2, h = 1, ag = 3 sin(2 pi t) m/s2 for t < 1 s (a table on a 0.01 s
 #: grid, held per 0.01 s communication step as fmpy does), 5 s; the FMU's default settings
 QUICKSTART_T = np.linspace(0.0, 5.0, 501)
 QUICKSTART_AG = 3.0 * np.sin(2 * np.pi * QUICKSTART_T) * (QUICKSTART_T < 1)
@@ -141,8 +142,8 @@ for _s in ("ED", "MJ"):
 
 @pytest.mark.parametrize("scheme", ["ED", "MJ"])
 def test_overturning_lift_off_sinks_a_corner_as_documented(scheme, record_property):
-    """The documented limitation, measured (docs/limitations.md). The README quickstart overturns the block
-    at 2.05 s. In its final fall the pivot's normal force reaches 0 at phi = -1.34 rad while the pivot's free
+    """The documented limitation, measured (docs/limitations.md). This pulse (the quickstart of earlier
+    READMEs) overturns the block at 2.05 s. In its final fall the pivot's normal force reaches 0 at phi = -1.34 rad while the pivot's free
     normal acceleration is -6 m/s2 (the sticking force is not 0): with no sliding there is no consistent
     contact state (physics.md section 6). Up to that lift-off the run is sane (`sane_horizon`); after it the
     schemes take flight and the pivot corner sinks: ED 20.4 mm at the frozen state, MJ 0.28 mm (then

@@ -246,3 +246,18 @@ def test_example_script_writes_csv_and_png(example_osp, tmp_path, monkeypatch):
     lines = (tmp_path / "system_fmpy.csv").read_text().splitlines()
     assert lines[0].split(",")[:3] == ["time", "ground.ag", "storey.u"] and len(lines) == 102
     assert (tmp_path / "system.png").stat().st_size > 10_000
+
+
+def test_readme_states_the_example_step_count():
+    """The README's claim about the system example (issue 14: it said 800 steps where it runs 1000)."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    text = (ROOT / "README.md").read_text()
+    m = re.search(r"its (\d+(?:\.\d+)?) s in (\d+) steps of (\d+) ms", text)
+    assert m, "the README no longer states the example's steps"
+    stop, steps, ms = float(m.group(1)), int(m.group(2)), int(m.group(3))
+    base = float(ET.parse(ROOT / "examples" / "system" / "OspSystemStructure.xml").getroot()
+                 .find("{*}BaseStepSize").text)
+    assert ms / 1000.0 == base and round(stop / base) == steps
+    assert f'default={stop}' in (ROOT / "examples" / "system" / "run.py").read_text().replace(" ", "")
