@@ -1,6 +1,7 @@
 """Plots (matplotlib, Agg backend; optional dependency: pip install 'rocking-model[plot]').
 
-- `plot_response`: rotation phi, ground acceleration and contact state over time, for one simulation.
+- `plot_response`: rotation phi, top displacement (flexible oscillator), ground acceleration and contact
+  state over time, for one simulation (`response_figure`: the same as a matplotlib figure).
 - `plot_overturning_spectrum`: Makris' overturning spectrum of a pulse grid, A / (g tan(alpha)) against
   omega_p / p, overturned or not.
 """
@@ -25,45 +26,50 @@ def _pyplot():
     return plt
 
 
-def plot_response(result, ground_motion, path, *, title: str = "", alpha: float | None = None,
-                  g: float = 9.81) -> Path:
-    """Write a PNG with three panels sharing the time axis: rotation phi [rad] (with +-alpha and impacts),
-    ground acceleration ag [m/s2] (with +-g tan(alpha), the uplift threshold of the rigid block) and the
-    contact state. ``result`` is a `Result`; ``ground_motion`` a callable ag(t) [m/s2]; ``alpha`` [rad] the
-    slenderness (None: not drawn); g [m/s2]."""
+def response_figure(result, ground_motion, *, title: str = "", alpha: float | None = None, g: float = 9.81):
+    """The figure of `plot_response` (matplotlib Figure; close it after use)."""
     plt = _pyplot()
     t = np.asarray(result.t)
     phi = np.asarray(result.phi)
+    top = result.values.get("top_displacement") if hasattr(result, "values") else None
     # ag on a grid finer than the output so that short pulses show their shape
     tf = np.linspace(t[0], t[-1], max(2000, 4 * t.size))
     ag = np.array([ground_motion(float(x)) for x in tf])
-    fig, axes = plt.subplots(3, 1, figsize=(8.5, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2, 1.3]})
+    ratios = [3] + ([2] if top is not None else []) + [2, 1.3]
+    fig, axes = plt.subplots(len(ratios), 1, figsize=(8.5, 2.2 * sum(ratios) / 2.0 + 1.2), sharex=True,
+                             gridspec_kw={"height_ratios": ratios})
+    imp = np.asarray(result.impact_times, dtype=float)
+    over = np.asarray(result.overturned, dtype=bool)
+    t_o = t[int(np.argmax(over))] if over.any() else None
     ax = axes[0]
     ax.plot(t, phi, color="C0", lw=1.2, label=r"$\varphi$")
     if alpha is not None:
         for s in (1, -1):
-            ax.axhline(s * alpha, color="grey", ls="--", lw=0.8)
-        ax.text(t[0], 0.95 * alpha, r" $\pm\alpha$", va="top", color="grey")
-    imp = np.asarray(result.impact_times, dtype=float)
+            ax.axhline(s * alpha, color="grey", ls="--", lw=0.8, label=r"$\pm\alpha$" if s == 1 else None)
     if imp.size:
         ax.plot(imp, np.interp(imp, t, phi), "x", color="C3", ms=5, label=f"impacts ({imp.size})")
-    over = np.asarray(result.overturned, dtype=bool)
-    if over.any():
-        t_o = t[int(np.argmax(over))]
-        ax.axvline(t_o, color="C3", lw=1.0)
-        ax.text(t_o, ax.get_ylim()[1], " overturned", color="C3", va="top")
+    if t_o is not None:
+        ax.axvline(t_o, color="C3", lw=1.0, label=f"overturned at {t_o:.3g} s")
     ax.set_ylabel(r"rotation $\varphi$ [rad]")
-    ax.legend(loc="upper right", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     if title:
         ax.set_title(title, fontsize=10)
-    ax = axes[1]
+    panel = 1
+    if top is not None:
+        ax = axes[panel]
+        ax.plot(t, np.asarray(top), color="C4", lw=1.1, label="top mass")
+        ax.set_ylabel("top displacement\n(rel. ground) [m]")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+        panel += 1
+    ax = axes[panel]
     ax.plot(tf, ag, color="C1", lw=1.0, label=r"$a_g$")
     if alpha is not None:
         for s in (1, -1):
-            ax.axhline(s * g * math.tan(alpha), color="grey", ls=":", lw=0.8)
-        ax.text(t[0], g * math.tan(alpha), r" $g\,\tan\alpha$ (uplift)", va="bottom", color="grey", fontsize=8)
+            ax.axhline(s * g * math.tan(alpha), color="grey", ls=":", lw=0.8,
+                       label=r"$\pm g\,\tan\alpha$ (uplift)" if s == 1 else None)
     ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
-    ax = axes[2]
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+    ax = axes[panel + 1]
     ax.step(t, np.asarray(result.contact), where="post", color="C2")
     ax.set_yticks(range(4), CONTACT_LABELS)
     ax.set_ylim(-0.5, 3.5)
@@ -72,9 +78,22 @@ def plot_response(result, ground_motion, path, *, title: str = "", alpha: float 
     for a in axes:
         a.grid(alpha=0.3)
     fig.tight_layout()
+    return fig
+
+
+def plot_response(result, ground_motion, path, *, title: str = "", alpha: float | None = None,
+                  g: float = 9.81) -> Path:
+    """Write a PNG with panels sharing the time axis: rotation phi [rad] (with +-alpha, impacts and the
+    overturning time), the top displacement [m] when the result has one (flexible oscillator), ground
+    acceleration ag [m/s2] (with +-g tan(alpha), the uplift threshold of the rigid block) and the contact
+    state; legends sit right of the panels, clear of the curves. ``result`` is a `Result`;
+    ``ground_motion`` a callable ag(t) [m/s2]; ``alpha`` [rad] the slenderness (None: not drawn);
+    g [m/s2]."""
+    plt = _pyplot()
+    fig = response_figure(result, ground_motion, title=title, alpha=alpha, g=g)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return path
 
