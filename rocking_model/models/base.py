@@ -45,7 +45,6 @@ A subclass may provide (the defaults here are generic and correct, the overrides
 """
 from __future__ import annotations
 
-import difflib
 import math
 from abc import ABC, abstractmethod
 
@@ -96,6 +95,8 @@ class RockingModel(ABC):
         """ValueError for keywords that are not initial values of this model, with the closest names."""
         if not names:
             return
+        import difflib
+
         allowed = [p.name for p in self.INITIAL]
         hints = []
         for name in sorted(names):
