@@ -52,10 +52,29 @@ import numpy as np
 
 from ..contact import mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, Mode, mode_from_closed
-from ..params import declared_parameters
+from ..params import Param, declared_parameters
 
 #: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
 HALF_PI = 0.5 * math.pi
+
+#: the initial rotation and rate, declared once for every rocking model (their `INITIAL` starts with them)
+PHI_0 = Param("phi_0", 0.0, "rad", "Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2",
+              lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
+PHI_DOT_0 = Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity", lo=-1e4, hi=1e4)
+
+
+def body_outputs(body: str, point: str) -> tuple:
+    """The declared outputs of the rocking body's motion: rotation and rate of ``body``, displacement and
+    velocity of its reference ``point`` (e.g. "the centroid")."""
+    return (
+        Param("phi", 0.0, "rad", f"Rotation of the {body}"),
+        Param("phi_dot", 0.0, "rad/s", f"Angular velocity of the {body}"),
+        Param("x", 0.0, "m", f"Horizontal displacement of {point} relative to the ground"),
+        Param("y", 0.0, "m", f"Vertical displacement of {point} from rest"),
+        Param("x_dot", 0.0, "m/s", f"Horizontal velocity of {point} relative to the ground"),
+        Param("y_dot", 0.0, "m/s", f"Vertical velocity of {point}"),
+    )
+
 
 #: the keyword arguments of `rocking_model.simulation.Simulator` besides the initial values (named in the
 #: message of a misspelt keyword)

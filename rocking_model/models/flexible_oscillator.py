@@ -30,7 +30,7 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import HALF_PI, RockingModel
+from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs
 from .flexible_impact import classical_impact
 
 
@@ -93,9 +93,7 @@ class FlexibleOscillator(RockingModel):
 
     #: initial values (`initial_state`)
     INITIAL: ClassVar[tuple] = (
-        Param("phi_0", 0.0, "rad", "Initial base rotation (positive: pivoting on the left corner), "
-              "|phi_0| < pi/2", lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True),
-        Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity of the base", lo=-1e4, hi=1e4),
+        PHI_0, PHI_DOT_0,
         Param("u_0", 0.0, "m", "Initial flexural coordinate (tip deflection), |u_0| <= h"),
         Param("u_dot_0", 0.0, "m/s", "Initial flexural velocity", lo=-1e4, hi=1e4),
     )
@@ -103,12 +101,7 @@ class FlexibleOscillator(RockingModel):
     OUTPUTS: ClassVar[tuple] = (
         Param("u", 0.0, "m", "Flexural coordinate (tip deflection relative to the base)"),
         Param("u_dot", 0.0, "m/s", "Flexural velocity"),
-        Param("phi", 0.0, "rad", "Rotation of the base"),
-        Param("phi_dot", 0.0, "rad/s", "Angular velocity of the base"),
-        Param("x", 0.0, "m", "Horizontal displacement of the base midpoint relative to the ground"),
-        Param("y", 0.0, "m", "Vertical displacement of the base midpoint"),
-        Param("x_dot", 0.0, "m/s", "Horizontal velocity of the base midpoint"),
-        Param("y_dot", 0.0, "m/s", "Vertical velocity of the base midpoint"),
+    ) + body_outputs("base", "the base midpoint") + (
         Param("top_displacement", 0.0, "m", "Horizontal displacement of the top mass relative to the ground"),
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
               "potential + strain)"),

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
-from .base import HALF_PI, RockingModel
+from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs
 
 _S = (-1.0, 1.0)
 
@@ -39,19 +39,9 @@ class RigidBlock(RockingModel):
     title: ClassVar[str] = "rigid rocking block"
 
     #: initial values (`initial_state`)
-    INITIAL: ClassVar[tuple] = (
-        Param("phi_0", 0.0, "rad", "Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2",
-              lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True),
-        Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity", lo=-1e4, hi=1e4),
-    )
+    INITIAL: ClassVar[tuple] = (PHI_0, PHI_DOT_0)
     #: outputs (`outputs`)
-    OUTPUTS: ClassVar[tuple] = (
-        Param("phi", 0.0, "rad", "Rotation of the block"),
-        Param("phi_dot", 0.0, "rad/s", "Angular velocity of the block"),
-        Param("x", 0.0, "m", "Horizontal displacement of the centroid relative to the ground"),
-        Param("y", 0.0, "m", "Vertical displacement of the centroid from rest"),
-        Param("x_dot", 0.0, "m/s", "Horizontal velocity of the centroid relative to the ground"),
-        Param("y_dot", 0.0, "m/s", "Vertical velocity of the centroid"),
+    OUTPUTS: ClassVar[tuple] = body_outputs("block", "the centroid") + (
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
               "potential)"),
     )
