@@ -24,17 +24,30 @@ def inverse_mass(model: "RockingModel", q: np.ndarray) -> np.ndarray:
 
 
 def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
-           e_N: float | None = None) -> ContactSolution:
-    """Post-impact velocities from the impact LCP (Newton's law, sticking on contacts that take impulse).
+           e_N: float | None = None, e_T: float | None = None) -> ContactSolution:
+    """Post-impact velocities from the impact LCP: Newton's law in the normal direction (coefficient e_N) and,
+    on the contacts that take impulse, the tangential law of the model (`RockingModel.e_T`): the paper's
+    sticking (e_T = 0, U_T+ = 0) or the tangential restitution U_T+ = -e_T U_T- of the energetically
+    consistent law (e_T = e_N, Glocker 2013).
 
-    ``forced`` contacts are closed plastically (w_N = 0, e_N = 0 on them): the Zeno rule."""
+    ``forced`` contacts are closed plastically (w_N = 0, e_N = e_T = 0 on them): the Zeno rule."""
     e = model.e_N if e_N is None else e_N
+    et = model.e_T if e_T is None else e_T
     W_N, W_T = model.contact_jacobians(q)
     U_minus = W_N.T @ v_minus
     b_N = e * np.minimum(U_minus, 0.0)
     for i in forced:
         b_N[i] = 0.0
-    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, np.zeros(model.n_contacts),
+    if et:
+        # one coefficient per contact in both directions (Glocker's standard impact): e on the closing
+        # contacts, 0 on the forced ones; a contact that separates takes no part in the impact
+        b_T = np.where(U_minus < 0.0, et * (W_T.T @ v_minus), 0.0)
+        for i in forced:
+            b_T[i] = 0.0
+        candidates = [i for i in candidates if i in forced or U_minus[i] <= 0.0]
+    else:
+        b_T = np.zeros(model.n_contacts)
+    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, b_T,
                              candidates, forced, rtol=DEFAULT_TOLERANCES.lcp_exact)
 
 

@@ -97,8 +97,10 @@ def test_model_description_units_variability_structure(fmu):
         if typ.tag == "Real":
             assert typ.get("unit") in units, sv.get("name")
     assert {n: v[2].get("unit") for n, v in variables.items() if v[2].tag == "Real"} == expected_units
-    assert set(variables) == set(expected_units) | {"scheme", "max_steps", "contact", "impacts", "overturned"}
-    for name in ("b", "h", "m", "g", "e_N", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance", "max_steps"):
+    assert set(variables) == set(expected_units) | {"scheme", "impact_law", "max_steps", "contact", "impacts",
+                                                    "overturned"}
+    for name in ("b", "h", "m", "g", "e_N", "impact_law", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance",
+                 "max_steps"):
         sv = variables[name][1]
         assert (sv.get("causality"), sv.get("variability"), sv.get("initial")) == ("parameter", "fixed", "exact")
         assert variables[name][2].get("start") is not None
@@ -114,8 +116,8 @@ def test_model_description_units_variability_structure(fmu):
     from rocking_model.models import RigidBlock
     for p in RigidBlock.parameters() + RigidBlock.INITIAL:
         typ = variables[p.name][2]
-        assert float(typ.get("start")) == p.default
-        for bound, value in (("min", p.lo), ("max", p.hi)):
+        assert float(typ.get("start")) == p.check(p.default)
+        for bound, value in (("min", p.fmu_min()), ("max", p.fmu_max())):
             assert (None if typ.get(bound) is None else float(typ.get(bound))) == value, (p.name, bound)
         assert variables[p.name][1].get("description").startswith(p.description)
     assert (variables["ag"][1].get("causality"), variables["ag"][1].get("variability")) == ("input", "continuous")

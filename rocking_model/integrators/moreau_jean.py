@@ -151,8 +151,11 @@ class MoreauJean(Integrator):
         active = [i for i in range(model.n_contacts) if g_half[i] <= margin or g_free[i] <= 0.0]
         if active:
             b_N = model.e_N * np.minimum(U, 0.0)
+            # tangential law: the paper's sticking (b_T = 0), or restitution e_T = e_N of the pre-step tangential
+            # velocity on the closing contacts (the same coefficient as in the normal direction, per contact)
+            b_T = np.where(U < 0.0, model.e_T * (W_T.T @ v), 0.0) if model.e_T else np.zeros(model.n_contacts)
             tols = self.tolerances
-            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, np.zeros(model.n_contacts), active,
+            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active,
                                     hint=[i for i in self._closed if i in active], rtol=tols.lcp_exact,
                                     hint_tol=tols.lcp_hint)
             if not sol.exact:

@@ -52,7 +52,7 @@ import numpy as np
 
 from ..contact import mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, Mode, mode_from_closed
-from ..params import Param, declared_parameters
+from ..params import Param, declared_parameters, param
 
 #: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
 HALF_PI = 0.5 * math.pi
@@ -76,6 +76,20 @@ def body_outputs(body: str, point: str) -> tuple:
     )
 
 
+#: the tangential impact law, a parameter of every rocking model (`RockingModel.e_T`)
+IMPACT_LAW_ITEMS = (
+    ("newton", 0, "the paper's: Newton's law normal, sticking tangential; it can create energy when e_N > 0 "
+                  "and a corner slips (docs/limitations.md)"),
+    ("energy_consistent", 1, "Newton's law normal and tangential restitution e_T = e_N (Glocker 2013): "
+                             "never creates energy"),
+)
+
+
+def impact_law_param():
+    """The declared field ``impact_law`` (a `rocking_model.params.param`)."""
+    return param(0, None, "Tangential impact law", items=IMPACT_LAW_ITEMS)
+
+
 #: the keyword arguments of `rocking_model.simulation.Simulator` besides the initial values (named in the
 #: message of a misspelt keyword)
 SOLVER_KEYWORDS = ("scheme", "dt_max", "tolerance", "theta", "zeno_tol", "t0", "method", "impact_log_size",
@@ -91,6 +105,16 @@ class RockingModel(ABC):
     phi_index: int = -1
     #: coefficient of restitution of Newton's impact law [1]
     e_N: float = 0.0
+    #: tangential impact law (0: the paper's, sticking; 1: tangential restitution e_T = e_N)
+    impact_law: int = 0
+
+    @property
+    def e_T(self) -> float:
+        """Tangential coefficient of restitution of the impact law [1]: 0 for the paper's law (Newton normal,
+        sticking tangential), e_N for the energetically consistent law (Glocker 2013: Newton's law in both
+        directions with one coefficient dissipates energy at every impact)."""
+        return self.e_N if self.impact_law == 1 else 0.0
+
     #: gravity [m/s2]
     g: float = 9.81
 

@@ -30,7 +30,7 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs
+from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, impact_law_param
 from .flexible_impact import classical_impact
 
 
@@ -79,6 +79,7 @@ class FlexibleOscillator(RockingModel):
     zeta: float = param(0.02, "1", "Damping ratio of the flexural mode (>= 0)", lo=0.0, hi=10.0)
     e_N: float = param(0.0, "1", "Newton coefficient of restitution at the base corners, in [0, 1]",
                        lo=0.0, hi=1.0)
+    impact_law: int = impact_law_param()
     impact_rule: int = param(0, None, "Impact rule at a rocking impact", items=(
         ("lcp", 0, "the impact LCP with Newton's law (the paper's formulation)"),
         ("classical", 1, "the classical rule: angular momentum about the impacting corner conserved, "
