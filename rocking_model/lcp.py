@@ -36,7 +36,7 @@ unique, only the split of the tangential percussion is not (the minimum-norm spl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import combinations
+from itertools import combinations, product
 
 import numpy as np
 
@@ -284,3 +284,143 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
     # zero to 1e-9) are told apart by their violations rather than by a tolerance
     return ContactSolution(v=v, P_N=np.array(P[:n]), P_T=np.array(P[n:]), active=S, w_N=w_out,
                            exact=viol <= rtol, violation=viol)
+
+
+# ---------------------------------------------------------------------------------------------------- friction
+#: per-contact states of the frictional problem (the order in which they are tried)
+OPEN, STICK, SLIDE_POS, SLIDE_NEG = 0, 1, 2, 3
+#: [contacts] largest number of candidates whose 4^n state combinations are enumerated; beyond, a descent over
+#: single-contact state changes from the hint (reported inexact when it finds no solution)
+FRICTION_ENUMERATE_MAX = 4
+
+
+@dataclass
+class FrictionSolution(ContactSolution):
+    """Result of a frictional contact LCP: `ContactSolution` plus the state of each contact (OPEN, STICK,
+    SLIDE_POS: sliding with positive tangential velocity, friction -mu P_N; SLIDE_NEG) and w_T."""
+
+    states: tuple = ()
+    w_T: np.ndarray = None
+
+
+def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free: np.ndarray,
+                       b_N: np.ndarray, b_T: np.ndarray, candidates, mu: float, forced=(),
+                       rtol: float = 1e-9, hint=None) -> FrictionSolution:
+    """The contact problem of `solve_contact_lcp` with Coulomb friction of coefficient ``mu`` (finite, > 0) in
+    place of sticking: for every candidate contact, with w = G^T v + b,
+
+        0 <= w_N  _|_  P_N >= 0,
+        stick:          w_T = 0,   |P_T| <= mu P_N
+        slide forward:  w_T > 0,   P_T = -mu P_N
+        slide back:     w_T < 0,   P_T = +mu P_N
+
+    the planar Coulomb law, exact in 2D (the complementarity form of Glocker & Pfeiffer: w_T = w_T+ - w_T-,
+    0 <= w_T+ _|_ mu P_N + P_T >= 0, 0 <= w_T- _|_ mu P_N - P_T >= 0). At the velocity level with
+    b_N = e_N U_N- it is Newton's impact law with Coulomb's law for the tangential impulse; at the acceleration
+    level it gives the forces and the states that follow (stick, slide, lift-off).
+
+    Solved like the sticking problem: every combination of states of the (at most FRICTION_ENUMERATE_MAX)
+    candidates is a small linear system on the Delassus matrix; the combination that violates the conditions
+    least is returned (``exact`` when by round-off only). Where the problem has several solutions (Painlevé's
+    paradox at the acceleration level with mu above its critical value) the first exact combination in the
+    order hint, then states (open, stick, slide forward, slide back) per contact in contact order, is taken;
+    where it has none the least violating is returned, flagged inexact. ``forced`` candidates stay closed
+    (normal equality, as in the Zeno rule)."""
+    v_free = np.asarray(v_free, dtype=float)
+    n = W_N.shape[1]
+    cand = sorted(set(candidates) | set(forced))
+    G = np.concatenate([W_N, W_T], axis=1)
+    MG = Minv @ G
+    D = G.T @ MG
+    w0 = G.T @ v_free + np.concatenate([b_N, b_T])
+    scale_v = max([abs(w0[i]) for i in cand] + [abs(w0[n + i]) for i in cand] + [1e-300])
+    forced = set(forced)
+
+    def trial(states):
+        cols, rows, coef = [], [], {}
+        for i, s in zip(cand, states):
+            if s == OPEN:
+                continue
+            rows.append(i)                           # w_N,i = 0
+            if s == STICK:
+                cols.append(("N", i))
+                cols.append(("T", i))
+                rows.append(n + i)                   # w_T,i = 0
+            else:
+                cols.append(("N", i))
+                coef[i] = -mu if s == SLIDE_POS else mu
+        P = np.zeros(2 * n)
+        if cols:
+            A = np.zeros((len(rows), len(cols)))
+            for c, (kind, i) in enumerate(cols):
+                col = D[:, i] + coef[i] * D[:, n + i] if kind == "N" and i in coef else \
+                    (D[:, i] if kind == "N" else D[:, n + i])
+                A[:, c] = col[rows]
+            rhs = -w0[rows]
+            try:
+                x = np.linalg.solve(A, rhs)
+            except np.linalg.LinAlgError:
+                x = np.linalg.lstsq(A, rhs, rcond=1e-12)[0]
+            for (kind, i), xi in zip(cols, x):
+                if kind == "N":
+                    P[i] = xi
+                    if i in coef:
+                        P[n + i] = coef[i] * xi
+                else:
+                    P[n + i] = xi
+        w = w0 + D @ P
+        scale_P = max(float(np.max(np.abs(P[:n]))), 1e-300)
+        viol = 0.0
+        for i, s in zip(cand, states):
+            if s == OPEN:
+                viol = max(viol, -w[i] / scale_v)
+                continue
+            viol = max(viol, abs(w[i]) / scale_v)
+            if i not in forced:
+                viol = max(viol, -P[i] / scale_P)
+            if s == STICK:
+                viol = max(viol, abs(w[n + i]) / scale_v, (abs(P[n + i]) - mu * max(P[i], 0.0)) / scale_P)
+            elif s == SLIDE_POS:
+                viol = max(viol, -w[n + i] / scale_v)
+            else:
+                viol = max(viol, w[n + i] / scale_v)
+        return viol, states, P, w
+
+    k = len(cand)
+    options = [(STICK, SLIDE_POS, SLIDE_NEG) if i in forced else (OPEN, STICK, SLIDE_POS, SLIDE_NEG) for i in cand]
+    first = tuple(hint) if hint is not None and len(hint) == k else None
+    best = None
+    if k <= FRICTION_ENUMERATE_MAX:
+        combos = list(product(*options))
+        if first is not None and first in combos:
+            combos.remove(first)
+            combos.insert(0, first)
+        for states in combos:
+            res = trial(states)
+            if best is None or res[0] < best[0]:
+                best = res
+                if res[0] <= 1e-3 * rtol:         # exact beyond doubt: the first such combination is taken
+                    break
+    else:
+        states = first or tuple(o[0] for o in options)
+        best = trial(states)
+        improved = True
+        while improved and best[0] > rtol:
+            improved = False
+            for j in range(k):
+                for s in options[j]:
+                    if s == best[1][j]:
+                        continue
+                    res = trial(best[1][:j] + (s,) + best[1][j + 1:])
+                    if res[0] < best[0]:
+                        best, improved = res, True
+    viol, states, P, w = best
+    v = v_free + MG @ P
+    w_N = np.full(n, np.nan)
+    w_T = np.full(n, np.nan)
+    full = [OPEN] * n
+    for i, s in zip(cand, states):
+        w_N[i], w_T[i], full[i] = w[i], w[n + i], s
+    active = tuple(i for i, s in zip(cand, states) if s != OPEN)
+    return FrictionSolution(v=v, P_N=P[:n].copy(), P_T=P[n:].copy(), active=active, w_N=w_N,
+                            exact=viol <= rtol, violation=viol, states=tuple(full), w_T=w_T)

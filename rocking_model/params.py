@@ -35,6 +35,8 @@ class Param:
     hi_open: bool = False
     items: tuple = ()
     fmu: bool = True
+    #: whether +inf is an allowed value (a limit, e.g. the friction coefficient of the sticking law)
+    inf_ok: bool = False
 
     def check(self, value):
         """``value`` checked against the declaration (ValueError naming it and the allowed range/values);
@@ -43,7 +45,19 @@ class Param:
             allowed = {code: code for _, code, _ in self.items}
             allowed.update({name: code for name, code, _ in self.items})
             return check_choice(self.name, value, allowed)
-        return check_real(self.name, value, lo=self.lo, hi=self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
+        if self.inf_ok and isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            try:
+                if float(value) == math.inf:
+                    return math.inf
+            except ValueError:
+                pass
+        try:
+            return check_real(self.name, value, lo=self.lo, hi=self.hi, lo_open=self.lo_open,
+                              hi_open=self.hi_open)
+        except ValueError as exc:
+            if self.inf_ok and self.hi is None:          # the range includes +inf
+                raise ValueError(str(exc).replace(", inf)", ", inf]")) from None
+            raise
 
     def fmu_min(self):
         """Closed lower bound for the FMU's ``min`` attribute (None: none; an open bound is written as is,
@@ -53,6 +67,8 @@ class Param:
         return None if self.lo is None or not math.isfinite(self.lo) else self.lo
 
     def fmu_max(self):
+        if self.inf_ok:
+            return None
         if self.items:
             return max(code for _, code, _ in self.items)
         return None if self.hi is None or not math.isfinite(self.hi) else self.hi
@@ -62,8 +78,11 @@ class Param:
             return ", ".join(f"{code} {name}" for name, code, _ in self.items)
         lo = "-inf" if self.lo is None else f"{self.lo:g}"
         hi = "inf" if self.hi is None else f"{self.hi:g}"
-        return (f"{'(' if self.lo_open or self.lo is None else '['}{lo}, {hi}"
+        text = (f"{'(' if self.lo_open or self.lo is None else '['}{lo}, {hi}"
                 f"{')' if self.hi_open or self.hi is None else ']'}")
+        if self.inf_ok and self.hi is None:
+            return text[:-1] + "]"
+        return text + (" or inf" if self.inf_ok else "")
 
 
 def param(default, unit: str | None = "1", description: str = "", **kw):

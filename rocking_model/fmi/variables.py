@@ -138,6 +138,10 @@ def _fmt(value, type_: str) -> str:
     return str(int(value))
 
 
+#: Python's spelling of the non-finite doubles -> xs:double's (a start value of mu = inf)
+_XS_DOUBLE = {"inf": "INF", "-inf": "-INF", "nan": "NaN"}
+
+
 class _ExtraAttrs:
     """Mixin: add attributes to the type element (<Real>, <Integer>) of the ScalarVariable node."""
 
@@ -151,6 +155,10 @@ class _ExtraAttrs:
         child = node.find(self._type_tag)
         for key, value in getattr(self, "_extra", {}).items():
             child.set(key, value)
+        # pythonfmu writes Python's spelling of the non-finite start values; xs:double spells them INF, NaN
+        start = child.get("start")
+        if start in _XS_DOUBLE:
+            child.set("start", _XS_DOUBLE[start])
         return node
 
 

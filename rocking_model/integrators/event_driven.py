@@ -82,6 +82,10 @@ class EventDriven(Integrator):
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
+        if not math.isinf(model.mu):
+            raise ValueError(f"mu = {model.mu:g}: Coulomb friction is integrated by scheme 'moreau_jean' for now; "
+                             "the event-driven scheme has sticking contacts only (allowed with it: mu = inf, the "
+                             "paper's law)")
         tol = check_real("tolerance", options.tolerance, lo=1e-14, hi=1e-2)
         zt = check_real("zeno_tol", options.zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
         method = check_choice("method", options.method, METHOD_CHOICES)

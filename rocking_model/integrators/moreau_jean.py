@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from ..contact import inverse_mass, project_to_ground
-from ..lcp import solve_contact_lcp
+from ..lcp import OPEN, STICK, solve_contact_lcp, solve_friction_lcp
 from ..modes import BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from ..validation import WorkLimitError, check_real, state_bool, state_float, state_floats, state_int, state_ints
@@ -155,9 +155,16 @@ class MoreauJean(Integrator):
             # velocity on the closing contacts (the same coefficient as in the normal direction, per contact)
             b_T = np.where(U < 0.0, model.e_T * (W_T.T @ v), 0.0) if model.e_T else np.zeros(model.n_contacts)
             tols = self.tolerances
-            sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active,
-                                    hint=[i for i in self._closed if i in active], rtol=tols.lcp_exact,
-                                    hint_tol=tols.lcp_hint)
+            if math.isinf(model.mu):
+                sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active,
+                                        hint=[i for i in self._closed if i in active], rtol=tols.lcp_exact,
+                                        hint_tol=tols.lcp_hint)
+            else:
+                # Coulomb friction: stick, slide forward or slide back per contact (the last step's closed
+                # contacts tried sticking first)
+                sol = solve_friction_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active, model.mu,
+                                         rtol=tols.lcp_exact,
+                                         hint=[STICK if i in self._closed else OPEN for i in active])
             if not sol.exact:
                 self.report("inexact_contact", t + dt, inexact_message(sol, t + dt, "step LCP"))
             v_new = sol.v
@@ -178,7 +185,12 @@ class MoreauJean(Integrator):
             # all corners stuck and at rest in the normal direction: the state is on the full-contact
             # manifold up to round-off; put it there exactly so that phi stays 0 at rest (no drift)
             full = model.mode_of(closed)
+            x, x_dot = q_new[model.slide_index], v_new[model.slide_index]
             q_new, v_new = model.embed(full, *model.reduce(full, q_new, v_new))
+            if not math.isinf(model.mu):
+                # with friction the base may have slid (or slide): keep its horizontal position and velocity
+                # (the full-contact embedding places it where it started)
+                q_new[model.slide_index], v_new[model.slide_index] = x, x_dot
         self.q = q_new
         self.v = v_new
         self.mode = model.mode_of(closed)

@@ -18,6 +18,7 @@ Contract (in the style of scipy's ``OdeSolver``)
 A subclass must provide:
 
     dof_names, phi_index        names of q and the index of the rotation phi (overturning: |phi| = pi/2)
+    slide_index                 the index of the base's horizontal translation x (sliding moves it)
     e_N, g                      coefficient of restitution [1], gravity [m/s2]
     mass_matrix(q), forces(q, v, ag)
     gaps(q), contact_jacobians(q), contact_drift(q, v)
@@ -85,6 +86,13 @@ IMPACT_LAW_ITEMS = (
 )
 
 
+def friction_param():
+    """The declared field ``mu``: Coulomb's friction coefficient at the contacts, inf (the default) being the
+    paper's sticking law, its mu -> inf limit."""
+    return param(math.inf, "1", "Coulomb friction coefficient at the corners (inf: the paper's sticking law, "
+                 "no sliding)", lo=0.0, lo_open=True, inf_ok=True)
+
+
 def impact_law_param():
     """The declared field ``impact_law`` (a `rocking_model.params.param`)."""
     return param(0, None, "Tangential impact law", items=IMPACT_LAW_ITEMS)
@@ -107,6 +115,8 @@ class RockingModel(ABC):
     e_N: float = 0.0
     #: tangential impact law (0: the paper's, sticking; 1: tangential restitution e_T = e_N)
     impact_law: int = 0
+    #: Coulomb friction coefficient [1]; inf: the paper's sticking law
+    mu: float = math.inf
 
     @property
     def e_T(self) -> float:
@@ -118,6 +128,8 @@ class RockingModel(ABC):
     #: gravity [m/s2]
     g: float = 9.81
 
+    #: index in q of the horizontal translation of the base (the coordinate a sliding base moves along)
+    slide_index: int = 0
     #: registry name of the model (`rocking_model.models.MODELS`), its FMU's name and a title
     kind: str = ""
     fmu_name: str = ""

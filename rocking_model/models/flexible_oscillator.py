@@ -30,7 +30,7 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, impact_law_param
+from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param, impact_law_param
 from .flexible_impact import classical_impact
 
 
@@ -80,12 +80,14 @@ class FlexibleOscillator(RockingModel):
     e_N: float = param(0.0, "1", "Newton coefficient of restitution at the base corners, in [0, 1]",
                        lo=0.0, hi=1.0)
     impact_law: int = impact_law_param()
+    mu: float = friction_param()
     impact_rule: int = param(0, None, "Impact rule at a rocking impact", items=(
         ("lcp", 0, "the impact LCP with Newton's law (the paper's formulation)"),
         ("classical", 1, "the classical rule: angular momentum about the impacting corner conserved, "
                          "flexural velocity continuous")))
     g: float = param(9.81, "m/s2", "Gravitational acceleration", lo=1e-3, hi=1e3)
     dof_names: tuple = field(default=("u", "x", "y", "phi"), init=False, repr=False)
+    slide_index: int = field(default=1, init=False, repr=False)
     phi_index: int = field(default=3, init=False, repr=False)
 
     kind: ClassVar[str] = "flexible"

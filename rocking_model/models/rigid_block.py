@@ -15,7 +15,7 @@ import numpy as np
 
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
-from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, impact_law_param
+from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param, impact_law_param
 
 _S = (-1.0, 1.0)
 
@@ -32,7 +32,9 @@ class RigidBlock(RockingModel):
     e_N: float = param(0.0, "1", "Newton coefficient of restitution at the corners (0: Housner's "
                        "angular-momentum impact)", lo=0.0, hi=1.0)
     impact_law: int = impact_law_param()
+    mu: float = friction_param()
     dof_names: tuple = field(default=("x", "y", "phi"), init=False, repr=False)
+    slide_index: int = field(default=0, init=False, repr=False)
     phi_index: int = field(default=2, init=False, repr=False)
 
     kind: ClassVar[str] = "rigid"
