@@ -2,17 +2,21 @@
 
 - `impact`: velocity-level LCP with Newton's impact law (coefficient model.e_N) on the contacts at the ground;
 - `uplift`: acceleration-level LCP on the contacts that touch the ground with zero normal velocity; its active
-  set is the contact mode that follows (`next_closed`: full contact, rocking on either corner, flight);
+  set and stick / slide states are the contact mode that follows (`next_mode`: full contact, rocking on
+  either corner, flight, sliding);
+- `solve_with_friction`: the one place the friction law (mu) picks the LCP: sticking, its mu -> inf limit
+  where sticking has no solution, or Coulomb;
 - `project_to_ground`, `closed_candidates`, `mode_forces`: the geometry and forces around them.
 """
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .lcp import ContactSolution, solve_contact_lcp
-from .tolerances import DEFAULT_TOLERANCES
+from .lcp import OPEN, SLIDE_NEG, SLIDE_POS, SLIDE_SIGN, STICK, ContactSolution, solve_contact_lcp, solve_friction_lcp
+from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 
 if TYPE_CHECKING:                      # the models import this module (no import cycle at run time)
     from .models.base import RockingModel
@@ -24,13 +28,16 @@ def inverse_mass(model: "RockingModel", q: np.ndarray) -> np.ndarray:
 
 
 def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
-           e_N: float | None = None, e_T: float | None = None) -> ContactSolution:
+           e_N: float | None = None, e_T: float | None = None, prefer=None) -> ContactSolution:
     """Post-impact velocities from the impact LCP: Newton's law in the normal direction (coefficient e_N) and,
     on the contacts that take impulse, the tangential law of the model (`RockingModel.e_T`): the paper's
     sticking (e_T = 0, U_T+ = 0) or the tangential restitution U_T+ = -e_T U_T- of the energetically
-    consistent law (e_T = e_N, Glocker 2013).
+    consistent law (e_T = e_N, Glocker 2013); with a finite ``model.mu`` Coulomb's law bounds the tangential
+    impulse (|P_T| <= mu P_N, sliding at the bound). With mu = inf the sticking problem is solved, and where it
+    has no solution its mu -> inf limit (`solve_with_friction`).
 
-    ``forced`` contacts are closed plastically (w_N = 0, e_N = e_T = 0 on them): the Zeno rule."""
+    ``forced`` contacts are closed plastically (w_N = 0, e_N = e_T = 0 on them): the Zeno rule. ``prefer``:
+    the state (`rocking_model.lcp.STICK`, ...) tried first for every candidate where several solve it."""
     e = model.e_N if e_N is None else e_N
     et = model.e_T if e_T is None else e_T
     W_N, W_T = model.contact_jacobians(q)
@@ -47,19 +54,60 @@ def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates
         candidates = [i for i in candidates if i in forced or U_minus[i] <= 0.0]
     else:
         b_T = np.zeros(model.n_contacts)
-    return solve_contact_lcp(inverse_mass(model, q), W_N, W_T, v_minus, b_N, b_T,
-                             candidates, forced, rtol=DEFAULT_TOLERANCES.lcp_exact)
+    return solve_with_friction(model, inverse_mass(model, q), W_N, W_T, v_minus, b_N, b_T, candidates, forced,
+                               prefer=prefer)
 
 
 def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candidates,
-           forced=()) -> ContactSolution:
-    """Acceleration-level LCP: which of ``candidates`` stay closed (active) and their contact forces."""
+           forced=(), slip_tol: float | None = None, count: bool = False, prefer=None) -> ContactSolution:
+    """Acceleration-level LCP: which of ``candidates`` stay closed (active), whether they stick or slide
+    (Coulomb, a finite ``model.mu``, or where sticking has no solution its mu -> inf limit), and their
+    contact forces. Candidates whose tangential velocity exceeds ``slip_tol`` [m/s] already slide: they
+    can only open or keep sliding that way (None: none slides). ``count``: count the solutions (Painleve,
+    `FrictionSolution`); ``prefer``: the state tried first for every candidate."""
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
     acc_free = Minv @ model.forces(q, v, ag)
-    return solve_contact_lcp(Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced,
-                             rtol=DEFAULT_TOLERANCES.lcp_exact)
+    sliding = None
+    if slip_tol is not None:
+        U_T = W_T.T @ v
+        sliding = {i: (1 if U_T[i] > 0.0 else -1) for i in set(candidates) | set(forced)
+                   if abs(U_T[i]) > slip_tol}
+    return solve_with_friction(model, Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced, sliding, count,
+                               prefer=prefer)
+
+
+def solve_with_friction(model: "RockingModel", Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=(),
+                        sliding=None, count: bool = False, hint=None, prefer=None,
+                        tolerances: ContactTolerances = DEFAULT_TOLERANCES) -> ContactSolution:
+    """The contact LCP under the model's friction law: with mu = inf and nothing sliding, the sticking LCP
+    (`solve_contact_lcp`, the paper's), and where it has no exact solution the frictional problem in its
+    mu -> inf limit (a contact may then slide with a vanishing normal force) if that one has; with a finite
+    mu (or contacts that already slide) the frictional LCP (`solve_friction_lcp`, which counts its solutions
+    when ``count``). ``hint``: the contacts that were closed (a time-stepper's last step), tried first;
+    ``prefer``: with friction, the state tried first for every candidate (a stuck contact that reached its
+    friction cone: the slide)."""
+    rtol = tolerances.lcp_exact
+    mu = model.mu
+    if math.isinf(mu) and not sliding:
+        sol = solve_contact_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced, rtol=rtol,
+                                hint=hint, hint_tol=tolerances.lcp_hint)
+        if sol.exact:
+            return sol
+        limit = solve_friction_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, mu, forced, rtol=rtol)
+        return limit if limit.violation < sol.violation else sol
+    states = None
+    if prefer is not None:
+        cand = sorted(set(candidates) | set(forced))
+        states = [prefer if i not in (sliding or {}) or prefer == OPEN else
+                  SLIDE_POS if sliding[i] > 0 else SLIDE_NEG for i in cand]
+    elif hint is not None:
+        cand = sorted(set(candidates) | set(forced))
+        states = [(STICK if i in hint else OPEN) if i not in (sliding or {}) else
+                  (OPEN if i not in hint else SLIDE_POS if sliding[i] > 0 else SLIDE_NEG) for i in cand]
+    return solve_friction_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, mu, forced, rtol=rtol,
+                              sliding=sliding, count=count, hint=states)
 
 
 def project_to_ground(model: "RockingModel", q: np.ndarray, corners) -> np.ndarray:
@@ -92,20 +140,36 @@ def closed_candidates(model: "RockingModel", q: np.ndarray, v: np.ndarray, gap_t
     return [i for i in range(model.n_contacts) if g[i] <= gap_tol and abs(U[i]) <= v_tol]
 
 
-def next_closed(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
-                v_tol: float) -> tuple[tuple, ContactSolution | None]:
-    """(closed contacts, uplift solution) that follow a consistent state (q, v): the active set of the
-    uplift LCP on the contacts at the ground at rest (`closed_candidates`); ((), None) when there is none."""
+def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
+              v_tol: float, prefer=None):
+    """(mode, uplift solution) that follow a consistent state (q, v): the active set and the stick / slide
+    states of the uplift LCP on the contacts at the ground at rest (`closed_candidates`); (FLIGHT-like mode
+    of no closed contact, None) when there is none. ``v_tol`` [m/s] also tells a sliding contact. With
+    friction the solutions are counted (Painleve: `FrictionSolution.n_solutions`); ``prefer``: see
+    `solve_with_friction`."""
     cand = closed_candidates(model, q, v, gap_tol, v_tol)
     if not cand:
-        return (), None
-    sol = uplift(model, q, v, ag, cand)
-    return sol.active, sol
+        return model.mode_of(()), None
+    sol = uplift(model, q, v, ag, cand, slip_tol=v_tol, count=True, prefer=prefer)
+    return model.mode_of(sol.active, solution_sigma(sol)), sol
+
+
+def solution_sigma(sol: ContactSolution) -> int:
+    """The direction of sliding of the closed contacts of a contact solution: +1, -1, or 0 (they stick)."""
+    for s in getattr(sol, "states", ()):
+        if s in SLIDE_SIGN:
+            return int(SLIDE_SIGN[s])
+    return 0
 
 
 def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
-    """Normal contact forces [N] of the closed contacts of ``mode`` (bilateral), shape (n_contacts,)."""
+    """Normal contact forces [N] of the closed contacts of the sticking ``mode`` held closed (bilateral, stuck),
+    shape (n_contacts,)."""
     closed = model.closed_of(mode)
     if not closed:
         return np.zeros(model.n_contacts)
-    return uplift(model, q, v, ag, closed, forced=closed).P_N
+    W_N, W_T = model.contact_jacobians(q)
+    a_N, a_T = model.contact_drift(q, v)
+    Minv = inverse_mass(model, q)
+    return solve_contact_lcp(Minv, W_N, W_T, Minv @ model.forces(q, v, ag), a_N, a_T, closed, closed,
+                             rtol=DEFAULT_TOLERANCES.lcp_exact).P_N

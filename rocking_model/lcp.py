@@ -35,6 +35,7 @@ unique, only the split of the tangential percussion is not (the minimum-norm spl
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from itertools import combinations, product
 
@@ -289,25 +290,39 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
 # ---------------------------------------------------------------------------------------------------- friction
 #: per-contact states of the frictional problem (the order in which they are tried)
 OPEN, STICK, SLIDE_POS, SLIDE_NEG = 0, 1, 2, 3
+#: the direction sigma of each sliding state (its tangential velocity's sign; friction acts against it)
+SLIDE_SIGN = {SLIDE_POS: 1.0, SLIDE_NEG: -1.0}
 #: [contacts] largest number of candidates whose 4^n state combinations are enumerated; beyond, a descent over
 #: single-contact state changes from the hint (reported inexact when it finds no solution)
 FRICTION_ENUMERATE_MAX = 4
+#: [1] a combination violating the conditions by less than this times ``rtol`` is exact beyond doubt: the
+#: enumeration stops there (round-off of the small solves is some 1e-15; rtol is 1e-9)
+EXACT_BEYOND_DOUBT = 1e-3
 
 
 @dataclass
 class FrictionSolution(ContactSolution):
     """Result of a frictional contact LCP: `ContactSolution` plus the state of each contact (OPEN, STICK,
-    SLIDE_POS: sliding with positive tangential velocity, friction -mu P_N; SLIDE_NEG) and w_T."""
+    SLIDE_POS: sliding with positive tangential velocity, friction against it; SLIDE_NEG), w_T, and (when
+    asked for with ``count=True``) the number of state combinations that solve the problem exactly: 0 or
+    more than 1 at the acceleration level is Painleve's paradox."""
 
     states: tuple = ()
     w_T: np.ndarray = None
+    n_solutions: int = -1
+    sliding: dict = None       #: the ``sliding`` argument: contacts that already slid, and their direction
+
+    @property
+    def painleve(self) -> bool:
+        """Painleve's paradox: with a contact sliding, no or several motions solve the problem (counted)."""
+        return self.n_solutions not in (-1, 1) and bool(self.sliding or any(s in SLIDE_SIGN for s in self.states))
 
 
 def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free: np.ndarray,
                        b_N: np.ndarray, b_T: np.ndarray, candidates, mu: float, forced=(),
-                       rtol: float = 1e-9, hint=None) -> FrictionSolution:
-    """The contact problem of `solve_contact_lcp` with Coulomb friction of coefficient ``mu`` (finite, > 0) in
-    place of sticking: for every candidate contact, with w = G^T v + b,
+                       rtol: float = 1e-9, hint=None, sliding=None, count: bool = False) -> FrictionSolution:
+    """The contact problem of `solve_contact_lcp` with Coulomb friction of coefficient ``mu`` (> 0, finite or
+    inf) in place of sticking: for every candidate contact, with w = G^T v + b,
 
         0 <= w_N  _|_  P_N >= 0,
         stick:          w_T = 0,   |P_T| <= mu P_N
@@ -319,101 +334,126 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
     b_N = e_N U_N- it is Newton's impact law with Coulomb's law for the tangential impulse; at the acceleration
     level it gives the forces and the states that follow (stick, slide, lift-off).
 
+    A sliding contact's unknown is the friction magnitude tau = mu P_N >= 0 (P_T = -sigma tau), so that
+    ``mu = inf`` is the limit of the finite-mu problem, not a special case: sticking where it has a solution
+    (the sticking LCP's), and where it has none (a pivot whose sticking needs tension) a contact that slides
+    on the ground with P_N -> 0 and a finite friction force tau, as every finite mu -> inf does.
+
+    ``sliding``: {contact: sigma} for contacts that already slide with sign(w_T) = sigma (the acceleration
+    level of a sliding contact): their states are OPEN or the slide in that direction. ``forced`` candidates
+    stay closed (normal equality, as in the Zeno rule). ``hint``: the state of each candidate to try first.
+
     Solved like the sticking problem: every combination of states of the (at most FRICTION_ENUMERATE_MAX)
     candidates is a small linear system on the Delassus matrix; the combination that violates the conditions
-    least is returned (``exact`` when by round-off only). Where the problem has several solutions (Painlevé's
-    paradox at the acceleration level with mu above its critical value) the first exact combination in the
-    order hint, then states (open, stick, slide forward, slide back) per contact in contact order, is taken;
-    where it has none the least violating is returned, flagged inexact. ``forced`` candidates stay closed
-    (normal equality, as in the Zeno rule)."""
+    least is returned (``exact`` when by round-off only). Where the problem has several solutions (Painleve's
+    paradox at the acceleration level) the first exact combination in the order hint, then states (open,
+    stick, slide forward, slide back) per contact in contact order, is taken; where it has none the least
+    violating is returned, flagged inexact. ``count``: enumerate every combination and count the exact ones
+    (``n_solutions``: distinct motions v, as the split of the tangential force between two contacts whose
+    tangential rows are parallel is not unique)."""
     v_free = np.asarray(v_free, dtype=float)
     n = W_N.shape[1]
     cand = sorted(set(candidates) | set(forced))
+    sliding = sliding or {}
     G = np.concatenate([W_N, W_T], axis=1)
     MG = Minv @ G
     D = G.T @ MG
     w0 = G.T @ v_free + np.concatenate([b_N, b_T])
     scale_v = max([abs(w0[i]) for i in cand] + [abs(w0[n + i]) for i in cand] + [1e-300])
     forced = set(forced)
+    inv_mu = 0.0 if math.isinf(mu) else 1.0 / mu
 
     def trial(states):
-        cols, rows, coef = [], [], {}
+        cols, rows = [], []
         for i, s in zip(cand, states):
             if s == OPEN:
                 continue
-            rows.append(i)                           # w_N,i = 0
+            rows.append(i)                                          # w_N,i = 0
             if s == STICK:
-                cols.append(("N", i))
-                cols.append(("T", i))
-                rows.append(n + i)                   # w_T,i = 0
+                cols += [D[:, i], D[:, n + i]]
+                rows.append(n + i)                                  # w_T,i = 0
             else:
-                cols.append(("N", i))
-                coef[i] = -mu if s == SLIDE_POS else mu
+                cols.append(inv_mu * D[:, i] - SLIDE_SIGN[s] * D[:, n + i])   # unknown tau = mu P_N
         P = np.zeros(2 * n)
         if cols:
-            A = np.zeros((len(rows), len(cols)))
-            for c, (kind, i) in enumerate(cols):
-                col = D[:, i] + coef[i] * D[:, n + i] if kind == "N" and i in coef else \
-                    (D[:, i] if kind == "N" else D[:, n + i])
-                A[:, c] = col[rows]
+            A = np.stack(cols, axis=1)[rows]
             rhs = -w0[rows]
             try:
                 x = np.linalg.solve(A, rhs)
             except np.linalg.LinAlgError:
                 x = np.linalg.lstsq(A, rhs, rcond=1e-12)[0]
-            for (kind, i), xi in zip(cols, x):
-                if kind == "N":
-                    P[i] = xi
-                    if i in coef:
-                        P[n + i] = coef[i] * xi
-                else:
-                    P[n + i] = xi
+            k = 0
+            for i, s in zip(cand, states):
+                if s == STICK:
+                    P[i], P[n + i] = x[k], x[k + 1]
+                    k += 2
+                elif s != OPEN:
+                    P[i], P[n + i] = inv_mu * x[k], -SLIDE_SIGN[s] * x[k]
+                    k += 1
         w = w0 + D @ P
-        scale_P = max(float(np.max(np.abs(P[:n]))), 1e-300)
+        scale_P = max(float(np.max(np.abs(P))), 1e-300)
         viol = 0.0
         for i, s in zip(cand, states):
             if s == OPEN:
                 viol = max(viol, -w[i] / scale_v)
                 continue
             viol = max(viol, abs(w[i]) / scale_v)
-            if i not in forced:
-                viol = max(viol, -P[i] / scale_P)
             if s == STICK:
-                viol = max(viol, abs(w[n + i]) / scale_v, (abs(P[n + i]) - mu * max(P[i], 0.0)) / scale_P)
-            elif s == SLIDE_POS:
-                viol = max(viol, -w[n + i] / scale_v)
+                if i not in forced:
+                    viol = max(viol, -P[i] / scale_P)
+                cone = abs(P[n + i]) - mu * max(P[i], 0.0) if inv_mu else 0.0
+                viol = max(viol, abs(w[n + i]) / scale_v, cone / scale_P)
             else:
-                viol = max(viol, w[n + i] / scale_v)
+                sigma = SLIDE_SIGN[s]
+                if i not in forced:
+                    viol = max(viol, sigma * P[n + i] / scale_P)    # tau >= 0
+                viol = max(viol, -sigma * w[n + i] / scale_v)
         return viol, states, P, w
 
+    def options(i):
+        if i in sliding:
+            slide = SLIDE_POS if sliding[i] > 0 else SLIDE_NEG
+            return (slide,) if i in forced else (OPEN, slide)
+        return (STICK, SLIDE_POS, SLIDE_NEG) if i in forced else (OPEN, STICK, SLIDE_POS, SLIDE_NEG)
+
     k = len(cand)
-    options = [(STICK, SLIDE_POS, SLIDE_NEG) if i in forced else (OPEN, STICK, SLIDE_POS, SLIDE_NEG) for i in cand]
+    opts = [options(i) for i in cand]
     first = tuple(hint) if hint is not None and len(hint) == k else None
-    best = None
+    best, n_exact, motions = None, 0, []
     if k <= FRICTION_ENUMERATE_MAX:
-        combos = list(product(*options))
+        combos = list(product(*opts))
         if first is not None and first in combos:
             combos.remove(first)
             combos.insert(0, first)
         for states in combos:
             res = trial(states)
-            if best is None or res[0] < best[0]:
+            if count and res[0] <= rtol:
+                v = v_free + MG @ res[2]
+                scale = max(float(np.max(np.abs(v))), 1e-300)
+                if not any(np.max(np.abs(v - u)) <= rtol * scale for u in motions):
+                    motions.append(v)
+                n_exact = len(motions)
+                if best is None or best[0] > rtol:
+                    best = res                # the first exact one in the order of preference
+                continue
+            if best is None or (res[0] < best[0] and not (count and n_exact)):
                 best = res
-                if res[0] <= 1e-3 * rtol:         # exact beyond doubt: the first such combination is taken
+                if not count and res[0] <= EXACT_BEYOND_DOUBT * rtol:
                     break
     else:
-        states = first or tuple(o[0] for o in options)
+        states = first or tuple(o[0] for o in opts)
         best = trial(states)
         improved = True
         while improved and best[0] > rtol:
             improved = False
             for j in range(k):
-                for s in options[j]:
+                for s in opts[j]:
                     if s == best[1][j]:
                         continue
                     res = trial(best[1][:j] + (s,) + best[1][j + 1:])
                     if res[0] < best[0]:
                         best, improved = res, True
+        n_exact = int(best[0] <= rtol)
     viol, states, P, w = best
     v = v_free + MG @ P
     w_N = np.full(n, np.nan)
@@ -423,4 +463,5 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
         w_N[i], w_T[i], full[i] = w[i], w[n + i], s
     active = tuple(i for i, s in zip(cand, states) if s != OPEN)
     return FrictionSolution(v=v, P_N=P[:n].copy(), P_T=P[n:].copy(), active=active, w_N=w_N,
-                            exact=viol <= rtol, violation=viol, states=tuple(full), w_T=w_T)
+                            exact=viol <= rtol, violation=viol, states=tuple(full), w_T=w_T,
+                            n_solutions=n_exact if count else -1, sliding=dict(sliding))

@@ -7,31 +7,51 @@ from enum import IntEnum
 
 class ContactState(IntEnum):
     """State of one contact. OPEN: no percussion, the gap may open; CLOSED: at the ground, stuck
-    (tangential sliding excluded: the paper's law, the mu -> inf limit). Room is left for the stick / slide
-    states of Coulomb friction (issue 15)."""
+    (tangential sliding excluded: the paper's law, the mu -> inf limit); SLIDE_POS / SLIDE_NEG: at the
+    ground, sliding towards +x / -x with the friction force mu lambda_N against it (Coulomb)."""
 
     OPEN = 0
     CLOSED = 1
+    SLIDE_POS = 2
+    SLIDE_NEG = 3
 
 
-def contact_states(closed, n_contacts: int) -> tuple:
-    """Per-contact states of the closed set ``closed`` among ``n_contacts`` contacts."""
+def contact_states(closed, n_contacts: int, sigma: int = 0) -> tuple:
+    """Per-contact states of the closed set ``closed`` among ``n_contacts`` contacts, sliding in direction
+    ``sigma`` (+1, -1; 0: stuck)."""
     s = set(closed)
-    return tuple(ContactState.CLOSED if i in s else ContactState.OPEN for i in range(n_contacts))
+    on = ContactState.CLOSED if not sigma else ContactState.SLIDE_POS if sigma > 0 else ContactState.SLIDE_NEG
+    return tuple(on if i in s else ContactState.OPEN for i in range(n_contacts))
 
 
 class Mode(IntEnum):
-    """Which base corners touch the ground.
+    """Which base corners touch the ground, and whether the base slides.
 
     FULL: both corners closed; LEFT: rocking on the left corner (phi > 0);
-    RIGHT: rocking on the right corner (phi < 0); FLIGHT: both corners open.
+    RIGHT: rocking on the right corner (phi < 0); FLIGHT: both corners open; the corners stick in these.
+    FULL_SLIDE_POS, FULL_SLIDE_NEG, LEFT_SLIDE_POS, ...: the same closed corners sliding towards +x / -x
+    (Coulomb friction: a finite mu, or the mu -> inf limit where sticking would need tension).
     """
 
     FULL = 0
     LEFT = 1
     RIGHT = 2
     FLIGHT = 3
+    FULL_SLIDE_POS = 4
+    FULL_SLIDE_NEG = 5
+    LEFT_SLIDE_POS = 6
+    LEFT_SLIDE_NEG = 7
+    RIGHT_SLIDE_POS = 8
+    RIGHT_SLIDE_NEG = 9
 
+
+#: sliding mode -> (the mode with the same closed corners stuck, the direction sigma of the sliding)
+SLIDING = {
+    Mode.FULL_SLIDE_POS: (Mode.FULL, 1), Mode.FULL_SLIDE_NEG: (Mode.FULL, -1),
+    Mode.LEFT_SLIDE_POS: (Mode.LEFT, 1), Mode.LEFT_SLIDE_NEG: (Mode.LEFT, -1),
+    Mode.RIGHT_SLIDE_POS: (Mode.RIGHT, 1), Mode.RIGHT_SLIDE_NEG: (Mode.RIGHT, -1),
+}
+_SLIDE_OF = {(stick, sigma): mode for mode, (stick, sigma) in SLIDING.items()}
 
 #: what each mode code means (the FMU output ``contact``)
 MODE_DESCRIPTIONS = {
@@ -39,6 +59,12 @@ MODE_DESCRIPTIONS = {
     Mode.LEFT: "rocking on the left corner",
     Mode.RIGHT: "rocking on the right corner",
     Mode.FLIGHT: "flight",
+    Mode.FULL_SLIDE_POS: "sliding towards +x in full contact",
+    Mode.FULL_SLIDE_NEG: "sliding towards -x in full contact",
+    Mode.LEFT_SLIDE_POS: "rocking on the left corner sliding towards +x",
+    Mode.LEFT_SLIDE_NEG: "rocking on the left corner sliding towards -x",
+    Mode.RIGHT_SLIDE_POS: "rocking on the right corner sliding towards +x",
+    Mode.RIGHT_SLIDE_NEG: "rocking on the right corner sliding towards -x",
 }
 
 #: closed contacts (0 = left corner, 1 = right corner) of each mode
@@ -48,23 +74,37 @@ CLOSED = {
     Mode.RIGHT: (1,),
     Mode.FLIGHT: (),
 }
+CLOSED.update({mode: CLOSED[stick] for mode, (stick, _) in SLIDING.items()})
 
 
-def mode_from_closed(closed) -> Mode:
-    """The mode whose closed contact set is ``closed`` (an iterable of 0/1)."""
+def mode_from_closed(closed, sigma: int = 0) -> Mode:
+    """The mode whose closed contact set is ``closed`` (an iterable of 0/1), sliding in direction ``sigma``
+    (+1, -1; 0: the corners stick)."""
     s = frozenset(closed)
     if s == {0, 1}:
-        return Mode.FULL
-    if s == {0}:
-        return Mode.LEFT
-    if s == {1}:
-        return Mode.RIGHT
-    return Mode.FLIGHT
+        mode = Mode.FULL
+    elif s == {0}:
+        mode = Mode.LEFT
+    elif s == {1}:
+        mode = Mode.RIGHT
+    else:
+        return Mode.FLIGHT
+    return _SLIDE_OF[mode, 1 if sigma > 0 else -1] if sigma else mode
+
+
+def stick_mode(mode: Mode) -> Mode:
+    """The mode with the same closed corners stuck (``mode`` itself if it is not sliding)."""
+    return SLIDING[mode][0] if mode in SLIDING else mode
+
+
+def slide_sign(mode: Mode) -> int:
+    """The direction of sliding of ``mode``: +1 towards +x, -1 towards -x, 0 stuck or in flight."""
+    return SLIDING[mode][1] if mode in SLIDING else 0
 
 
 def pivot_sign(mode: Mode) -> int:
     """s of the pivot corner at body abscissa s*b: -1 left, +1 right."""
-    return -1 if mode == Mode.LEFT else 1
+    return -1 if mode == Mode.LEFT or mode == Mode.LEFT_SLIDE_POS or mode == Mode.LEFT_SLIDE_NEG else 1
 
 
 class BoundedLog(list):

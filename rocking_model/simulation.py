@@ -260,7 +260,9 @@ class Simulator:
         return self.integrator.state()
 
     def outputs(self) -> dict:
-        """Model outputs plus contact (int), impacts (int) and overturned (bool)."""
+        """Model outputs plus contact (int), impacts (int), overturned (bool), friction_demand (float: the
+        largest |lambda_T| / lambda_N the contacts needed so far) and painleve (int: Painleve situations
+        resolved so far)."""
         integ = self.integrator
         cached = self._out
         if cached is not None and cached[0] is getattr(integ, self._token):
@@ -270,6 +272,8 @@ class Simulator:
         out["contact"] = int(integ.mode)
         out["impacts"] = int(integ.impacts)
         out["overturned"] = bool(integ.overturned)
+        out["friction_demand"] = float(integ.friction_demand)
+        out["painleve"] = int(integ.painleve)
         return out
 
     # ------------------------------------------------------------------ plain-data state

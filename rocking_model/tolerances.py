@@ -69,6 +69,10 @@ class ContactTolerances:
     #: [1] contact LCP: violation below which the time-stepper's last active set is taken without
     #: enumerating the others (round-off of a persistent contact)
     lcp_hint: float = 1e-12
+    #: [weight] friction demand: a total normal force (or per time-step percussion over the step) below this
+    #: fraction of the weight carries no load, so the ratio |lambda_T| / lambda_N there is round-off over
+    #: round-off and is not counted; near a lift-off the demand therefore grows to at most ~1/demand_floor
+    demand_floor: float = 1e-6
 
     def __post_init__(self):
         for f in fields(self):
@@ -87,13 +91,14 @@ class ContactTolerances:
         V = math.sqrt(model.g * L)
         return ModelTolerances(gap=self.gap * L, step_gap=self.step_gap * L, rest_velocity=self.rest_velocity * V,
                                step_rest_velocity=self.step_rest_velocity * V,
-                               stateless_step=self.stateless_step * model.time_scale, velocity_scale=V)
+                               stateless_step=self.stateless_step * model.time_scale, velocity_scale=V,
+                               force_floor=self.demand_floor * model.force_scale)
 
 
 @dataclass(frozen=True)
 class ModelTolerances:
     """`ContactTolerances` scaled to one model: gap, step_gap [m]; rest_velocity, step_rest_velocity,
-    velocity_scale [m/s]; stateless_step [s]."""
+    velocity_scale [m/s]; stateless_step [s]; force_floor [N]."""
 
     gap: float
     step_gap: float
@@ -101,6 +106,7 @@ class ModelTolerances:
     step_rest_velocity: float
     stateless_step: float
     velocity_scale: float
+    force_floor: float
 
 
 #: what both schemes use unless told otherwise

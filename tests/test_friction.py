@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from rocking_model import RigidBlock, Simulator, simulate
+from rocking_model.modes import Mode
 from rocking_model.lcp import OPEN, SLIDE_NEG, SLIDE_POS, STICK, solve_friction_lcp
 
 G = 9.81
@@ -45,17 +46,21 @@ def test_friction_lcp_separating_contact_is_open():
 
 
 # ---------------------------------------------------------------------------------------------- closed forms
-@pytest.mark.parametrize("dt", [1e-3, 2.5e-4])
+@pytest.mark.parametrize("scheme, dt", [("moreau_jean", 1e-3), ("moreau_jean", 2.5e-4), ("event_driven", 0.0)])
 @pytest.mark.parametrize("ag", [5.0, -4.0])
-def test_sliding_block_under_constant_ag(ag, dt):
+def test_sliding_block_under_constant_ag(ag, scheme, dt):
     """b = h (tan alpha = 1), mu = 0.3 < |ag|/g < tan(alpha): the block slides without rocking, relative to
-    the ground x(t) = 1/2 (-ag + sign(ag) mu g) t^2 (the theta-method is exact for a constant acceleration)."""
+    the ground x(t) = 1/2 (-ag + sign(ag) mu g) t^2 (the theta-method and the Runge-Kutta steps are exact for
+    a constant acceleration), in the sliding full-contact mode against the ground's push."""
     block = RigidBlock(b=0.5, h=0.5, mu=0.3)
-    res = simulate(block, ag, 1.0, scheme="moreau_jean", dt_max=dt, output_interval=0.05)
+    res = simulate(block, ag, 1.0, scheme=scheme, dt_max=dt, output_interval=0.05)
     a_rel = -ag + math.copysign(0.3 * G, ag)
     np.testing.assert_allclose(res.x, 0.5 * a_rel * res.t ** 2, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(res.x_dot, a_rel * res.t, rtol=1e-9, atol=1e-12)
-    assert np.all(res.phi == 0.0) and np.all(res.contact == 0)
+    np.testing.assert_allclose(res.slip, res.x, rtol=0, atol=1e-15)
+    sliding = Mode.FULL_SLIDE_NEG if ag > 0 else Mode.FULL_SLIDE_POS
+    assert np.all(res.phi == 0.0) and np.all(res.contact[1:] == sliding)
+    assert np.all(res.friction_demand[1:] == pytest.approx(0.3, rel=1e-12)) and np.all(res.painleve == 0)
 
 
 @pytest.mark.parametrize("factor, slides", [(0.98, False), (1.02, True)])
@@ -68,62 +73,94 @@ def test_sliding_threshold_is_mu_g(factor, slides):
         assert moved < 1e-15
 
 
+@pytest.mark.parametrize("scheme", ["moreau_jean", "event_driven"])
+@pytest.mark.parametrize("factor, slides", [(0.98, False), (1.02, True)])
+def test_sliding_threshold_is_mu_g(factor, slides, scheme):
+    block = RigidBlock(b=0.5, h=0.5, mu=0.4)
+    res = simulate(block, factor * 0.4 * G, 1.0, scheme=scheme, output_interval=0.1)
+    moved = np.max(np.abs(res.x))
+    assert (moved > 1e-3) == slides, moved
+    if not slides:
+        assert moved < 1e-15
+        assert res.friction_demand[-1] == pytest.approx(0.98 * 0.4, rel=1e-12)
+
+
+@pytest.mark.parametrize("scheme", ["moreau_jean", "event_driven"])
 @pytest.mark.parametrize("mu, ag_over_g, first", [
     (0.2, 0.25, "slide"),      # mu < tan(alpha) = 0.5 and mu g < ag < g tan(alpha): slides, does not rock
+    (0.3, 0.55, "slide"),      # mu < tan(alpha), ag above both thresholds: slides (Shenton: slide, not rock)
     (0.8, 0.6, "rock"),        # mu > tan(alpha): rocks at ag > g tan(alpha) = 0.5 g while mu g = 0.8 g holds
     (0.8, 0.45, "rest"),       # below both thresholds
 ])
-def test_initiation_from_rest(mu, ag_over_g, first):
+def test_initiation_from_rest(mu, ag_over_g, first, scheme):
     """Shenton (1996): from rest under a horizontal ag the block slides first if mu < tan(alpha) (at |ag| =
-    mu g) and rocks first if mu > tan(alpha) (at |ag| = g tan(alpha)). Here tan(alpha) = 0.5."""
+    mu g) and rocks first if mu > tan(alpha) (at |ag| = g tan(alpha)). Here tan(alpha) = 0.5. A block that
+    slides carries the friction mu m g, whose moment about the trailing corner never exceeds the restoring
+    one when mu < tan(alpha): it slides without rocking (his slide mode, no slide-rock from rest)."""
     block = RigidBlock(b=0.25, h=0.5, mu=mu)
-    res = simulate(block, ag_over_g * G, 0.3, scheme="moreau_jean", dt_max=1e-4, output_interval=0.01)
+    res = simulate(block, ag_over_g * G, 0.3, scheme=scheme, dt_max=1e-4 if scheme == "moreau_jean" else 0.0,
+                   output_interval=0.01)
     rocked = np.max(np.abs(res.phi)) > 1e-6
-    slid = np.max(np.abs(res.x)) > 1e-6 and not rocked
-    assert {"slide": slid and not rocked, "rock": rocked, "rest": not rocked and not slid}[first], \
-        (np.max(np.abs(res.phi)), np.max(np.abs(res.x)))
+    # (Moreau-Jean's pivot drifts by O(dt) along the ground while it rocks: some 1e-6 m here)
+    slid = np.max(np.abs(res.slip)) > 1e-4
+    assert {"slide": slid and not rocked, "rock": rocked and not slid, "rest": not rocked and not slid}[first], \
+        (np.max(np.abs(res.phi)), np.max(np.abs(res.slip)))
     if first == "rock":
-        # rocking on a corner that sticks: the pivot does not move horizontally
-        q, v = Simulator(block, "moreau_jean", dt_max=1e-4).state()
-        assert res.contact[-1] in (1, 2)
+        # rocking on a corner that sticks
+        assert set(res.contact[1:]) <= {Mode.LEFT, Mode.RIGHT}
+    if first == "slide":
+        assert set(res.contact[1:]) == {Mode.FULL_SLIDE_NEG}
 
 
-def test_mu_above_the_friction_demand_gives_the_sticking_results():
+@pytest.mark.parametrize("scheme", ["moreau_jean", "event_driven"])
+def test_mu_above_the_friction_demand_gives_the_sticking_results(scheme):
     """A rocking scene whose contacts never need more than about 0.3 of friction: mu = 5 gives the mu = inf
-    motion (the friction LCP and the sticking LCP agree to round-off)."""
-    kw = dict(scheme="moreau_jean", dt_max=1e-3, output_interval=0.01, phi_0=0.1)
+    motion (the friction LCP and the sticking LCP agree to round-off), and the friction demand says so."""
+    kw = dict(scheme=scheme, dt_max=1e-3 if scheme == "moreau_jean" else 0.0, output_interval=0.01, phi_0=0.1)
     inf = simulate(RigidBlock(b=0.3, h=1.0), 0.0, 3.0, **kw)
     five = simulate(RigidBlock(b=0.3, h=1.0, mu=5.0), 0.0, 3.0, **kw)
     assert inf.impacts[-1] == five.impacts[-1] >= 3
     np.testing.assert_allclose(five.phi, inf.phi, rtol=0, atol=1e-9)
     np.testing.assert_allclose(five.x, inf.x, rtol=0, atol=1e-9)
+    assert 0.05 < inf.friction_demand[-1] < 1.0
+    np.testing.assert_allclose(five.slip, inf.slip, rtol=0, atol=1e-9)
+    # the pivot does not slide; Moreau-Jean's drifts along the ground by O(dt) (0.1 mm over the 3 s here)
+    assert np.max(np.abs(five.slip)) == 0.0 if scheme == "event_driven" else np.max(np.abs(five.slip)) < 1e-3
+    np.testing.assert_allclose(five.friction_demand, inf.friction_demand, rtol=1e-6)
 
 
-def test_growing_mu_converges_to_the_sticking_law_without_its_hole():
-    """The one-sine pulse that overturns a slender block (3 m/s2, 1 Hz): with the sticking law the pivot's
-    lift-off has no consistent contact state (inexact solves, the corner sinks); with any finite mu the pivot
-    slides instead -- no corner below the ground, no inexact solve -- and the base's final x converges to the
-    sticking law's as mu grows."""
+def _overturning_pulse_run(scheme, mu):
+    """The README quickstart's first pulse (3 m/s2 one-sine of 1 s) that overturns a slender block b = 0.2,
+    h = 1: (lowest corner over the run [m], inexact reports, final outputs)."""
     t = np.linspace(0.0, 5.0, 501)
     ag = 3.0 * np.sin(2 * np.pi * t) * (t < 1)
-    out = {}
-    for mu in (1.0, 5.0, 20.0, math.inf):
-        sim = Simulator(RigidBlock(b=0.2, h=1.0, mu=mu), "moreau_jean", dt_max=1e-3, on_report="ignore")
-        lowest, inexact = 0.0, 0
-        for k in range(500):
-            sim.advance((k + 1) * 0.01, (t, ag))
-            lowest = min(lowest, float(min(sim.model.gaps(sim.state()[0]))))
-            inexact += len(sim.last_reports)
-        out[mu] = (lowest, inexact, sim.outputs()["x"], sim.outputs()["overturned"])
-    for mu in (1.0, 5.0, 20.0):
-        assert out[mu][0] > -1e-12 and out[mu][1] == 0 and out[mu][3], out[mu]
-    assert out[math.inf][0] < -1e-5 and out[math.inf][1] > 0
-    gaps = [abs(out[mu][2] - out[math.inf][2]) for mu in (1.0, 5.0, 20.0)]
-    assert gaps[0] > gaps[1] > gaps[2] and gaps[2] < 0.005, gaps
+    sim = Simulator(RigidBlock(b=0.2, h=1.0, mu=mu), scheme, dt_max=1e-3 if scheme == "moreau_jean" else None,
+                    on_report="ignore")
+    lowest, inexact = 0.0, 0
+    for k in range(500):
+        sim.advance((k + 1) * 0.01, (t, ag))
+        lowest = min(lowest, float(min(sim.model.gaps(sim.state()[0]))))
+        inexact += len(sim.last_reports)
+    return lowest, inexact, sim.outputs()
 
 
-def test_event_driven_refuses_finite_mu_by_name():
-    with pytest.raises(ValueError, match=r"mu = 0.5: Coulomb friction is integrated by scheme 'moreau_jean'"):
-        Simulator(RigidBlock(mu=0.5), "event_driven")
+@pytest.mark.parametrize("scheme", ["moreau_jean", "event_driven"])
+def test_growing_mu_converges_to_the_sticking_law_without_its_hole(scheme):
+    """Tipping over its right corner the pivot's normal force reaches zero at phi ~ -1.34 rad, where sticking
+    would need tension (the hole of the paper's law: no consistent contact state, a corner sank 20 mm). With
+    any finite mu the pivot slides first; mu = inf takes the limit (the pivot slides with a vanishing normal
+    force). No corner goes below the ground, no contact solve is inexact, up to the frozen overturned state,
+    and the slip of the base converges to the mu = inf one as mu grows."""
+    out = {mu: _overturning_pulse_run(scheme, mu) for mu in (1.0, 5.0, 20.0, 100.0, math.inf)}
+    for mu, (lowest, inexact, o) in out.items():
+        assert lowest > -1e-12 and inexact == 0 and o["overturned"], (mu, lowest, inexact)
+        assert o["friction_demand"] <= mu * (1 + 1e-9)
+    slip_inf = out[math.inf][2]["slip"]
+    gaps = [abs(out[mu][2]["slip"] - slip_inf) for mu in (1.0, 5.0, 20.0, 100.0)]
+    assert gaps[0] > gaps[1] > gaps[2] > gaps[3] and gaps[3] < 0.2 * gaps[1], gaps
+    assert out[math.inf][2]["friction_demand"] > 10.0      # sticking needed far more than any surface gives
+
+
+def test_mu_is_checked_by_name():
     with pytest.raises(ValueError, match=r"mu = 0 is out of range; allowed range \(0, inf\]"):
         RigidBlock(mu=0.0)

@@ -7,7 +7,8 @@ import pytest
 from scipy.integrate import quad
 
 from rocking_model import RigidBlock, SampledMotion, Simulator, SinePulse, simulate
-from rocking_model.contact import impact, next_closed, uplift
+from rocking_model.contact import impact, uplift
+from rocking_model.contact import next_mode as contact_next_mode
 from rocking_model.models.base import RockingModel
 from rocking_model.modes import Mode
 
@@ -17,8 +18,8 @@ TOL = dict(gap_tol=1e-12, v_tol=1e-12)
 
 
 def next_mode(block, q, v, ag, gap_tol, v_tol):
-    """The mode the event-driven scheme enters at (q, v): the production path (`contact.next_closed`)."""
-    return block.mode_of(next_closed(block, q, v, ag, gap_tol, v_tol)[0])
+    """The mode the event-driven scheme enters at (q, v): the production path (`contact.next_mode`)."""
+    return contact_next_mode(block, q, v, ag, gap_tol, v_tol)[0]
 
 
 def pre_impact(block, pivot_mode, speed=1.0):

@@ -600,6 +600,13 @@ class ModelSlave(RockingSlave):
             Var("impacts", "output", 0, type="Integer", description="Number of impacts so far"),
             Var("overturned", "output", False, type="Boolean",
                 description="True once the structure has overturned (outputs are frozen from then on)"),
+            Var("friction_demand", "output", 0.0, unit="1",
+                description="The largest friction coefficient the corners needed so far, |sum lambda_T| / "
+                            "sum lambda_N (the paper's sticking law holds where it stays below the surface's "
+                            "mu; values near 1e6 mean a lift-off where sticking needs unbounded friction)"),
+            Var("painleve", "output", 0, type="Integer",
+                description="Painleve situations met so far (sliding with no or several consistent "
+                            "accelerations, each resolved by an impact without collision)"),
         )
         return model_variables(model_class, SOLVER_PARAMETERS, (MAX_STEPS_PARAMETER,), (AG_INPUT,),
                                extra_outputs)

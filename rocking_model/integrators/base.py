@@ -24,7 +24,9 @@ A subclass must provide:
                                 plain-data state (the Simulator adds and checks the header)
 
 and keep these attributes current: ``model``, ``t`` [s], ``mode`` (the model's contact mode), ``impacts``
-(count), ``impact_times`` (a `BoundedLog`), ``overturned`` (bool), ``n_steps`` (internal steps).
+(count), ``impact_times`` (a `BoundedLog`), ``overturned`` (bool), ``n_steps`` (internal steps),
+``friction_demand`` (the largest |sum lambda_T| / sum lambda_N of the closed contacts so far, `note_demand`)
+and ``painleve`` (Painleve situations resolved so far), the last two in `get_state`.
 
 A subclass may provide:
 
@@ -94,6 +96,11 @@ class Integrator(Checkpointed):
 
     #: reports of the current advance (cleared by the Simulator before each one)
     reports: list
+    #: [1] the largest friction coefficient the contacts needed so far: |sum lambda_T| / sum lambda_N of the
+    #: closed contacts (forces, or a time-step's percussions); at most mu, as sliding caps it
+    friction_demand: float = 0.0
+    #: Painleve situations met so far (each resolved by an impact without collision)
+    painleve: int = 0
 
     @classmethod
     def from_options(cls, model, mode, q: np.ndarray, v: np.ndarray, t0: float,
@@ -120,6 +127,14 @@ class Integrator(Checkpointed):
         """`ContactState` of each contact now."""
         return contact_states(self.model.closed_of(self.mode), self.model.n_contacts)
 
+    def note_demand(self, lam_N: float, lam_T: float, floor: float) -> None:
+        """Raise ``friction_demand`` to |lam_T| / lam_N if larger (forces with lam_N above ``floor`` [N],
+        `ContactTolerances.demand_floor`)."""
+        if lam_N > floor:
+            d = abs(lam_T) / lam_N
+            if d > self.friction_demand:
+                self.friction_demand = d
+
     def report(self, kind: str, t: float, message: str) -> None:
         """Record a `Report` of the current advance."""
         reports = self.__dict__.get("reports")
@@ -129,18 +144,21 @@ class Integrator(Checkpointed):
 
     def sample(self, times, ag, max_steps: int | None = None):
         """Outputs at ``times`` (increasing, after t): (modes, values, impacts, overturned), arrays of
-        len(times) + 1 starting with the current state; the work budget applies per interval."""
+        len(times) + 1 starting with the current state (values: the model's outputs, friction_demand and
+        painleve); the work budget applies per interval."""
         rows = [self._row()]
         for t in times:
             self.advance(float(t), ag, max_steps=max_steps)
             rows.append(self._row())
         names = list(rows[0][1])
         values = {n: np.array([r[1][n] for r in rows]) for n in names}
+        values["friction_demand"] = np.array([r[4] for r in rows])
+        values["painleve"] = np.array([r[5] for r in rows])
         return (np.array([int(r[0]) for r in rows]), values, np.array([r[2] for r in rows]),
                 np.array([r[3] for r in rows], dtype=bool))
 
     def _row(self):
-        return self.mode, self.outputs(), self.impacts, self.overturned
+        return self.mode, self.outputs(), self.impacts, self.overturned, self.friction_demand, self.painleve
 
 
 #: registry of the schemes: name -> class (`register_scheme`)

@@ -37,8 +37,10 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, inverse_mass, next_closed, project_to_ground
-from ..modes import BoundedLog, bounded_log
+from ..contact import closed_candidates, impact, inverse_mass, next_mode, project_to_ground
+from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
+from ..models.sliding import shift_of
+from ..modes import SLIDING, BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from ..validation import WorkLimitError, check_choice, check_real, state_bool, state_float, state_floats, state_int
 from .base import Integrator, SolverOptions, register_scheme
@@ -49,6 +51,8 @@ from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
 _KIND_IMPACT, _KIND_RELEASE, _KIND_OVERTURN = "impact", "release", "overturn"
+#: a sliding mode's slip velocity reaches zero (stop or reversal); a sticking mode reaches its friction cone
+_KIND_SLIP, _KIND_CONE = "slip", "cone"
 
 #: [steps] what one event counts in the work budget (``max_steps``): locating it (some 10 to 60 evaluations of
 #: the event functions on the dense output) and the impact and uplift LCPs cost about as much as 20 (rigid
@@ -82,10 +86,6 @@ class EventDriven(Integrator):
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
-        if not math.isinf(model.mu):
-            raise ValueError(f"mu = {model.mu:g}: Coulomb friction is integrated by scheme 'moreau_jean' for now; "
-                             "the event-driven scheme has sticking contacts only (allowed with it: mu = inf, the "
-                             "paper's law)")
         tol = check_real("tolerance", options.tolerance, lo=1e-14, hi=1e-2)
         zt = check_real("zeno_tol", options.zeno_tol, lo=0.0, hi=1e-2, lo_open=True)
         method = check_choice("method", options.method, METHOD_CHOICES)
@@ -112,6 +112,8 @@ class EventDriven(Integrator):
         self.event_tol = tolerances.event
         #: [s] longest step of a phase without state (ContactTolerances.stateless_step)
         self.stateless_step = scaled.stateless_step
+        #: [N] a normal force below this carries no load (ContactTolerances.demand_floor)
+        self.force_floor = scaled.force_floor
         self.reports = []
         self.max_events = max_events
         self.impacts = 0
@@ -125,22 +127,35 @@ class EventDriven(Integrator):
 
     # ------------------------------------------------------------------ state
     def _set_state(self, mode, q, v):
+        model = self.model
         self.mode = mode
-        r, rd = self.model.reduce(self.mode, q, v)
+        r, rd = model.reduce_any(self.mode, q, v)
         self.k = len(r)
         self.y = [float(a) for a in r] + [float(a) for a in rd]
         self._full = None
+        # a sticking mode on the ground keeps the base's horizontal offset (it has slid, or landed off its rest
+        # position) outside its reduced state; below gap_tol it is round-off of the events
+        shift = 0.0
+        if mode not in SLIDING and model.closed_of(mode):
+            shift = shift_of(model, mode, q)
+            if abs(shift) <= self.gap_tol:
+                shift = 0.0
+        self.shift = shift
 
     def state(self):
         """Full (q, v) at the current time."""
         if self._full is None:
             k = self.k
-            self._full = self.model.embed(self.mode, np.array(self.y[:k]), np.array(self.y[k:]))
+            q, v = self.model.embed_any(self.mode, np.array(self.y[:k]), np.array(self.y[k:]))
+            if self.shift:
+                q = np.array(q, dtype=float)
+                q[self.model.slide_index] += self.shift
+            self._full = (q, v)
         return self._full
 
     def outputs(self) -> dict:
         """The model's outputs at the current time."""
-        return self.model.mode_outputs(self.mode, self.y)
+        return self.model.outputs_of(self.mode, self.y, self.shift)
 
     def _functions(self, mode, ag):
         """(rhs, G) of model.mode_functions(mode, ag), G the event function vector (contacts, then the
@@ -150,13 +165,14 @@ class EventDriven(Integrator):
         cached = self.__dict__.get("_fn_cache")
         if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
             return cached[2]
-        fns = self.model.mode_functions(mode, ag)
+        fns = self.model.functions_of(mode, ag)
         self._fn_cache = (key, ag, fns)
         return fns
 
     # ------------------------------------------------------------------ plain-data state
     #: fields of `get_state` (the Simulator adds the header: version, scheme, model, n_dof)
-    STATE_KEYS = ("t", "mode", "y", "impacts", "overturned", "n_steps", "h", "impact_times", "impact_log")
+    STATE_KEYS = ("t", "mode", "y", "impacts", "overturned", "n_steps", "h", "impact_times", "impact_log",
+                  "shift", "friction_demand", "painleve")
 
     def get_state(self) -> dict:
         """What determines the future of this integrator, as plain data (see `Simulator.get_state`).
@@ -173,7 +189,9 @@ class EventDriven(Integrator):
         return {"t": float(self.t), "mode": int(self.mode), "y": [float(a) for a in self.y],
                 "impacts": int(self.impacts), "overturned": bool(self.overturned), "n_steps": int(self.n_steps),
                 "h": math.nan if self._h is None else float(self._h),
-                "impact_times": [float(a) for a in self.impact_times.tail()], "impact_log": flat}
+                "impact_times": [float(a) for a in self.impact_times.tail()], "impact_log": flat,
+                "shift": float(self.shift), "friction_demand": float(self.friction_demand),
+                "painleve": int(self.painleve)}
 
     def set_state(self, state) -> None:
         """Load a `get_state` dict (header and keys checked by the caller): every field is checked for type,
@@ -182,7 +200,7 @@ class EventDriven(Integrator):
         model = self.model
         t = state_float(state, "t")
         mode = model.mode_code(state_int(state, "mode", 0, model.n_modes - 1))
-        k = len(model.mode_dofs(mode))
+        k = len(model.dofs_of(mode))
         y = state_floats(state, "y", length=2 * k)
         impacts = state_int(state, "impacts")
         overturned = state_bool(state, "overturned")
@@ -196,14 +214,21 @@ class EventDriven(Integrator):
         rows = [(flat[i], np.array(flat[i + 1:i + 1 + model.n_dof]), np.array(flat[i + 1 + model.n_dof:i + n]))
                 for i in range(0, len(flat), n)]
         check_times(state, "impact_log", [r[0] for r in rows], t, impacts)
-        q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
+        q, v = model.embed_any(mode, np.array(y[:k]), np.array(y[k:]))
+        shift = state_float(state, "shift")
+        if shift and (mode in SLIDING or not model.closed_of(mode)):
+            raise ValueError(f"state field 'shift' = {shift!r} must be 0 in mode {int(mode)} (its reduced state "
+                             "holds the base's position)")
+        demand = state_float(state, "friction_demand", lo=0.0)
+        painleve = state_int(state, "painleve")
         # a corner may sink in flight where the sticking law has no solution (bug 7, a documented model gap:
         # 33 mm measured before an overturning): only junk, a corner a whole length scale down, is refused
         check_configuration(model, state, "y", q, v, overturned, gap_tol=model.length_scale)
         # all checked: assign
         self.t, self.impacts, self.overturned, self.n_steps = t, impacts, overturned, n_steps
         self._h = None if h != h else h
-        self.mode, self.k, self.y, self._full = mode, k, y, None
+        self.mode, self.k, self.y, self._full, self.shift = mode, k, y, None, shift
+        self.friction_demand, self.painleve = demand, painleve
         self._live = None
         self.impact_times = bounded_log(self.impact_times.maxlen, times)
         self.impact_log = bounded_log(self.impact_log.maxlen, rows)
@@ -226,7 +251,7 @@ class EventDriven(Integrator):
 
     def _atol_of(self, mode):
         dof_scales = self.model.dof_scales
-        s = [dof_scales[i] for i in self.model.mode_dofs(mode)]
+        s = [dof_scales[i] for i in self.model.dofs_of(mode)]
         ts = self.model.time_scale
         return [self.tolerance * a for a in s] + [self.tolerance * a / ts for a in s]
 
@@ -242,18 +267,26 @@ class EventDriven(Integrator):
         """Outputs at ``times`` in one pass, read from the dense output (a fine output grid does not shorten
         the steps) and evaluated per contact mode on arrays; the work budget applies between consecutive
         times. See `Integrator.sample`."""
-        samples = [(self.mode, list(self.y), self.impacts, self.overturned)]
+        samples = [self._sample_row(self.mode, list(self.y))]
         samples += self._run(float(times[-1]), ag, times, max_steps)
         modes = np.array([int(smp[0]) for smp in samples])
         values = {}
         for code in np.unique(modes):
             idx = np.nonzero(modes == code)[0]
-            out = self.model.mode_outputs_array(self.model.mode_code(int(code)),
-                                                np.array([samples[i][1] for i in idx]))
+            out = self.model.outputs_array_of(self.model.mode_code(int(code)),
+                                              np.array([samples[i][1] for i in idx]),
+                                              np.array([samples[i][4] for i in idx]))
             for name, arr in out.items():
                 values.setdefault(name, np.empty(len(samples)))[idx] = arr
+        values["friction_demand"] = np.array([smp[5] for smp in samples])
+        values["painleve"] = np.array([smp[6] for smp in samples])
         return (modes, values, np.array([smp[2] for smp in samples]),
                 np.array([smp[3] for smp in samples], dtype=bool))
+
+    def _sample_row(self, mode, y, overturned=None):
+        """A sample of `sample`: (mode, y, impacts, overturned, shift, friction_demand, painleve)."""
+        return (mode, y, self.impacts, self.overturned if overturned is None else overturned, self.shift,
+                self.friction_demand, self.painleve)
 
     def _run(self, t_end: float, ag, samples, max_steps):
         """`advance` to t_end recording (mode, y, impacts, overturned) at the increasing ``samples`` in
@@ -270,7 +303,7 @@ class EventDriven(Integrator):
                 self.t = t_end
             while pending:
                 pending.popleft()
-                out.append((self.mode, list(self.y), self.impacts, self.overturned))
+                out.append(self._sample_row(self.mode, list(self.y)))
             return out
         n_events = 0
         kink = False              # the last segment ended at a breakpoint where ag is continuous
@@ -301,7 +334,7 @@ class EventDriven(Integrator):
         self._full = None
         while pending:                     # samples at t_end (or after overturning: frozen state)
             pending.popleft()
-            out.append((self.mode, list(self.y), self.impacts, self.overturned))
+            out.append(self._sample_row(self.mode, list(self.y)))
         return out
 
     def _settle(self, t, ag):
@@ -311,17 +344,20 @@ class EventDriven(Integrator):
         _, monitors = self._functions(mode, ag)
         e = monitors(t, self.y)
         nc = self.model.n_contacts
-        # fast path: closed corners loaded, open corners clearly open (then the active set still holds)
+        # fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip
+        # going on or just starting (then the mode still holds: the boundary between sticking and sliding is
+        # crossed by the events, which know the direction)
         clear = self.tolerances.clearly_open
-        if all(e[i] > 0.0 if i in closed else e[i] > clear for i in range(nc)):
+        if all(e[i] >= 0.0 if i >= nc else e[i] > 0.0 if i in closed else e[i] > clear
+               for i in range(len(e) - 1)):
             return
         q, v = self.state()
         if all(i in closed for i in closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)):
-            if all(e[i] > 0.0 for i in closed):
+            if all(e[i] > 0.0 for i in closed) and all(g >= 0.0 for g in e[nc:-1]):
                 return
-        new = self._select_mode(q, v, ag(t), t)
-        if new != mode:
-            self._set_state(new, q, v)
+        new, v_new = self._decide(q, v, ag(t), t)
+        if new != mode or v_new is not v:
+            self._set_state(new, q, v_new)
 
     # ------------------------------------------------------------------ smooth phase
     def _segment(self, t_stop: float, ag, pending, out) -> bool:
@@ -330,21 +366,29 @@ class EventDriven(Integrator):
         if pending and pending[0] <= self.t:
             while pending and pending[0] <= self.t:
                 pending.popleft()
-                out.append((mode, list(self.y), self.impacts, False))
+                out.append(self._sample_row(mode, list(self.y), False))
             if self._max_work is not None:
                 self._work_end = self.n_steps + self._max_work
         if k == 0 and ag.constant:
             # nothing moves and the (positive) contact forces cannot change
+            self._note_totals(self.model.force_totals_of(mode, ag), self.t, self.y)
             self.t = t_stop
             while pending and pending[0] <= t_stop:
                 pending.popleft()
-                out.append((mode, list(self.y), self.impacts, False))
+                out.append(self._sample_row(mode, list(self.y), False))
             self._full = None
             return False
         rhs, G = self._functions(mode, ag)
-        nc = self.model.n_contacts
-        closed = self.model.closed_of(mode)
-        kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(nc)] + [_KIND_OVERTURN]
+        model = self.model
+        nc = model.n_contacts
+        closed = model.closed_of(mode)
+        kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(nc)]
+        if mode in SLIDING:
+            kinds.append(_KIND_SLIP)
+        elif closed and not math.isinf(model.mu):
+            kinds.append(_KIND_CONE)
+        kinds.append(_KIND_OVERTURN)
+        totals = model.force_totals_of(mode, ag) if closed else None
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
@@ -380,6 +424,9 @@ class EventDriven(Integrator):
                 return True
             if pending and pending[0] <= stepper.t:
                 self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
+            if totals is not None:
+                # (at the ends of the steps without an event: the mode's forces hold there)
+                self._note_totals(totals, stepper.t, stepper.y)
             for i, g in enumerate(g_new):
                 if g > 0.0:
                     armed[i] = True
@@ -392,6 +439,11 @@ class EventDriven(Integrator):
         self._full = None
         self._live = stepper
         return False
+
+    def _note_totals(self, totals, t, y) -> None:
+        """The friction demand of a sticking mode at (t, y) (`Integrator.note_demand`)."""
+        lam_N, lam_T = totals(t, y)
+        self.note_demand(lam_N, lam_T, self.force_floor)
 
     def _bounces(self, stepper, G, kinds, watch, armed, g_new) -> dict:
         """After the first step of a segment: an open corner that started at the ground and is back at or
@@ -457,7 +509,7 @@ class EventDriven(Integrator):
     def _record_samples(self, pending, out, mode, dense, t_last, inclusive):
         if pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
             while pending and (pending[0] <= t_last if inclusive else pending[0] < t_last):
-                out.append((mode, dense(pending.popleft()), self.impacts, False))
+                out.append(self._sample_row(mode, dense(pending.popleft()), False))
             if self._max_work is not None:
                 self._work_end = self.n_steps + self._max_work      # the budget applies per output sample
 
@@ -483,6 +535,12 @@ class EventDriven(Integrator):
             return
         if kind == _KIND_IMPACT:
             self._impact(q, v, t, ag(t))
+        elif kind == _KIND_CONE:
+            # the friction reached mu lambda_N: the corners slide against it (preferred where sticking is
+            # still consistent to round-off, as at the far side of the root it is only marginally)
+            lam_T = self.model.force_totals_of(self.mode, ag)(t, self.y)[1]
+            slide = SLIDE_NEG if lam_T > 0.0 else SLIDE_POS
+            self._enter(q, v, ag(t), t, prefer=slide)
         else:
             self._enter(q, v, ag(t), t)
 
@@ -506,13 +564,13 @@ class EventDriven(Integrator):
                 self._enter(q, v_plus, ag_t, t)
                 return
         v_plus = self._impact_velocity(q, v, cand, grazing, ag_t, t)
-        mode = self._select_mode(q, v_plus, ag_t, t)
+        mode, v_plus = self._decide(q, v_plus, ag_t, t)
         if any(i not in model.closed_of(mode) for i in grazing):
             # held closed, the corner is still sent into flight: the sticking LCP has no solution (the corner
             # should slide, bug 7); not held (that would be a chatter of grazing landings)
             q = q_found
             v_plus = self._impact_velocity(q, v, cand, (), ag_t, t)
-            mode = self._select_mode(q, v_plus, ag_t, t)
+            mode, v_plus = self._decide(q, v_plus, ag_t, t)
         U_minus = model.contact_jacobians(q)[0].T @ v
         if any(U_minus[i] < -self.v_zeno for i in cand):
             self._record_impact(t, v, v_plus)
@@ -545,12 +603,32 @@ class EventDriven(Integrator):
         self.impact_times.append(t)
         self.impact_log.append((t, np.array(v_minus), np.array(v_plus)))
 
-    def _select_mode(self, q, v, ag_t, t):
-        """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_closed`)."""
-        closed, sol = next_closed(self.model, q, v, ag_t, self.gap_tol, self.v_tol)
+    def _select_mode(self, q, v, ag_t, t, prefer=None):
+        """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_mode`); with
+        friction ``prefer`` (a sliding state) is tried first for the closed contacts."""
+        mode, sol = next_mode(self.model, q, v, ag_t, self.gap_tol, self.v_tol, prefer=prefer)
         if sol is not None and not sol.exact:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
-        return self.model.mode_of(closed)
+        return mode, sol
 
-    def _enter(self, q, v, ag_t, t):
-        self._set_state(self._select_mode(q, v, ag_t, t), q, v)
+    def _enter(self, q, v, ag_t, t, prefer=None):
+        mode, v = self._decide(q, v, ag_t, t, prefer)
+        self._set_state(mode, q, v)
+
+    def _decide(self, q, v, ag_t, t, prefer=None):
+        """(mode, v): the mode that follows the consistent state (q, v) (`_select_mode`), and v, changed only
+        by the impact without collision of a Painleve situation (counted in ``painleve``)."""
+        mode, sol = self._select_mode(q, v, ag_t, t, prefer)
+        if sol is not None and getattr(sol, "painleve", False):
+            # Painleve: sliding with no consistent acceleration (or several): an impact without collision, the
+            # tangential impulse that makes the sliding corners stick (Genot & Brogliato 1999), then the
+            # acceleration problem at rest tangentially, which has a solution
+            self.painleve += 1
+            sol_i = impact(self.model, q, v, sol.active or closed_candidates(self.model, q, v, self.gap_tol,
+                                                                             self.v_tol), e_N=0.0, e_T=0.0,
+                           prefer=STICK)
+            if not sol_i.exact:
+                self.report("inexact_contact", t, inexact_message(sol_i, t, "Painleve impact LCP"))
+            v = sol_i.v
+            mode, _ = self._select_mode(q, v, ag_t, t)
+        return mode, v

@@ -21,8 +21,7 @@ import math
 
 import numpy as np
 
-from ..contact import inverse_mass, project_to_ground
-from ..lcp import OPEN, STICK, solve_contact_lcp, solve_friction_lcp
+from ..contact import inverse_mass, project_to_ground, solution_sigma, solve_with_friction
 from ..modes import BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from ..validation import WorkLimitError, check_real, state_bool, state_float, state_floats, state_int, state_ints
@@ -60,6 +59,8 @@ class MoreauJean(Integrator):
         self.gap_margin = tol.step_gap
         #: [m/s] closing slower than this is no impact; two closed corners this slow are at rest
         self.v_rest = tol.step_rest_velocity
+        #: [N] a normal force below this carries no load (ContactTolerances.demand_floor)
+        self.force_floor = tol.force_floor
         self.reports = []
         self.q = np.array(q, dtype=float)
         self.v = np.array(v, dtype=float)
@@ -154,24 +155,21 @@ class MoreauJean(Integrator):
             # tangential law: the paper's sticking (b_T = 0), or restitution e_T = e_N of the pre-step tangential
             # velocity on the closing contacts (the same coefficient as in the normal direction, per contact)
             b_T = np.where(U < 0.0, model.e_T * (W_T.T @ v), 0.0) if model.e_T else np.zeros(model.n_contacts)
-            tols = self.tolerances
-            if math.isinf(model.mu):
-                sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active,
-                                        hint=[i for i in self._closed if i in active], rtol=tols.lcp_exact,
-                                        hint_tol=tols.lcp_hint)
-            else:
-                # Coulomb friction: stick, slide forward or slide back per contact (the last step's closed
-                # contacts tried sticking first)
-                sol = solve_friction_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active, model.mu,
-                                         rtol=tols.lcp_exact,
-                                         hint=[STICK if i in self._closed else OPEN for i in active])
+            # the friction law picks the LCP: sticking (the paper's), its mu -> inf limit where sticking has no
+            # solution, or Coulomb; the last step's closed contacts are tried first
+            sol = solve_with_friction(model, Winv, W_N, W_T, v_free, b_N, b_T, active,
+                                      hint=[i for i in self._closed if i in active], tolerances=self.tolerances)
             if not sol.exact:
                 self.report("inexact_contact", t + dt, inexact_message(sol, t + dt, "step LCP"))
             v_new = sol.v
             closed = set(sol.active)
+            sigma = solution_sigma(sol)
+            self.note_demand(float(np.sum(sol.P_N[list(closed)])), float(np.sum(sol.P_T[list(closed)])),
+                             self.force_floor * dt)
         else:
             v_new = v_free
             closed = set()
+            sigma = 0
         v_scale = self.v_rest
         new = [i for i in closed - self._closed if U[i] < -v_scale]
         if new or rule_impact:
@@ -185,15 +183,18 @@ class MoreauJean(Integrator):
             # all corners stuck and at rest in the normal direction: the state is on the full-contact
             # manifold up to round-off; put it there exactly so that phi stays 0 at rest (no drift)
             full = model.mode_of(closed)
-            x, x_dot = q_new[model.slide_index], v_new[model.slide_index]
+            i = model.slide_index
+            x, x_dot = q_new[i], v_new[i]
             q_new, v_new = model.embed(full, *model.reduce(full, q_new, v_new))
-            if not math.isinf(model.mu):
-                # with friction the base may have slid (or slide): keep its horizontal position and velocity
-                # (the full-contact embedding places it where it started)
-                q_new[model.slide_index], v_new[model.slide_index] = x, x_dot
+            # the embedding puts the base at its rest abscissa, at rest: keep an offset where it has slid (or
+            # landed off its rest position) and a velocity where it slides, beyond round-off
+            if abs(x - q_new[i]) > margin:
+                q_new[i] = x
+            if abs(x_dot - v_new[i]) > v_scale:
+                v_new[i] = x_dot
         self.q = q_new
         self.v = v_new
-        self.mode = model.mode_of(closed)
+        self.mode = model.mode_of(closed, sigma)
         self.n_steps += 1
         if abs(self.q[model.phi_index]) >= 0.5 * math.pi:
             self.overturned = True
@@ -210,7 +211,8 @@ class MoreauJean(Integrator):
 
     # ------------------------------------------------------------------ plain-data state
     #: fields of `get_state` (the Simulator adds the header: version, scheme, model, n_dof)
-    STATE_KEYS = ("t", "q", "v", "mode", "closed", "impacts", "overturned", "n_steps", "impact_times")
+    STATE_KEYS = ("t", "q", "v", "mode", "closed", "impacts", "overturned", "n_steps", "impact_times",
+                  "friction_demand", "painleve")
 
     def get_state(self) -> dict:
         """What determines the future of this integrator, as plain data (see `Simulator.get_state`):
@@ -219,7 +221,8 @@ class MoreauJean(Integrator):
         return {"t": float(self.t), "q": [float(a) for a in self.q], "v": [float(a) for a in self.v],
                 "mode": int(self.mode), "closed": sorted(int(i) for i in self._closed),
                 "impacts": int(self.impacts), "overturned": bool(self.overturned), "n_steps": int(self.n_steps),
-                "impact_times": [float(a) for a in self.impact_times.tail()]}
+                "impact_times": [float(a) for a in self.impact_times.tail()],
+                "friction_demand": float(self.friction_demand), "painleve": int(self.painleve)}
 
     def set_state(self, state) -> None:
         """Load a `get_state` dict (header and keys checked by the caller); ValueError naming the field,
@@ -234,9 +237,9 @@ class MoreauJean(Integrator):
         closed = state_ints(state, "closed", lo=0, hi=nc - 1, max_len=nc)
         if closed != sorted(set(closed)):
             raise ValueError(f"state field 'closed' = {closed!r} must list distinct corners in increasing order")
-        if model.mode_of(closed) != mode:
+        if model.closed_of(mode) != tuple(closed):
             raise ValueError(f"state field 'mode' = {int(mode)} does not match 'closed' = {closed!r}; expected "
-                             f"{int(model.mode_of(closed))}")
+                             f"one of the modes with these closed corners, e.g. {int(model.mode_of(closed))}")
         impacts = state_int(state, "impacts")
         overturned = state_bool(state, "overturned")
         n_steps = state_int(state, "n_steps")
@@ -245,7 +248,10 @@ class MoreauJean(Integrator):
         # the time-stepper lets corners sink by O(dt |v|) before the impulse stops them: only junk (a corner a
         # whole length scale below the ground) is refused
         check_configuration(model, state, "q", q, v, overturned, gap_tol=model.length_scale)
+        demand = state_float(state, "friction_demand", lo=0.0)
+        painleve = state_int(state, "painleve")
         self.t, self.q, self.v, self.mode, self._closed = t, q, v, mode, set(closed)
+        self.friction_demand, self.painleve = demand, painleve
         self.impacts, self.overturned, self.n_steps = impacts, overturned, n_steps
         self.impact_times = bounded_log(self.impact_times.maxlen, times)
 

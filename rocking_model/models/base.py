@@ -52,8 +52,9 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..contact import mode_forces
-from ..modes import CLOSED, MODE_DESCRIPTIONS, Mode, mode_from_closed
+from ..modes import CLOSED, MODE_DESCRIPTIONS, SLIDING, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
+from . import sliding
 
 #: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
 HALF_PI = 0.5 * math.pi
@@ -74,6 +75,8 @@ def body_outputs(body: str, point: str) -> tuple:
         Param("y", 0.0, "m", f"Vertical displacement of {point} from rest"),
         Param("x_dot", 0.0, "m/s", f"Horizontal velocity of {point} relative to the ground"),
         Param("y_dot", 0.0, "m/s", f"Vertical velocity of {point}"),
+        Param("slip", 0.0, "m", "Base sliding displacement: horizontal displacement of the lower base corner from "
+              "its rest position (0 while the corners stick)"),
     )
 
 
@@ -130,6 +133,10 @@ class RockingModel(ABC):
 
     #: index in q of the horizontal translation of the base (the coordinate a sliding base moves along)
     slide_index: int = 0
+    #: index in q of the vertical translation of the base (its row of M a - f carries only normal forces)
+    lift_index: int = 1
+    #: outputs that move with a horizontal offset of the whole structure (a slid or landed-off base)
+    SHIFTED_OUTPUTS: tuple = ("x", "slip")
     #: registry name of the model (`rocking_model.models.MODELS`), its FMU's name and a title
     kind: str = ""
     fmu_name: str = ""
@@ -165,9 +172,10 @@ class RockingModel(ABC):
         return len(self.dof_names)
 
     # ------------------------------------------------------------------ contact modes (may override)
-    def mode_of(self, closed) -> Mode:
-        """The contact mode whose closed contacts are ``closed`` (an iterable of contact indices)."""
-        return mode_from_closed(closed)
+    def mode_of(self, closed, sigma: int = 0) -> Mode:
+        """The contact mode whose closed contacts are ``closed`` (an iterable of contact indices), sliding in
+        direction ``sigma`` (+1 towards +x, -1 towards -x, 0: sticking)."""
+        return mode_from_closed(closed, sigma)
 
     def closed_of(self, mode) -> tuple:
         """The closed contacts of ``mode``, in increasing order."""
@@ -223,6 +231,26 @@ class RockingModel(ABC):
     @abstractmethod
     def contact_drift(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(a_N, a_T), each shape (n_contacts,): the terms (d/dt W)^T v of the contact accelerations."""
+
+    @abstractmethod
+    def contact_abscissae(self, q: np.ndarray) -> np.ndarray:
+        """Horizontal positions of the contacts relative to the ground [m], shape (n_contacts,)."""
+
+    def slip(self, q: np.ndarray) -> float:
+        """Base sliding displacement [m]: the horizontal displacement of the lower corner from its rest
+        position (0 while the corners stick; continuous through rocking, flight and landing, as the lower
+        corner is the pivot, the one that lands, and the corners swap at phi = 0 where both agree)."""
+        g = self.gaps(q)
+        i = int(np.argmin(g))
+        return float(self.contact_abscissae(q)[i] - self._rest_abscissae[i])
+
+    @property
+    def _rest_abscissae(self) -> np.ndarray:
+        cached = self.__dict__.get("_rest_x")
+        if cached is None:
+            cached = self.contact_abscissae(self.rest_position())
+            object.__setattr__(self, "_rest_x", cached)
+        return cached
 
     def classical_impact_velocity(self, q: np.ndarray, v_minus: np.ndarray, mode) -> np.ndarray | None:
         """Post-impact velocities of an impact rule that replaces the impact LCP when the open contact of a
@@ -281,6 +309,82 @@ class RockingModel(ABC):
     def step_limit(self) -> float:
         """Largest Moreau-Jean step [s] the model tolerates (inf: no limit); the time-stepper sub-steps to it."""
         return math.inf
+
+    # ------------------------------------------------------------------ any mode, sliding ones included
+    # The models implement their sticking modes (above, closed forms); the sliding modes are generic
+    # (`rocking_model.models.sliding`). The event-driven scheme calls these.
+    def dofs_of(self, mode) -> tuple:
+        """`mode_dofs` of any mode."""
+        return sliding.slide_dofs(self, mode) if mode in SLIDING else self.mode_dofs(mode)
+
+    def embed_any(self, mode, r, r_dot) -> tuple[np.ndarray, np.ndarray]:
+        """`embed` of any mode."""
+        return sliding.slide_embed(self, mode, r, r_dot) if mode in SLIDING else self.embed(mode, r, r_dot)
+
+    def reduce_any(self, mode, q, v) -> tuple[np.ndarray, np.ndarray]:
+        """`reduce` of any mode."""
+        return sliding.slide_reduce(self, mode, q, v) if mode in SLIDING else self.reduce(mode, q, v)
+
+    def functions_of(self, mode, ag):
+        """`mode_functions` of any mode. With a finite mu a closed sticking mode gets one more event function
+        before the overturning margin: (mu sum lambda_N - |sum lambda_T|) / force_scale, positive while the
+        corners stick (the friction cone); a sliding mode's are those of `sliding.slide_functions`."""
+        if mode in SLIDING:
+            return sliding.slide_functions(self, mode, ag)
+        rhs, monitors = self.mode_functions(mode, ag)
+        if math.isinf(self.mu) or not self.closed_of(mode):
+            return rhs, monitors
+        mu, F, k = self.mu, self.force_scale, len(self.mode_dofs(mode))
+        a_of = (lambda t: ag.value) if ag.constant else ag
+
+        def cone_monitors(t, y):
+            out = monitors(t, y)
+            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
+            lam_N, lam_T = sliding.force_totals(self, mode, q, v, a_of(t))
+            return out[:-1] + [(mu * lam_N - abs(lam_T)) / F, out[-1]]
+        return rhs, cone_monitors
+
+    def force_totals_of(self, mode, ag):
+        """float-level (t, y) -> (sum lambda_N, sum lambda_T) [N] of the closed corners of ``mode`` (the
+        friction demand); generic numpy code, models may override with closed forms for sticking modes."""
+        a_of = (lambda t: ag.value) if ag.constant else ag
+        if mode in SLIDING:
+            k = len(sliding.slide_dofs(self, mode))
+            sigma, inv_mu = SLIDING[mode][1], 0.0 if math.isinf(self.mu) else 1.0 / self.mu
+
+            def slide_totals(t, y):
+                q, v = sliding.slide_embed(self, mode, y[:k], y[k:])
+                tau = float(np.sum(sliding.slide_motion(self, mode, q, v, a_of(t))[1]))
+                return inv_mu * tau, -sigma * tau
+            return slide_totals
+        k = len(self.mode_dofs(mode))
+
+        def totals(t, y):
+            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
+            return sliding.force_totals(self, mode, q, v, a_of(t))
+        return totals
+
+    def outputs_of(self, mode, y, shift: float = 0.0) -> dict:
+        """`mode_outputs` of any mode; ``shift`` [m]: the horizontal offset of a sticking mode's base."""
+        if mode in SLIDING:
+            k = len(y) // 2
+            return self.outputs(*sliding.slide_embed(self, mode, y[:k], y[k:]))
+        out = self.mode_outputs(mode, y)
+        if shift:
+            for name in self.SHIFTED_OUTPUTS:
+                out[name] += shift
+        return out
+
+    def outputs_array_of(self, mode, Y, shift=None) -> dict:
+        """`mode_outputs_array` of any mode; ``shift``: offsets per row (sticking modes)."""
+        if mode in SLIDING:
+            rows = [self.outputs_of(mode, list(y)) for y in Y]
+            return {name: np.array([r[name] for r in rows], dtype=float) for name in rows[0]} if rows else {}
+        out = self.mode_outputs_array(mode, Y)
+        if shift is not None and np.any(shift):
+            for name in self.SHIFTED_OUTPUTS:
+                out[name] = out[name] + shift
+        return out
 
     # ------------------------------------------------------------------ float-level mode functions
     @property

@@ -88,8 +88,10 @@ class FlexibleOscillator(RockingModel):
     g: float = param(9.81, "m/s2", "Gravitational acceleration", lo=1e-3, hi=1e3)
     dof_names: tuple = field(default=("u", "x", "y", "phi"), init=False, repr=False)
     slide_index: int = field(default=1, init=False, repr=False)
+    lift_index: int = field(default=2, init=False, repr=False)
     phi_index: int = field(default=3, init=False, repr=False)
 
+    SHIFTED_OUTPUTS: ClassVar[tuple] = ("x", "slip", "top_displacement")
     kind: ClassVar[str] = "flexible"
     fmu_name: ClassVar[str] = "FlexibleRockingOscillator"
     title: ClassVar[str] = "flexible rocking oscillator"
@@ -252,6 +254,10 @@ class FlexibleOscillator(RockingModel):
         W_T = np.array([[0.0, 0.0], [1.0, 1.0], [0.0, 0.0], [bs, -bs]])
         return W_N, W_T
 
+    def contact_abscissae(self, q):
+        x, bc = float(q[1]), self.b * math.cos(float(q[3]))
+        return np.array([x - bc, x + bc])
+
     def contact_drift(self, q, v):
         phi, w = float(q[3]), float(v[3])
         bs, bc = self.b * math.sin(phi) * w * w, self.b * math.cos(phi) * w * w
@@ -393,6 +399,8 @@ class FlexibleOscillator(RockingModel):
             "u": u, "u_dot": ud,
             "phi": phi, "phi_dot": w,
             "x": x, "y": y, "x_dot": xd, "y_dot": yd,
+            # the lower corner's displacement (s = -1, the left one, for phi > 0): exactly 0 while rocking
+            "slip": x + ((phi > 0.0) * -2.0 + 1.0) * self.b * (cp - 1.0),
             "top_displacement": x - self.h * sp + u * cp,
             "energy": kin + pot,
         }

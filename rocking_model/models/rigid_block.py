@@ -134,6 +134,11 @@ class RigidBlock(RockingModel):
         object.__setattr__(self, "_jac_last", (phi, (W_N, W_T)))
         return W_N, W_T
 
+    def contact_abscissae(self, q):
+        x, phi = float(q[0]), float(q[2])
+        bc, hs = self.b * math.cos(phi), self.h * math.sin(phi)
+        return np.array([x - bc + hs, x + bc + hs])
+
     def contact_drift(self, q, v):
         phi, w = q[2], v[2]
         sp, cp = math.sin(phi), math.cos(phi)
@@ -250,15 +255,41 @@ class RigidBlock(RockingModel):
             return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
         return rhs, monitors
 
+    def force_totals_of(self, mode, ag):
+        """Closed forms of `RockingModel.force_totals_of` for the sticking modes: Newton's law of the centroid,
+        sum lambda_T = m (x_dd + ag), sum lambda_N = m (y_dd + g)."""
+        if mode not in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+            return super().force_totals_of(mode, ag)
+        m, g, b, h = self.m, self.g, self.b, self.h
+        const = ag.constant
+        a0 = ag.value if const else 0.0
+        if mode == Mode.FULL:
+            def totals(t, y):
+                return m * g, m * (a0 if const else ag(t))
+            return totals
+        s = pivot_sign(mode)
+
+        def totals(t, y):
+            phi, w = y
+            a = a0 if const else ag(t)
+            acc = self.rocking_acceleration(phi, a, s)
+            sp, cp = math.sin(phi), math.cos(phi)
+            x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
+            y_dd = (-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w
+            return m * (y_dd + g), m * (x_dd + a)
+        return totals
+
     def mode_outputs_array(self, mode, Y):
         Y = np.asarray(Y, dtype=float)
         n = Y.shape[0]
         if mode == Mode.FULL:
             z = np.zeros(n)
-            return {name: z.copy() for name in ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy")}
+            return {name: z.copy() for name in ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "slip", "energy")}
         if mode == Mode.FLIGHT:
             x, yc, phi, xd, yd, w = Y.T
             yc = yc - self.h
+            s = np.where(phi > 0.0, -1.0, 1.0)          # the lower corner
+            slip = x + s * self.b * (np.cos(phi) - 1.0) + self.h * np.sin(phi)
         else:
             s = pivot_sign(mode)
             phi, w = Y[:, 0], Y[:, 1]
@@ -266,13 +297,15 @@ class RigidBlock(RockingModel):
             b, h = self.b, self.h
             x, yc = s * b * (1.0 - cp) - h * sp, -s * b * sp + h * cp - h
             xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
+            slip = np.zeros(n)
         kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
-        return {"phi": phi, "phi_dot": w, "x": x, "y": yc, "x_dot": xd, "y_dot": yd,
+        return {"phi": phi, "phi_dot": w, "x": x, "y": yc, "x_dot": xd, "y_dot": yd, "slip": slip,
                 "energy": kin + self.m * self.g * yc}
 
     def mode_outputs(self, mode, y):
         if mode == Mode.FULL:
-            return {"phi": 0.0, "phi_dot": 0.0, "x": 0.0, "y": 0.0, "x_dot": 0.0, "y_dot": 0.0, "energy": 0.0}
+            return {"phi": 0.0, "phi_dot": 0.0, "x": 0.0, "y": 0.0, "x_dot": 0.0, "y_dot": 0.0, "slip": 0.0,
+                    "energy": 0.0}
         if mode == Mode.FLIGHT:
             return self.outputs(y[:3], y[3:])
         s = pivot_sign(mode)
@@ -283,7 +316,7 @@ class RigidBlock(RockingModel):
         xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
         kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
         return {"phi": phi, "phi_dot": w, "x": s * b * (1.0 - cp) - h * sp, "y": yc, "x_dot": xd, "y_dot": yd,
-                "energy": kin + self.m * self.g * yc}
+                "slip": 0.0, "energy": kin + self.m * self.g * yc}
 
     # ------------------------------------------------------------------ quantities
     def rest_position(self):
@@ -308,5 +341,6 @@ class RigidBlock(RockingModel):
             "phi": float(q[2]), "phi_dot": float(v[2]),
             "x": float(q[0]), "y": float(q[1] - self.h),
             "x_dot": float(v[0]), "y_dot": float(v[1]),
+            "slip": self.slip(q),
             "energy": float(self.energy(q, v)),
         }
