@@ -155,10 +155,14 @@ def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, ga
 
 
 def solution_sigma(sol: ContactSolution) -> int:
-    """The direction of sliding of the closed contacts of a contact solution: +1, -1, or 0 (they stick)."""
-    for s in getattr(sol, "states", ()):
-        if s in SLIDE_SIGN:
-            return int(SLIDE_SIGN[s])
+    """The direction of sliding of the closed contacts of a contact solution: +1, -1, or 0 (they stick).
+
+    The corners of a rigid base that are closed together slide together; where one sticks they all do (a
+    stuck corner and one at its friction cone, with no slip, is the same motion with another split of the
+    tangential force between them, which the per-corner law does not fix)."""
+    states = [s for s in getattr(sol, "states", ()) if s != OPEN]
+    if states and all(s in SLIDE_SIGN for s in states):
+        return int(SLIDE_SIGN[states[0]])
     return 0
 
 

@@ -295,9 +295,6 @@ SLIDE_SIGN = {SLIDE_POS: 1.0, SLIDE_NEG: -1.0}
 #: [contacts] largest number of candidates whose 4^n state combinations are enumerated; beyond, a descent over
 #: single-contact state changes from the hint (reported inexact when it finds no solution)
 FRICTION_ENUMERATE_MAX = 4
-#: [1] a combination violating the conditions by less than this times ``rtol`` is exact beyond doubt: the
-#: enumeration stops there (round-off of the small solves is some 1e-15; rtol is 1e-9)
-EXACT_BEYOND_DOUBT = 1e-3
 
 
 @dataclass
@@ -339,8 +336,9 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
     (the sticking LCP's), and where it has none (a pivot whose sticking needs tension) a contact that slides
     on the ground with P_N -> 0 and a finite friction force tau, as every finite mu -> inf does.
 
-    ``sliding``: {contact: sigma} for contacts that already slide with sign(w_T) = sigma (the acceleration
-    level of a sliding contact): their states are OPEN or the slide in that direction. ``forced`` candidates
+    ``sliding``: {contact: sigma} for contacts that already slide with tangential velocity of sign sigma (the
+    acceleration level of a sliding contact): their states are OPEN or the slide in that direction, with no
+    condition on the sign of their w_T (a tangential acceleration: the sliding may slow down). ``forced`` candidates
     stay closed (normal equality, as in the Zeno rule). ``hint``: the state of each candidate to try first.
 
     Solved like the sticking problem: every combination of states of the (at most FRICTION_ENUMERATE_MAX)
@@ -407,7 +405,9 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
                 sigma = SLIDE_SIGN[s]
                 if i not in forced:
                     viol = max(viol, sigma * P[n + i] / scale_P)    # tau >= 0
-                viol = max(viol, -sigma * w[n + i] / scale_v)
+                if i not in sliding:
+                    # (a contact that already slides may decelerate: its w_T, an acceleration, has any sign)
+                    viol = max(viol, -sigma * w[n + i] / scale_v)
         return viol, states, P, w
 
     def options(i):
@@ -429,16 +429,16 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
             res = trial(states)
             if count and res[0] <= rtol:
                 v = v_free + MG @ res[2]
-                scale = max(float(np.max(np.abs(v))), 1e-300)
+                scale = max(float(np.max(np.abs(v))), float(np.max(np.abs(v_free))), 1e-300)
                 if not any(np.max(np.abs(v - u)) <= rtol * scale for u in motions):
                     motions.append(v)
                 n_exact = len(motions)
                 if best is None or best[0] > rtol:
                     best = res                # the first exact one in the order of preference
                 continue
-            if best is None or (res[0] < best[0] and not (count and n_exact)):
-                best = res
-                if not count and res[0] <= EXACT_BEYOND_DOUBT * rtol:
+            if best is None or (res[0] < best[0] and best[0] > rtol):
+                best = res                    # an exact one is kept: the first in the order of preference
+                if not count and res[0] <= rtol:
                     break
     else:
         states = first or tuple(o[0] for o in opts)

@@ -604,10 +604,11 @@ class EventDriven(Integrator):
         self.impact_log.append((t, np.array(v_minus), np.array(v_plus)))
 
     def _select_mode(self, q, v, ag_t, t, prefer=None):
-        """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_mode`); with
-        friction ``prefer`` (a sliding state) is tried first for the closed contacts."""
+        """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_mode`) and the LCP's
+        solution; with friction ``prefer`` (a sliding state) is tried first for the closed contacts. An inexact
+        solve is reported unless it is a Painleve situation (which `_decide` resolves)."""
         mode, sol = next_mode(self.model, q, v, ag_t, self.gap_tol, self.v_tol, prefer=prefer)
-        if sol is not None and not sol.exact:
+        if sol is not None and not sol.exact and not getattr(sol, "painleve", False):
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol
 
