@@ -5,16 +5,27 @@ project venv; `benchmarks.contenders.run_siconos` starts it as a subprocess:
 
     /usr/bin/python3 benchmarks/siconos_runner.py job.json result.json
 
-job: {"b", "h", "m", "g", "phi_0", "t_end", "grid", "dts": [...], "repeats", "motion": {...}, "mu", "tmp"}.
-(Siconos' solvers print to stdout, hence files.)
-Result: {"version", "runs": [{"dt", "times": [...], "phi": [...], "n_steps"}]} or {"error": "..."}.
+job: {"b", "h", "m", "g", "phi_0", "t_end", "grid", "dts": [...], "repeats", "motion": {...}, "mu", "tmp"}
+(motion: {"kind": "none"}, {"kind": "constant", "A"}, {"kind": "sine", "A", "omega_p"} or {"kind": "sampled",
+"t": [...], "ag": [...]}) and optionally "solver" ("lemke", the default, or "nsgs"), "e_N" (0 by default),
+"budget", "ag_rule" ("midpoint", the default: ag at t + dt/2; "trapezoid": (ag(t) + ag(t + dt)) / 2, the
+package's theta-weighted forcing at theta = 1/2) and "activation_threshold" [m] (MoreauJeanOSI's, 0 by
+default). (Siconos' solvers print to stdout, hence files.)
+Result: {"version", "mu_used", "runs": [{"dt", "times": [...], "phi": [...], "n_steps", "x": [...],
+"x_dot": [...], "y": [...], "phi_dot": [...], "contact": [...]}]} or {"error": "..."}; the per-time lists are
+on the output grid (t = 0, grid, 2 grid, ...), x and y are the centroid's displacement from rest relative to
+the ground (the package's outputs x and y), contact the package's mode code (rocking_model.modes.Mode: 0 both
+corners, 1 left, 2 right, 3 none; 4..9 the same closed corners sliding towards +x / -x) of the corners that
+carried a normal impulse in the step that ended there.
 
 Model: LagrangianDS q = [x, y, phi], M = diag(m, m, m R^2/3), f_ext = [-m ag, -m g, 0]; one interaction
 per base corner, LagrangianScleronomousR with the gap and tangential position as output (compiled C
 plugins: Siconos calls relations through plugins; Python-subclassed relations crash 4.4's MoreauJeanOSI),
-NewtonImpactFrictionNSL(e_N = 0, e_T = 0, mu) in 2-D, FrictionContact(2) one-step problem with a large
-mu so that the contacts stick (the package's sticking law), MoreauJeanOSI(theta = 0.5), TimeStepping.
-The ground acceleration is set into f_ext at the mid-step time before each step. The run stops when
+NewtonImpactFrictionNSL(e_N, e_T = 0, mu) in 2-D, FrictionContact(2) one-step problem, MoreauJeanOSI(theta =
+0.5), TimeStepping. A finite job mu is used unchanged (Coulomb friction); mu = inf (JSON Infinity, null or
+missing) stands for the package's sticking law and is replaced by STICK_MU, large enough that the contacts
+stick.
+The ground acceleration is set into f_ext before each step (per "ag_rule"). The run stops when
 |phi| reaches pi/2 (the package's overturning criterion) and phi is frozen from there.
 """
 from __future__ import annotations
@@ -25,6 +36,22 @@ import os
 import subprocess
 import sys
 import time
+
+#: Coulomb coefficient standing for the sticking law (job mu = inf or missing)
+STICK_MU = 100.0
+#: [m/s] a closed corner with a larger tangential velocity after the step slides (contact codes 4..9)
+SLIP_TOL = 1e-9
+
+
+def friction_mu(job) -> float:
+    """The mu given to NewtonImpactFrictionNSL: the job's finite mu unchanged, STICK_MU for inf/missing."""
+    mu = job.get("mu")
+    if mu is None or (isinstance(mu, str) and mu.strip().lower() in ("inf", "infinity")):
+        return STICK_MU
+    mu = float(mu)
+    if not mu > 0.0:
+        raise ValueError(f"mu = {mu!r}: must be > 0")
+    return mu if math.isfinite(mu) else STICK_MU
 
 PLUGIN_C = r"""
 #include <math.h>
@@ -60,6 +87,9 @@ def make_ag(motion):
     kind = motion["kind"]
     if kind == "none":
         return lambda t: 0.0
+    if kind == "constant":
+        A = float(motion["A"])
+        return lambda t: A
     if kind == "sine":
         A, w = motion["A"], motion["omega_p"]
         t1 = 2 * math.pi / w
@@ -94,14 +124,22 @@ def run_one(job, plugin, dt):
     nsds = sk.NonSmoothDynamicalSystem(0.0, t_end)
     nsds.insertDynamicalSystem(ds)
     keep = []
+    mu = friction_mu(job)
+    e_N = float(job.get("e_N", 0.0))
+    inters = []
     for side in ("left", "right"):
-        nsl = sk.NewtonImpactFrictionNSL(0.0, 0.0, job["mu"], 2)
+        nsl = sk.NewtonImpactFrictionNSL(e_N, 0.0, mu, 2)
         rel = sk.LagrangianScleronomousR(plugin + ":h_" + side, plugin + ":G_" + side)
         inter = sk.Interaction(nsl, rel)
         keep += [nsl, rel, inter]
+        inters.append(inter)
         nsds.link(inter, ds)
     td = sk.TimeDiscretisation(0.0, dt)
     osi = sk.MoreauJeanOSI(0.5)
+    if job.get("activation_threshold"):
+        # a corner enters the step's problem when y + dt/2 y_dot <= threshold (Siconos' default 0: a corner
+        # resting at gap 0 drops out on a round-off positive normal velocity)
+        osi.setConstraintActivationThreshold(float(job["activation_threshold"]))
     solver = job.get("solver", "lemke")
     if solver == "lemke":       # 2-D friction as an LCP, solved by pivoting: exact for these 2-contact problems
         osnspb = sk.FrictionContact(2, sn.SICONOS_FRICTION_2D_LEMKE)
@@ -112,16 +150,46 @@ def run_one(job, plugin, dt):
     sim = sk.TimeStepping(nsds, td, osi, osnspb)
     F = ds.fExt()
     q = ds.q()
+    v = ds.velocity()
+    trapezoid = job.get("ag_rule", "midpoint") == "trapezoid"
     phi = [phi0]
+    out = {"x": [float(q[0])], "y": [float(q[1]) - h], "x_dot": [0.0], "phi_dot": [0.0],
+           "contact": [0 if phi0 == 0.0 else (1 if phi0 > 0 else 2)]}
+
+    def record(phi_pred):
+        closed = [float(inter.lambda_(1)[0]) > 0.0 for inter in inters]
+        code = {(True, True): 0, (True, False): 1, (False, True): 2, (False, False): 3}[tuple(closed)]
+        # sliding: a closed corner whose post-step tangential velocity is not zero (Lemke gives round-off
+        # zeros when it sticks); the package's codes 4..9 (FULL/LEFT/RIGHT sliding towards +x, -x). The
+        # velocity is taken with the Jacobian of the step's problem: MoreauJeanOSI evaluates it at the
+        # predicted position q_k + dt v_k (phi_pred here; checked: the sticking pivot's velocity is then 0 to
+        # round-off), while its output y(1) uses q_k+1 and differs from the complementarity velocity by O(dt^2)
+        sp, cp = math.sin(phi_pred), math.cos(phi_pred)
+        slip = [float(v[0]) + (-sgn * b * sp + h * cp) * float(v[2])
+                for sgn, c in zip((-1.0, 1.0), closed) if c]
+        u_T = max(slip, key=abs) if slip else 0.0
+        if code != 3 and abs(u_T) > SLIP_TOL:
+            code = 4 + 2 * code + (0 if u_T > 0.0 else 1)
+        out["contact"].append(code)
+        out["x"].append(float(q[0]))
+        out["y"].append(float(q[1]) - h)
+        out["x_dot"].append(float(v[0]))
+        out["phi_dot"].append(float(v[2]))
+
     k = 0
     overturned = False
     n_steps = 0
+    phi_pred = phi0
     for i in range(n_grid):
         if overturned:
             phi.append(phi[-1])
+            for key in out:
+                out[key].append(out[key][-1])
             continue
-        for _ in range(per):
-            F[0] = -m * ag((k + 0.5) * dt)
+        for j in range(per):
+            if j == per - 1:
+                phi_pred = float(q[2]) + dt * float(v[2])
+            F[0] = -m * (0.5 * (ag(k * dt) + ag((k + 1) * dt)) if trapezoid else ag((k + 0.5) * dt))
             sim.computeOneStep()
             sim.nextStep()
             k += 1
@@ -130,8 +198,9 @@ def run_one(job, plugin, dt):
                 overturned = True
                 break
         phi.append(math.copysign(0.5 * math.pi, q[2]) if overturned else float(q[2]))
+        record(phi_pred)
     elapsed = time.perf_counter() - start
-    return elapsed, phi, n_steps
+    return elapsed, phi, n_steps, out
 
 
 def main():
@@ -148,6 +217,10 @@ def _run(job):
     except Exception as exc:  # pragma: no cover - depends on the machine
         return {"error": f"siconos not importable: {exc}"}
     try:
+        friction_mu(job)
+    except (TypeError, ValueError) as exc:
+        return {"error": f"bad job mu: {exc}"}
+    try:
         plugin = build_plugin(job["b"], job["h"], job["tmp"])
     except Exception as exc:
         return {"error": f"cannot compile the relation plugin with gcc: {exc}"}
@@ -160,14 +233,15 @@ def _run(job):
     for dt in job["dts"]:
         times = []
         phi = n_steps = None
+        out = {}
         budget = job.get("budget", 3.0)
         for rep in range(job["repeats"]):
-            elapsed, phi, n_steps = run_one(job, plugin, dt)
+            elapsed, phi, n_steps, out = run_one(job, plugin, dt)
             times.append(elapsed)
             if sum(times) > budget:
                 break
-        runs.append({"dt": dt, "times": times, "phi": phi, "n_steps": n_steps})
-    return {"version": version, "python": sys.version.split()[0], "runs": runs}
+        runs.append({"dt": dt, "times": times, "phi": phi, "n_steps": n_steps, **out})
+    return {"version": version, "python": sys.version.split()[0], "mu_used": friction_mu(job), "runs": runs}
 
 
 if __name__ == "__main__":
