@@ -14,7 +14,7 @@ integrator bug keep their strict assertion and are marked ``xfail(strict=True)``
 Round-off (issue 12): the long and violent scenes (free rocking to rest under a long quiet input, large
 steps, the stored 30 s record, a one-sine pulse that overturns) are named scenes of `roundoff`; they
 are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
-that overturn are checked up to `sane_horizon`, where the documented limitation starts (docs/limitations.md).
+that overturn are checked to the end, the final fall and the frozen overturned state included (issue 15).
 
 Tolerances (measured first, then set with a margin):
 - event-driven (ED): corners in contact are exact in the reduced coordinates; a corner at an event is taken
@@ -140,43 +140,16 @@ def pen_tol(tr, dt=None, v=None):
     return max(2.0 * dt * v, 1e-12 * L)
 
 
-def sane_horizon(phi, modes, overturned, alpha: float) -> int:
-    """Number of leading output samples on which the geometric invariants are the model's own promise.
-
-    The no-sliding contact law has no consistent solution once an overturning body has fallen past its
-    tipping point and its pivot unloads (lambda_N -> 0 while the sticking force is not 0: the pivot's free
-    normal acceleration is negative, so 'closed' needs tension and 'open' penetrates; physics.md section 6),
-    nor for a landing at a steep angle on a sliding corner (bug 7). Both happen only in the *final fall*
-    of an overturning run: the samples after the last one within the tipping angle (|phi| <= alpha) before
-    the overturning flag is set. The checks therefore cover
-    - every sample of a run that does not overturn;
-    - in a run that overturns: everything up to its final fall, and the final fall as long as the body
-      still rocks on its outer pivot (phi > 0: LEFT); they stop at the first sample of the final fall off
-      that pivot (lift-off or flight: from there on the corner may sink, which docs/limitations.md
-      measures; test_overturning_lift_off_sinks_a_corner_as_documented).
-    The frozen samples after overturning repeat the overturning state and are checked with it when it was
-    reached on the pivot."""
-    phi, modes, overturned = np.asarray(phi), np.asarray(modes), np.asarray(overturned, dtype=bool)
-    n = len(phi)
-    if not overturned.any():
-        return n
-    k_ov = int(np.argmax(overturned))
-    inside = np.nonzero(np.abs(phi[:k_ov]) <= alpha)[0]
-    k_fall = int(inside[-1]) + 1 if inside.size else 0
-    pivot = Mode.LEFT if phi[k_ov] > 0 else Mode.RIGHT
-    off = np.nonzero(modes[k_fall:k_ov + 1] != pivot)[0]
-    return k_fall + int(off[0]) if off.size else n
-
-
 def sanity_report(tr, overturn_ok=False, pen=None) -> dict:
     """The invariants of `assert_sane` as a dict: ``finite``, ``no_penetration``, ``right_side``,
     ``bounded_rotation`` (|phi| < pi/2 without overturning, or <= pi/2 + 0.05 when overturning is allowed),
     ``not_overturned`` (only when overturning is not allowed), each a bool, plus ``messages`` (why not) and
-    the figures ``horizon`` (samples checked, see `sane_horizon`), ``min_gap`` [m] over them and ``tol`` [m]."""
+    the figures ``horizon`` (samples checked: all of them since friction filled the hole of the sticking law at
+    an overturning body's lift-off, issue 15), ``min_gap`` [m] over them and ``tol`` [m]."""
     q, v = np.array(tr.q), np.array(tr.v)
     out = {"finite": bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v))), "messages": []}
     phi, modes = tr.phi, tr.modes
-    n = sane_horizon(phi, modes, tr.overturned, tr.model.alpha) if overturn_ok else len(phi)
+    n = len(phi)
     tol = pen_tol(tr) if pen is None else pen
     min_gap = min(float(tr.model.gaps(qk).min()) for qk in tr.q[:n]) if n else 0.0
     out["no_penetration"] = bool(min_gap >= -tol)
@@ -212,8 +185,8 @@ SANITY_KEYS = ("finite", "no_penetration", "right_side", "bounded_rotation", "no
 
 def assert_sane(tr, overturn_ok=False, pen=None):
     """Finite, no penetration beyond the documented tolerance, each pivot on its own side, |phi| < pi/2
-    and no overturning unless overturning is allowed (then the geometric checks stop where the documented
-    limitation starts, see `sane_horizon`)."""
+    and no overturning unless overturning is allowed (the geometric checks then cover the final fall and the
+    frozen overturned state too)."""
     rep = sanity_report(tr, overturn_ok, pen)
     failed = [k for k in SANITY_KEYS if k in rep and not rep[k]]
     assert not failed, f"{failed}: {'; '.join(rep['messages'])}"

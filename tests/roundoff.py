@@ -11,7 +11,7 @@ coarse outcome, the *verdict*, is far from any decision boundary, and every one 
 3. in a subprocess whose arithmetic kernels differ from this machine's defaults (`kernel_env`: the libm
    variant glibc selects, OpenBLAS' core type, numpy's dispatched SIMD targets).
 
-The verdicts (booleans: finite, no penetration beyond the documented tolerance up to `sane_horizon`, each
+The verdicts (booleans: finite, no penetration beyond the documented tolerance over the whole run, each
 pivot on its own side, overturned or not, exactly at rest at the end or not, energy below the tipping
 energy, impact log bounded, ...) must be identical in all three; the figures (max |phi| / alpha, impacts,
 ...) are reported and checked against the documented margins.
@@ -122,11 +122,8 @@ def summarize(tr, checks: dict | None = None) -> dict:
         "impacts": int(tr.impacts[-1]),
         "episodes": int(np.count_nonzero(rocking[1:] & ~rocking[:-1])),
         "t_overturn": float(T[k_ov]) if over.any() else None,
-        "t_horizon": float(T[rep["horizon"] - 1]) if rep["horizon"] else None,
         "min_gap_checked": rep["min_gap"],
         "pen_tol": rep["tol"],
-        # how deep a corner went below the ground after the checks stopped (the documented limitation)
-        "sink_after_horizon": max([0.0] + [-float(model.gaps(qk).min()) for qk in tr.q[rep["horizon"]:]]),
         "wall_s": float(getattr(tr, "wall", 0.0)),
     }
     if isinstance(model, RigidBlock) and not over.any():

@@ -134,10 +134,10 @@ for _m in ("rigid", "flexible"):
 @pytest.mark.parametrize("model_name", ["rigid", "flexible"])
 def test_five_g_pulse_overturns_cleanly(model_name, scheme):
     """A 5 g, 2 Hz one-sine pulse overturns both models, by a wide margin (25 times the uplift threshold;
-    the same overturning time in all 14 runs of the round-off measurement). Up to overturning the run is sane
-    (the geometric checks stop where the documented limitation starts: `sane_horizon`; the flexible MJ run's
-    corner sinks 2.45 mm after it, docs/limitations.md); from then on the outputs are frozen (the flag is
-    set, phi stays where it crossed pi/2, time still advances)."""
+    the same overturning time in all 14 runs of the round-off measurement). The run is sane to the end, the
+    final fall included (before issue 15 the flexible MJ run's corner sank 2.45 mm at the pivot's lift-off);
+    from overturning on the outputs are frozen (the flag is set, phi stays where it crossed pi/2, time still
+    advances)."""
     key = f"{MOD}:five_g_{model_name}_{scheme}"
     tr, summary = nominal(key)
     assert_sane(tr, overturn_ok=True)

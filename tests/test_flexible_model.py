@@ -277,8 +277,9 @@ def test_outputs_and_energy_at_rest():
     assert model.energy(model.rest_position(), np.zeros(4)) == 0.0
     mode, q, v = model.initial_state(phi_0=0.1, phi_dot_0=0.3, u_0=0.01, u_dot_0=0.1)
     out = model.outputs(q, v)
-    assert set(out) == {"u", "u_dot", "phi", "phi_dot", "x", "y", "x_dot", "y_dot", "top_displacement",
+    assert set(out) == {"u", "u_dot", "phi", "phi_dot", "x", "y", "x_dot", "y_dot", "slip", "top_displacement",
                         "energy"}
+    assert out["slip"] == 0.0            # rocking on its pivot: the lower corner stays where it was
     assert out["top_displacement"] == pytest.approx(q[1] - model.h * math.sin(q[3]) + q[0] * math.cos(q[3]))
     assert out["y"] == pytest.approx(model.b * math.sin(0.1))
     assert out["energy"] > 0

@@ -23,7 +23,8 @@ from rocking_model.simulation import Simulator  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 
 PARAMS = dict(b=0.2, h=1.0, m=1.0, g=9.81, e_N=0.0, phi_0=0.0, phi_dot_0=0.0, dt_max=1e-3, tolerance=1e-8)
-OUTPUTS = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"]
+OUTPUTS = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "slip", "energy", "contact", "impacts", "overturned",
+           "friction_demand", "painleve"]
 
 
 @pytest.fixture(scope="session")
@@ -87,7 +88,7 @@ def test_model_description_units_variability_structure(fmu):
     assert units["rad/s"] == {"rad": "1", "s": "-1"}
     expected_units = dict(b="m", h="m", m="kg", g="m/s2", e_N="1", phi_0="rad", phi_dot_0="rad/s",
                           dt_max="s", tolerance="1", ag="m/s2", phi="rad", phi_dot="rad/s", x="m", y="m",
-                          x_dot="m/s", y_dot="m/s", energy="J")
+                          x_dot="m/s", y_dot="m/s", energy="J", mu="1", slip="m", friction_demand="1")
     variables = {}
     for i, sv in enumerate(root.find("ModelVariables"), start=1):
         (typ,) = list(sv)
@@ -98,7 +99,8 @@ def test_model_description_units_variability_structure(fmu):
             assert typ.get("unit") in units, sv.get("name")
     assert {n: v[2].get("unit") for n, v in variables.items() if v[2].tag == "Real"} == expected_units
     assert set(variables) == set(expected_units) | {"scheme", "impact_law", "max_steps", "contact", "impacts",
-                                                    "overturned"}
+                                                    "overturned", "painleve"}
+    assert variables["mu"][2].get("start") == "INF" and variables["mu"][2].get("max") is None
     for name in ("b", "h", "m", "g", "e_N", "impact_law", "phi_0", "phi_dot_0", "scheme", "dt_max", "tolerance",
                  "max_steps"):
         sv = variables[name][1]

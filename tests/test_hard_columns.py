@@ -202,18 +202,14 @@ def test_step_above_threshold_uplifts_at_once(sign, scheme):
     assert sign * tr.phi[-1] > 0.5
 
 
-@pytest.mark.parametrize("scheme", [
-    pytest.param("ED", marks=pytest.mark.xfail(strict=True, reason="bug 7: sticking LCP infeasible when the driven "
-                                                                  "pivot unloads; corner sinks 0.16 m")),
-    pytest.param("MJ", marks=pytest.mark.xfail(strict=True, reason="bug 7: sticking LCP infeasible when the driven "
-                                                                  "pivot unloads; corner sinks 0.10 m"))])
+@pytest.mark.parametrize("scheme", ["ED", "MJ"])
 def test_sustained_step_lift_off_keeps_corners_above_ground(scheme):
     """Constant ag = 1.5 g tan(alpha) until overturning: at phi = 0.93 rad (t = 1.130 s) the pivot's normal
     force reaches 0 while the sticking force is 2.9 N (m g = 9.8 N): with no sliding the contact problem has
     no solution (flight accelerates the pivot into the ground at -4.4 m/s2, contact needs lambda_N < 0). Both
-    schemes take the least-violating answer (flight) and the pivot sinks through the ground while the block
-    falls: ED -0.16 m, MJ -0.10 m before |phi| = pi/2. Whatever the resolution (sliding, an impulsive
-    'impact without collision', or stopping with a diagnostic), corners must not go below the ground."""
+    schemes used to take the least-violating answer (flight) and the pivot sank through the ground while the
+    block fell (ED -0.16 m, MJ -0.10 m before |phi| = pi/2). Since issue 15 they take the mu -> inf limit of
+    Coulomb friction there (the pivot slides with a vanishing normal force): no corner below the ground."""
     block = RigidBlock(**SLENDER)
     ag = 1.5 * block.g * math.tan(block.alpha)
     tr = Trace(block, scheme, ConstantMotion(ag), grid(2.0))

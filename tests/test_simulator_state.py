@@ -153,7 +153,7 @@ COMMON_JUNK = [
     ("model", "FlexibleOscillator"), ("model", None),
     ("n_dof", 4), ("n_dof", 3.0),
     ("t", math.nan), ("t", math.inf), ("t", "0"), ("t", True), ("t", None),
-    ("mode", 4), ("mode", -1), ("mode", 1.0), ("mode", True),
+    ("mode", 10), ("mode", -1), ("mode", 1.0), ("mode", True),
     ("impacts", -1), ("impacts", 2 ** 63), ("impacts", 1.5), ("impacts", False),
     ("overturned", 0), ("overturned", "False"), ("overturned", None),
     ("n_steps", -5), ("n_steps", 3.0),

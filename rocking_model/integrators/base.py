@@ -47,7 +47,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..modes import contact_states
+from ..modes import contact_states, slide_sign
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from .state import Checkpointed
 
@@ -125,7 +125,7 @@ class Integrator(Checkpointed):
     @property
     def contacts(self) -> tuple:
         """`ContactState` of each contact now."""
-        return contact_states(self.model.closed_of(self.mode), self.model.n_contacts)
+        return contact_states(self.model.closed_of(self.mode), self.model.n_contacts, slide_sign(self.mode))
 
     def note_demand(self, lam_N: float, lam_T: float, floor: float) -> None:
         """Raise ``friction_demand`` to |lam_T| / lam_N if larger (forces with lam_N above ``floor`` [N],

@@ -128,18 +128,23 @@ class EventDriven(Integrator):
     # ------------------------------------------------------------------ state
     def _set_state(self, mode, q, v):
         model = self.model
+        old = self.__dict__.get("mode")
         self.mode = mode
         r, rd = model.reduce_any(self.mode, q, v)
         self.k = len(r)
         self.y = [float(a) for a in r] + [float(a) for a in rd]
         self._full = None
         # a sticking mode on the ground keeps the base's horizontal offset (it has slid, or landed off its rest
-        # position) outside its reduced state; below gap_tol it is round-off of the events
+        # position) outside its reduced state: unchanged from a sticking mode (the corners did not move), read
+        # off the state after flight or sliding (below gap_tol it is round-off of the events)
         shift = 0.0
         if mode not in SLIDING and model.closed_of(mode):
-            shift = shift_of(model, mode, q)
-            if abs(shift) <= self.gap_tol:
-                shift = 0.0
+            if old is not None and old not in SLIDING and model.closed_of(old):
+                shift = self.shift
+            else:
+                shift = shift_of(model, mode, q)
+                if abs(shift) <= self.gap_tol:
+                    shift = 0.0
         self.shift = shift
 
     def state(self):

@@ -164,8 +164,8 @@ class MoreauJean(Integrator):
             v_new = sol.v
             closed = set(sol.active)
             sigma = solution_sigma(sol)
-            self.note_demand(float(np.sum(sol.P_N[list(closed)])), float(np.sum(sol.P_T[list(closed)])),
-                             self.force_floor * dt)
+            P_N, P_T = sol.P_N.tolist(), sol.P_T.tolist()
+            self.note_demand(sum(P_N[i] for i in closed), sum(P_T[i] for i in closed), self.force_floor * dt)
         else:
             v_new = v_free
             closed = set()
@@ -186,12 +186,13 @@ class MoreauJean(Integrator):
             i = model.slide_index
             x, x_dot = q_new[i], v_new[i]
             q_new, v_new = model.embed(full, *model.reduce(full, q_new, v_new))
-            # the embedding puts the base at its rest abscissa, at rest: keep an offset where it has slid (or
-            # landed off its rest position) and a velocity where it slides, beyond round-off
-            if abs(x - q_new[i]) > margin:
-                q_new[i] = x
+            # the embedding puts the base at its rest abscissa, at rest: keep a velocity where it slides, and an
+            # offset where it has slid (or landed off its rest position) beyond round-off: the last step's where
+            # it was already at rest (no drift by the round-off of a zero velocity)
             if abs(x_dot - v_new[i]) > v_scale:
-                v_new[i] = x_dot
+                q_new[i], v_new[i] = x, x_dot
+            elif abs(x - q_new[i]) > margin:
+                q_new[i] = q[i] if self.mode == full else x
         self.q = q_new
         self.v = v_new
         self.mode = model.mode_of(closed, sigma)
@@ -262,6 +263,6 @@ class MoreauJean(Integrator):
 
 def inexact_message(sol, t: float, what: str) -> str:
     """Message of a `Report` of kind "inexact_contact"."""
-    return (f"the {what} at t = {t:.17g} s has no solution under the sticking law (least violation "
-            f"{sol.violation:.3g}, active set {tuple(int(i) for i in sol.active)}): kept the least-violating "
-            "one; a corner may sink or lift against the law (physics notes: the mu -> inf limit)")
+    return (f"the {what} at t = {t:.17g} s has no exact solution (least violation {sol.violation:.3g}, "
+            f"closed contacts {tuple(int(i) for i in sol.active)}): kept the least-violating one; a corner may "
+            "sink or lift against the contact law")

@@ -413,6 +413,16 @@ class FlexibleOscillator(RockingModel):
 
     def mode_functions(self, mode, ag):
         """Closed forms of `RockingModel.mode_functions` in full contact, rocking and flight."""
+        return self._closures(mode, ag)[:2]
+
+    def force_totals_of(self, mode, ag):
+        """Closed forms of `RockingModel.force_totals_of` in full contact and rocking (sticking): the x and y
+        rows of M v_dot - f."""
+        totals = self._closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
+        return totals or super().force_totals_of(mode, ag)
+
+    def _closures(self, mode, ag):
+        """(rhs, monitors, totals) of ``mode``: `mode_functions` and, on the ground, `force_totals_of`."""
         const = ag.constant
         a0 = ag.value if const else 0.0
         mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
@@ -449,7 +459,7 @@ class FlexibleOscillator(RockingModel):
                 yc, phi = y[2], y[3]
                 bs = b * math.sin(phi)
                 return [(yc - bs) / L, (yc + bs) / L, HALF_PI - abs(phi)]
-            return rhs, monitors
+            return rhs, monitors, None
         if mode == Mode.FULL:
             def rhs(t, y):
                 u, ud = y
@@ -462,7 +472,12 @@ class FlexibleOscillator(RockingModel):
                 # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g D u)
                 d = (-C * udd - A_h * a + g * D * u) / b
                 return [0.5 * (W - d) / W, 0.5 * (W + d) / W, HALF_PI]
-            return rhs, monitors
+
+            def totals(t, y):
+                u, ud = y
+                a = a0 if const else ag(t)
+                return W, D * (-c * ud - kt * u - D * a) / mt + Mt * a
+            return rhs, monitors, totals
         s = pivot_sign(mode)
         sb = s * b
         sbM = sb * Mt
@@ -492,7 +507,18 @@ class FlexibleOscillator(RockingModel):
             lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
             margin = HALF_PI - abs(phi)
             return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
-        return rhs, monitors
+
+        def totals(t, y):
+            u, phi, ud, w = y
+            a = a0 if const else ag(t)
+            udd, wd, sp, cp = accel(u, phi, ud, w, a)
+            ww = w * w
+            xdd, ydd = sb * sp * wd + sb * cp * ww, -sb * cp * wd + sb * sp * ww
+            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+            lam_N = D * sp * udd + Mt * ydd + Myp * wd + Mxp * ww + 2.0 * D * cp * ud * w + W
+            lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
+            return lam_N, lam_T
+        return rhs, monitors, totals
 
     def mode_outputs_array(self, mode, Y):
         Y = np.asarray(Y, dtype=float)
