@@ -24,8 +24,8 @@ import numpy as np
 from .ground_motion import PULSES
 
 ROOT = Path(__file__).resolve().parent.parent
-UNITS_OF = {"phi": "rad", "phi_dot": "rad/s", "x": "m", "y": "m", "x_dot": "m/s", "y_dot": "m/s", "energy": "J",
-            "u": "m", "u_dot": "m/s", "top_displacement": "m", "contact": "0 full/1 left/2 right/3 flight"}
+#: CSV header units of the simulator's own outputs (the model's come from its declarations, `OUTPUTS`)
+UNITS_OF = {"friction_demand": "1", "contact": "mode code: 0 full/1 left/2 right/3 flight/4-9 sliding"}
 
 
 class UsageError(ValueError):
@@ -213,7 +213,8 @@ def cmd_simulate(args) -> int:
     names = list(res.values)
     ag = np.array([motion(float(t)) for t in res.t])
     cols = [res.t, ag] + [np.asarray(res.values[n], dtype=float) for n in names]
-    header = ["time [s]", "ag [m/s2]"] + [f"{n} [{UNITS_OF[n]}]" if n in UNITS_OF else n for n in names]
+    units = {**{p.name: p.unit for p in model.OUTPUTS}, **UNITS_OF}
+    header = ["time [s]", "ag [m/s2]"] + [f"{n} [{units[n]}]" if n in units else n for n in names]
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.10g")
 
     rigid = args.model == "rigid"
@@ -229,6 +230,13 @@ def cmd_simulate(args) -> int:
     print(f"  max |phi|  = {phi[k]:.5g} rad{ratio} at t = {res.t[k]:.3f} s")
     print(f"  impacts    = {int(res.impacts[-1])}")
     print(f"  overturned = " + (f"yes, at t = {res.t[int(np.argmax(over))]:.3f} s" if over[-1] else "no"))
+    slip = np.asarray(res.slip)
+    print(f"  slip       = {slip[-1]:.4g} m at the end, max |slip| = {np.max(np.abs(slip)):.4g} m "
+          f"(mu = {model.mu:g})")
+    print(f"  friction demand = {res.friction_demand[-1]:.4g} (the largest |lambda_T|/lambda_N needed"
+          + (f"; above mu = {model.mu:g} the corners slid" if math.isfinite(model.mu) else
+             "; a surface with a smaller mu would slide") + ")"
+          + (f", Painleve situations: {int(res.painleve[-1])}" if res.painleve[-1] else ""))
     if not rigid:
         print(f"  max |top displacement| = {np.max(np.abs(res.top_displacement)):.4g} m")
     print(f"  wall time  = {wall:.3f} s ({res.n_steps} steps)")
@@ -269,7 +277,7 @@ def cmd_ensemble(args) -> int:
 
     b0, h0 = (0.2, 1.0) if args.model == "rigid" else (0.25, 1.5)      # the models' defaults
     geometries = [(b, h) for b in (_flat(args.b) or [b0]) for h in (_flat(args.h) or [h0])]
-    common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N,
+    common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N, mu=args.mu,
                   t_end=args.t_end, output_interval=args.output_interval, tolerance=args.tolerance,
                   dt_max=args.dt_max)
     if bool(args.record) == bool(args.pulse):
@@ -323,6 +331,8 @@ def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
         g.add_argument("--h", type=_values, nargs="+", metavar="H",
                        help="half-heights / column heights [m] (grid; default 1.0 rigid, 1.5 flexible)")
         g.add_argument("--e-N", dest="e_N", type=float, default=0.0, help="coefficient of restitution [1]")
+        g.add_argument("--mu", type=float, default=math.inf,
+                       help="Coulomb friction coefficient [1] (default inf: the paper's sticking law)")
         return
     # the options and their help come from the models' declarations (rocking_model.params)
     for name, per_kind in list(_declared().items()) + list(_declared_initial().items()):

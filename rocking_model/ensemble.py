@@ -34,14 +34,14 @@ from .models import model_class
 SCHEMES = tuple(sorted(_SCHEME_CLASSES, key=lambda name: -_SCHEME_CLASSES[name].code))
 
 #: case fields, in output column order
-CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "motion", "A", "omega_p", "a_ratio", "w_ratio",
+CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "motion", "A", "omega_p", "a_ratio", "w_ratio",
                "record", "units", "scale", "scheme", "t_end", "output_interval", "tolerance", "dt_max")
 #: result fields appended by `run_case`
 RESULT_FIELDS = ("alpha", "p", "max_abs_phi", "max_phi_over_alpha", "overturned", "t_overturn", "impacts",
-                 "wall_time", "error")
+                 "max_abs_slip", "friction_demand", "wall_time", "error")
 FIELDS = CASE_FIELDS + RESULT_FIELDS
 
-_FLOATS = {"b", "h", "e_N", "A", "omega_p", "a_ratio", "w_ratio", "scale", "t_end", "output_interval",
+_FLOATS = {"b", "h", "e_N", "mu", "max_abs_slip", "friction_demand", "A", "omega_p", "a_ratio", "w_ratio", "scale", "t_end", "output_interval",
            "tolerance", "dt_max", "alpha", "p", "max_abs_phi", "max_phi_over_alpha", "t_overturn",
            "wall_time"}
 _INTS = {"impacts"}
@@ -51,6 +51,8 @@ _BOOLS = {"overturned"}
 def case_id(case: dict) -> str:
     """Content hash of the case's parameters: the same case gets the same id in every run."""
     key = {k: case.get(k) for k in CASE_FIELDS if k != "case_id"}
+    if key.get("mu") in (None, math.inf):
+        del key["mu"]             # the default law: the ids of the cases of earlier versions stay valid
     return hashlib.sha1(json.dumps(key, sort_keys=True, default=repr).encode()).hexdigest()[:16]
 
 
@@ -61,7 +63,8 @@ def _rigid_scales(b: float, h: float, g: float = 9.81) -> tuple[float, float]:
 
 
 def _finish(case: dict) -> dict:
-    case = {k: case.get(k, "" if k in ("record", "units") else math.nan) for k in CASE_FIELDS}
+    case = {k: case.get(k, "" if k in ("record", "units") else math.inf if k == "mu" else math.nan)
+            for k in CASE_FIELDS}
     case["case_id"] = case_id(case)
     return case
 
@@ -78,13 +81,14 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
                 frequency_ratios: Sequence[float] | None = None, amplitudes: Sequence[float] | None = None,
                 frequencies: Sequence[float] | None = None, geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),),
                 schemes: Sequence[str] = ("event_driven",), model: str = "rigid", e_N: float = 0.0,
-                t_end: float | None = None, output_interval: float = 0.01, tolerance: float = 1e-8,
+                mu: float = math.inf, t_end: float | None = None, output_interval: float = 0.01, tolerance: float = 1e-8,
                 dt_max: float | None = None) -> list[dict]:
     """Grid of pulse cases: pulse ``kind`` x amplitudes x frequencies x geometries (b, h) [m] x schemes.
 
     Amplitudes either as ratios A / (g tan(alpha)) or in m/s2; frequencies as ratios omega_p / p or in Hz
     (omega_p = 2 pi f). Ratios need the rigid block. t_end [s] defaults to the end of the pulse plus 15/p
-    (enough for overturning after an impact). dt_max: Moreau-Jean step [s] (default 1e-3)."""
+    (enough for overturning after an impact). dt_max: Moreau-Jean step [s] (default 1e-3). e_N, mu: the
+    model's coefficient of restitution and friction coefficient (inf: the paper's sticking law)."""
     if kind not in PULSES:
         raise ValueError(f"pulse = {kind!r} is not supported; allowed values: {', '.join(PULSES)}")
     model_class(model)                    # ValueError naming the registered models
@@ -111,7 +115,7 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
         t_pulse = 3.0 * T_p if kind == "ricker" else T_p
         p_ref = p if model == "rigid" else 2.5
         te = t_end if t_end is not None else t_pulse + 15.0 / p_ref
-        cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), motion=kind, A=A,
+        cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion=kind, A=A,
                                   omega_p=omega_p, a_ratio=A / (9.81 * math.tan(alpha)) if model == "rigid"
                                   else math.nan, w_ratio=omega_p / p if model == "rigid" else math.nan,
                                   scale=1.0, scheme=scheme, t_end=float(te), output_interval=output_interval,
@@ -121,7 +125,7 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
 
 def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, units: str | None = None,
                  geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),), schemes: Sequence[str] = ("event_driven",),
-                 model: str = "rigid", e_N: float = 0.0, t_end: float | None = None,
+                 model: str = "rigid", e_N: float = 0.0, mu: float = math.inf, t_end: float | None = None,
                  output_interval: float = 0.01, tolerance: float = 1e-8, dt_max: float | None = None) -> list[dict]:
     """Grid of record cases: records (file paths or ``synthetic:<seed>``) x scale factors x geometries x
     schemes. t_end [s] defaults to the record's end plus 5 s. The records are read here once (so a bad
@@ -139,7 +143,7 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
         te = t_end if t_end is not None else float(rec.t[-1]) + 5.0
         for (b, h), scheme, s in itertools.product(geometries, schemes, scales):
             alpha, p = _rigid_scales(b, h) if model == "rigid" else (math.nan, math.nan)
-            cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), motion="record",
+            cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion="record",
                                       record=spec, units=units or "", scale=float(s), scheme=scheme,
                                       A=rec.pga * s, a_ratio=rec.pga * s / (9.81 * math.tan(alpha)),
                                       t_end=float(te), output_interval=output_interval, tolerance=tolerance,
@@ -169,8 +173,10 @@ def case_motion(case: dict):
 
 def case_model(case: dict):
     """The model of a case: the registered ``case["model"]`` (`rocking_model.models.MODELS`) with the case's
-    b, h, e_N."""
-    return model_class(case["model"])(b=case["b"], h=case["h"], e_N=case["e_N"])
+    b, h, e_N and mu (inf where a file of an earlier version has none)."""
+    mu = case.get("mu", math.inf)
+    return model_class(case["model"])(b=case["b"], h=case["h"], e_N=case["e_N"],
+                                      mu=math.inf if mu != mu else mu)
 
 
 def run_case(case: dict) -> dict:
@@ -184,7 +190,7 @@ def run_case(case: dict) -> dict:
     row = dict(case)
     alpha, p = _rigid_scales(case["b"], case["h"]) if case["model"] == "rigid" else (math.nan, math.nan)
     row.update(alpha=alpha, p=p, max_abs_phi=math.nan, max_phi_over_alpha=math.nan, overturned=False,
-               t_overturn=math.nan, impacts=-1, error="")
+               t_overturn=math.nan, impacts=-1, max_abs_slip=math.nan, friction_demand=math.nan, error="")
     t0 = time.perf_counter()
     try:
         kw = {}
@@ -201,6 +207,8 @@ def run_case(case: dict) -> dict:
         row["overturned"] = bool(over[-1])
         row["t_overturn"] = float(res.t[np.argmax(over)]) if over[-1] else math.nan
         row["impacts"] = int(res.impacts[-1])
+        row["max_abs_slip"] = float(np.max(np.abs(res.slip)))
+        row["friction_demand"] = float(res.friction_demand[-1])
     except Exception as exc:          # recorded, not raised: see the docstring
         row["error"] = f"{type(exc).__name__}: {exc}"
     row["wall_time"] = time.perf_counter() - t0

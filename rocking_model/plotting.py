@@ -1,7 +1,7 @@
 """Plots (matplotlib, Agg backend; optional dependency: pip install 'rocking-model[plot]').
 
-- `plot_response`: rotation phi, top displacement (flexible oscillator), ground acceleration and contact
-  state over time, for one simulation (`response_figure`: the same as a matplotlib figure).
+- `plot_response`: rotation phi, top displacement (flexible oscillator), base slip (where the base slid),
+  ground acceleration and contact state (sliding shaded) over time, for one simulation (`response_figure`: the same as a matplotlib figure).
 - `plot_overturning_spectrum`: Makris' overturning spectrum of a pulse grid, A / (g tan(alpha)) against
   omega_p / p, overturned or not.
 """
@@ -12,6 +12,8 @@ from pathlib import Path
 from typing import Sequence
 
 import numpy as np
+
+from .modes import Mode, stick_mode
 
 CONTACT_LABELS = ["full", "left corner", "right corner", "flight"]
 
@@ -35,7 +37,10 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
     # ag on a grid finer than the output so that short pulses show their shape
     tf = np.linspace(t[0], t[-1], max(2000, 4 * t.size))
     ag = np.array([ground_motion(float(x)) for x in tf])
-    ratios = [3] + ([2] if top is not None else []) + [2, 1.3]
+    slip = np.asarray(result.values["slip"]) if hasattr(result, "values") and "slip" in result.values else None
+    if slip is not None and not np.any(slip):
+        slip = None                                   # the corners stuck throughout: no panel
+    ratios = [3] + ([2] if top is not None else []) + ([1.5] if slip is not None else []) + [2, 1.3]
     fig, axes = plt.subplots(len(ratios), 1, figsize=(8.5, 2.2 * sum(ratios) / 2.0 + 1.2), sharex=True,
                              gridspec_kw={"height_ratios": ratios})
     imp = np.asarray(result.impact_times, dtype=float)
@@ -61,6 +66,12 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
         ax.set_ylabel("top displacement\n(rel. ground) [m]")
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
         panel += 1
+    if slip is not None:
+        ax = axes[panel]
+        ax.plot(t, slip, color="C5", lw=1.1, label="base slip")
+        ax.set_ylabel("slip [m]")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+        panel += 1
     ax = axes[panel]
     ax.plot(tf, ag, color="C1", lw=1.0, label=r"$a_g$")
     if alpha is not None:
@@ -70,7 +81,14 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
     ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     ax = axes[panel + 1]
-    ax.step(t, np.asarray(result.contact), where="post", color="C2")
+    codes = np.asarray(result.contact, dtype=int)
+    # the closed corners of each mode (sliding modes drawn on their sticking mode, shaded)
+    ax.step(t, [int(stick_mode(Mode(c))) for c in codes], where="post", color="C2")
+    sliding = codes >= Mode.FULL_SLIDE_POS
+    if sliding.any():
+        ax.fill_between(t, -0.5, 3.5, where=sliding, step="post", color="C3", alpha=0.2, lw=0,
+                        label="sliding")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     ax.set_yticks(range(4), CONTACT_LABELS)
     ax.set_ylim(-0.5, 3.5)
     ax.set_ylabel("contact")

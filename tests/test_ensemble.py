@@ -135,3 +135,22 @@ def test_record_cases(tmp_path):
     assert rows[0]["max_abs_phi"] == 0.0 and rows[0]["impacts"] == 0
     with pytest.raises(FileNotFoundError, match="no such file"):
         record_cases([str(tmp_path / "missing.AT2")])
+
+
+def test_friction_cases_and_ids():
+    """mu is a case field: a finite mu gives its own case id and rows with the slip and the friction demand;
+    the default mu = inf keeps the ids of the cases of earlier versions (resumable result files)."""
+    import math
+
+    from rocking_model.ensemble import CASE_FIELDS, case_id, pulse_cases, run_case
+    inf = pulse_cases("sine", amplitudes=[0.6 * 9.81], frequencies=[2.0], geometries=[(0.3, 0.6)], t_end=2.0)[0]
+    old = {k: inf[k] for k in CASE_FIELDS if k not in ("case_id", "mu")}
+    assert inf["mu"] == math.inf and inf["case_id"] == case_id(old)
+    slide = pulse_cases("sine", amplitudes=[0.6 * 9.81], frequencies=[2.0], geometries=[(0.3, 0.6)], t_end=2.0,
+                        mu=0.3)[0]
+    assert slide["case_id"] != inf["case_id"]
+    row = run_case(slide)
+    assert not row["error"] and row["max_abs_slip"] > 1e-3 and row["friction_demand"] == 0.3
+    assert row["max_abs_phi"] == 0.0 and not row["overturned"]
+    row = run_case(inf)
+    assert not row["error"] and row["max_abs_slip"] == 0.0 and 0.3 < row["friction_demand"] < 0.6
