@@ -43,7 +43,8 @@ def reference(table, scheme, start, stop, h, params=PARAMS):
     """Drive the Simulator as fmpy drives the FMU: communication points start + n h, the input set at the
     start of each step from fmpy's interpolant of the table (zero-order hold over the step)."""
     p = params
-    sim = Simulator(RigidBlock(b=p["b"], h=p["h"], m=p["m"], g=p["g"], e_N=p["e_N"]), scheme=scheme,
+    sim = Simulator(RigidBlock(b=p["b"], h=p["h"], m=p["m"], g=p["g"], e_N=p["e_N"], mu=p.get("mu", math.inf)),
+                    scheme=scheme,
                     dt_max=p["dt_max"], tolerance=p["tolerance"], t0=start, phi_0=p["phi_0"],
                     phi_dot_0=p["phi_dot_0"])
     values = table["ag"].reshape(1, -1)
@@ -163,6 +164,30 @@ def test_fmu_matches_python_simulator(fmu, scheme):
     for name in OUTPUTS:
         np.testing.assert_allclose(res[name].astype(float), ref[name].astype(float), rtol=0, atol=1e-12,
                                    err_msg=name)
+
+
+@pytest.mark.parametrize("scheme", [0, 1])
+def test_fmu_with_friction_matches_python_simulator(fmu, scheme):
+    """mu = 0.45 on a b = 0.3, h = 0.6 block (tan(alpha) = 0.5) under a 0.8 g one-sine pulse: it slides,
+    rocks and slides on its pivot; the FMU gives the Python simulator's outputs, slip and friction demand
+    included, and the default mu = inf set explicitly gives the default run."""
+    table = pulse_table(0.8 * 9.81, period=0.5)
+    start, stop, h = 0.0, 2.0, 0.01
+    params = {**PARAMS, "b": 0.3, "h": 0.6, "mu": 0.45}
+    res = fmpy.simulate_fmu(str(fmu), start_time=start, stop_time=stop, output_interval=h, input=table,
+                            start_values={**params, "scheme": scheme})
+    t_ref, ref = reference(table, scheme, start, stop, h, params=params)
+    assert np.abs(res["slip"]).max() > 1e-3 and res["friction_demand"][-1] == pytest.approx(0.45)
+    assert set(res["contact"]) & {4, 5, 6, 7, 8, 9}
+    for name in OUTPUTS:
+        np.testing.assert_allclose(res[name].astype(float), ref[name].astype(float), rtol=0, atol=1e-12,
+                                   err_msg=name)
+    inf = fmpy.simulate_fmu(str(fmu), start_time=start, stop_time=stop, output_interval=h, input=table,
+                            start_values={**params, "mu": math.inf, "scheme": scheme})
+    default = fmpy.simulate_fmu(str(fmu), start_time=start, stop_time=stop, output_interval=h, input=table,
+                                start_values={**{k: v for k, v in params.items() if k != "mu"}, "scheme": scheme})
+    for name in OUTPUTS:
+        np.testing.assert_array_equal(inf[name], default[name], err_msg=name)
 
 
 def test_overturning_freezes_outputs_and_keeps_stepping(fmu):

@@ -32,11 +32,15 @@ ENERGY_TOL = {1: 1e-9, 0: 2e-5}
 N_STEPS, H = 30, 0.02
 
 
+#: the friction coefficient: the paper's sticking law (and its mu -> inf limit), or Coulomb's (issue 15)
+MU = st.one_of(st.just(math.inf), st.floats(0.1, 2.0))
+
+
 @st.composite
 def rigid_case(draw, e_N=st.floats(0.0, 1.0)):
     b = draw(st.floats(0.05, 1.0))
     h = draw(st.floats(0.2, 3.0))
-    model = RigidBlock(b=b, h=h, e_N=draw(e_N))
+    model = RigidBlock(b=b, h=h, e_N=draw(e_N), mu=draw(MU))
     init = dict(phi_0=draw(st.floats(-0.9, 0.9)) * model.alpha, phi_dot_0=draw(st.floats(-1.0, 1.0)))
     return model, init
 
@@ -44,7 +48,7 @@ def rigid_case(draw, e_N=st.floats(0.0, 1.0)):
 @st.composite
 def flexible_case(draw, e_N=st.floats(0.0, 1.0)):
     model = FlexibleOscillator(b=draw(st.floats(0.15, 0.4)), EI=9.45e5 * draw(st.floats(0.2, 2.0)),
-                               zeta=draw(st.floats(0.0, 0.1)), e_N=draw(e_N))
+                               zeta=draw(st.floats(0.0, 0.1)), e_N=draw(e_N), mu=draw(MU))
     init = dict(phi_0=draw(st.floats(-0.05, 0.05)), u_0=draw(st.floats(-5e-4, 5e-4)))
     return model, init
 
