@@ -18,10 +18,12 @@ Contract (in the style of scipy's ``OdeSolver``)
 A subclass must provide:
 
     dof_names, phi_index        names of q and the index of the rotation phi (overturning: |phi| = pi/2)
-    slide_index                 the index of the base's horizontal translation x (sliding moves it)
-    e_N, g                      coefficient of restitution [1], gravity [m/s2]
+    slide_index, lift_index     indices of the base's horizontal and vertical translations (sliding moves the
+                                first; their rows of M a - f carry the total tangential and normal forces)
+    e_N, g, mu                  coefficient of restitution [1], gravity [m/s2], friction coefficient [1]
+                                (inf: the paper's sticking law)
     mass_matrix(q), forces(q, v, ag)
-    gaps(q), contact_jacobians(q), contact_drift(q, v)
+    gaps(q), contact_jacobians(q), contact_drift(q, v), contact_abscissae(q)
     mode_dofs(mode), embed(mode, r, r_dot), mode_jacobian(mode, r, r_dot)
     rest_position(), energy(q, v), outputs(q, v), initial_state(**initial)
     length_scale [m], time_scale [s]
@@ -41,6 +43,13 @@ A subclass may provide (the defaults here are generic and correct, the overrides
     reduced_acceleration, contact_forces        per mode, from the numpy interface
     mode_functions, mode_outputs(_array)        float-level right-hand sides, event functions and outputs
     force_scale                                 scale of the contact forces [N]; default |f| at rest
+    force_totals_of(mode, ag)                   float-level (sum lambda_N, sum lambda_T) of a mode (the
+                                                friction demand and cone); default generic numpy
+    SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
+
+The sliding modes (`rocking_model.modes.SLIDING`) need nothing more: their coordinates, right-hand sides and
+events are derived from the sticking modes' (`rocking_model.models.sliding`); the integrators reach every
+mode through `dofs_of`, `embed_any`, `reduce_any`, `functions_of`, `outputs_of` and `outputs_array_of`.
     fields()                                    declared parameters (name, unit, range, description):
                                                 the Python API, the CLI and the FMUs read them
 """
