@@ -160,7 +160,10 @@ def solution_sigma(sol: ContactSolution) -> int:
     The corners of a rigid base that are closed together slide together; where one sticks they all do (a
     stuck corner and one at its friction cone, with no slip, is the same motion with another split of the
     tangential force between them, which the per-corner law does not fix)."""
-    states = [s for s in getattr(sol, "states", ()) if s != OPEN]
+    states = getattr(sol, "states", None)           # (a sticking solution has none: it sticks)
+    if not states:
+        return 0
+    states = [s for s in states if s != OPEN]
     if states and all(s in SLIDE_SIGN for s in states):
         return int(SLIDE_SIGN[states[0]])
     return 0

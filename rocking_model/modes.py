@@ -102,9 +102,13 @@ def slide_sign(mode: Mode) -> int:
     return SLIDING[mode][1] if mode in SLIDING else 0
 
 
+#: the modes that pivot on the left corner
+_LEFT = frozenset((Mode.LEFT, Mode.LEFT_SLIDE_POS, Mode.LEFT_SLIDE_NEG))
+
+
 def pivot_sign(mode: Mode) -> int:
     """s of the pivot corner at body abscissa s*b: -1 left, +1 right."""
-    return -1 if mode == Mode.LEFT or mode == Mode.LEFT_SLIDE_POS or mode == Mode.LEFT_SLIDE_NEG else 1
+    return -1 if mode in _LEFT else 1
 
 
 class BoundedLog(list):

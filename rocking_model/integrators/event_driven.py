@@ -163,9 +163,10 @@ class EventDriven(Integrator):
         return self.model.outputs_of(self.mode, self.y, self.shift)
 
     def _functions(self, mode, ag):
-        """(rhs, G) of model.mode_functions(mode, ag), G the event function vector (contacts, then the
-        overturning margin); reused while the mode and a constant input stay the same (each co-simulation
-        step would otherwise build them twice)."""
+        """(rhs, G, totals) of ``mode``: `RockingModel.functions_of` (G the event function vector: contacts,
+        the friction events, then the overturning margin) and, with closed corners, `force_totals_of` (the
+        friction demand; None in flight); reused while the mode and a constant input stay the same (each
+        co-simulation step would otherwise build them twice)."""
         key = (mode, ag.value) if ag.constant else (mode, id(ag))
         cached = self.__dict__.get("_fn_cache")
         if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
@@ -346,7 +347,7 @@ class EventDriven(Integrator):
         """Re-decide the mode of the current state by the acceleration LCP (after an input change)."""
         mode = self.mode
         closed = self.model.closed_of(mode)
-        _, monitors = self._functions(mode, ag)
+        monitors = self._functions(mode, ag)[1]
         e = monitors(t, self.y)
         nc = self.model.n_contacts
         # fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip
@@ -376,24 +377,16 @@ class EventDriven(Integrator):
                 self._work_end = self.n_steps + self._max_work
         if k == 0 and ag.constant:
             # nothing moves and the (positive) contact forces cannot change
-            self._note_totals(self.model.force_totals_of(mode, ag), self.t, self.y)
+            self.note_demand(*self._functions(mode, ag)[2](self.t, self.y), self.force_floor)
             self.t = t_stop
             while pending and pending[0] <= t_stop:
                 pending.popleft()
                 out.append(self._sample_row(mode, list(self.y), False))
             self._full = None
             return False
-        rhs, G = self._functions(mode, ag)
-        model = self.model
-        nc = model.n_contacts
-        closed = model.closed_of(mode)
-        kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(nc)]
-        if mode in SLIDING:
-            kinds.append(_KIND_SLIP)
-        elif closed and not math.isinf(model.mu):
-            kinds.append(_KIND_CONE)
-        kinds.append(_KIND_OVERTURN)
-        totals = model.force_totals_of(mode, ag) if closed else None
+        rhs, G, totals = self._functions(mode, ag)
+        kinds = self._kinds(mode)
+        floor = self.force_floor
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
@@ -412,6 +405,8 @@ class EventDriven(Integrator):
             if self.n_steps > self._work_end:
                 raise WorkLimitError(self._work_message(stepper))
             g_new = G(stepper.t, stepper.y)
+            # the friction demand at the step's end (right after G: models share their work between the two)
+            lam = totals(stepper.t, stepper.y) if totals is not None else None
             rose = {}
             if first:
                 first = False
@@ -429,9 +424,9 @@ class EventDriven(Integrator):
                 return True
             if pending and pending[0] <= stepper.t:
                 self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
-            if totals is not None:
-                # (at the ends of the steps without an event: the mode's forces hold there)
-                self._note_totals(totals, stepper.t, stepper.y)
+            if lam is not None:
+                # (noted at the ends of the steps without an event: the mode's forces hold there)
+                self.note_demand(lam[0], lam[1], floor)
             for i, g in enumerate(g_new):
                 if g > 0.0:
                     armed[i] = True
@@ -445,10 +440,22 @@ class EventDriven(Integrator):
         self._live = stepper
         return False
 
-    def _note_totals(self, totals, t, y) -> None:
-        """The friction demand of a sticking mode at (t, y) (`Integrator.note_demand`)."""
-        lam_N, lam_T = totals(t, y)
-        self.note_demand(lam_N, lam_T, self.force_floor)
+    def _kinds(self, mode) -> list:
+        """What each event function of ``mode`` means: per contact release (closed) or impact (open), then the
+        slip's stop (sliding) or the friction cone (sticking with a finite mu), last overturning."""
+        cached = self.__dict__.setdefault("_kinds_cache", {})
+        kinds = cached.get(mode)
+        if kinds is None:
+            model = self.model
+            closed = model.closed_of(mode)
+            kinds = [(_KIND_RELEASE if i in closed else _KIND_IMPACT) for i in range(model.n_contacts)]
+            if mode in SLIDING:
+                kinds.append(_KIND_SLIP)
+            elif closed and not math.isinf(model.mu):
+                kinds.append(_KIND_CONE)
+            kinds.append(_KIND_OVERTURN)
+            cached[mode] = kinds
+        return kinds
 
     def _bounces(self, stepper, G, kinds, watch, armed, g_new) -> dict:
         """After the first step of a segment: an open corner that started at the ground and is back at or
@@ -543,7 +550,7 @@ class EventDriven(Integrator):
         elif kind == _KIND_CONE:
             # the friction reached mu lambda_N: the corners slide against it (preferred where sticking is
             # still consistent to round-off, as at the far side of the root it is only marginally)
-            lam_T = self.model.force_totals_of(self.mode, ag)(t, self.y)[1]
+            lam_T = self._functions(self.mode, ag)[2](t, self.y)[1]
             slide = SLIDE_NEG if lam_T > 0.0 else SLIDE_POS
             self._enter(q, v, ag(t), t, prefer=slide)
         else:

@@ -45,6 +45,7 @@ A subclass may provide (the defaults here are generic and correct, the overrides
     force_scale                                 scale of the contact forces [N]; default |f| at rest
     force_totals_of(mode, ag)                   float-level (sum lambda_N, sum lambda_T) of a mode (the
                                                 friction demand and cone); default generic numpy
+    mode_closures(mode, ag)                     (rhs, monitors, totals) built together (shared work)
     SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
 
 The sliding modes (`rocking_model.modes.SLIDING`) need nothing more: their coordinates, right-hand sides and
@@ -335,14 +336,15 @@ class RockingModel(ABC):
         return sliding.slide_reduce(self, mode, q, v) if mode in SLIDING else self.reduce(mode, q, v)
 
     def functions_of(self, mode, ag):
-        """`mode_functions` of any mode. With a finite mu a closed sticking mode gets one more event function
-        before the overturning margin: (mu sum lambda_N - |sum lambda_T|) / force_scale, positive while the
-        corners stick (the friction cone); a sliding mode's are those of `sliding.slide_functions`."""
+        """(rhs, monitors, totals) of any mode: `mode_closures`, where with a finite mu a closed sticking mode
+        gets one more event function before the overturning margin, (mu sum lambda_N - |sum lambda_T|) /
+        force_scale, positive while the corners stick (the friction cone); a sliding mode's are those of
+        `sliding.slide_functions` and its `force_totals_of`."""
         if mode in SLIDING:
-            return sliding.slide_functions(self, mode, ag)
-        rhs, monitors = self.mode_functions(mode, ag)
+            return sliding.slide_functions(self, mode, ag) + (self.force_totals_of(mode, ag),)
+        rhs, monitors, totals = self.mode_closures(mode, ag)
         if math.isinf(self.mu) or not self.closed_of(mode):
-            return rhs, monitors
+            return rhs, monitors, totals
         mu, F, k = self.mu, self.force_scale, len(self.mode_dofs(mode))
         a_of = (lambda t: ag.value) if ag.constant else ag
 
@@ -351,7 +353,13 @@ class RockingModel(ABC):
             q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
             lam_N, lam_T = sliding.force_totals(self, mode, q, v, a_of(t))
             return out[:-1] + [(mu * lam_N - abs(lam_T)) / F, out[-1]]
-        return rhs, cone_monitors
+        return rhs, cone_monitors, totals
+
+    def mode_closures(self, mode, ag):
+        """(rhs, monitors, totals) of the sticking ``mode``: `mode_functions` and, with closed corners,
+        `force_totals_of` (None in flight). Models override it to share work between the monitors and the
+        totals (the event-driven scheme evaluates both at the end of every step)."""
+        return self.mode_functions(mode, ag) + (self.force_totals_of(mode, ag) if self.closed_of(mode) else None,)
 
     def force_totals_of(self, mode, ag):
         """float-level (t, y) -> (sum lambda_N, sum lambda_T) [N] of the closed corners of ``mode`` (the

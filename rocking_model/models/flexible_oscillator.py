@@ -413,16 +413,17 @@ class FlexibleOscillator(RockingModel):
 
     def mode_functions(self, mode, ag):
         """Closed forms of `RockingModel.mode_functions` in full contact, rocking and flight."""
-        return self._closures(mode, ag)[:2]
+        return self.mode_closures(mode, ag)[:2]
 
     def force_totals_of(self, mode, ag):
         """Closed forms of `RockingModel.force_totals_of` in full contact and rocking (sticking): the x and y
         rows of M v_dot - f."""
-        totals = self._closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
+        totals = self.mode_closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
         return totals or super().force_totals_of(mode, ag)
 
-    def _closures(self, mode, ag):
-        """(rhs, monitors, totals) of ``mode``: `mode_functions` and, on the ground, `force_totals_of`."""
+    def mode_closures(self, mode, ag):
+        """(rhs, monitors, totals) of ``mode`` in closed form; while rocking the totals reuse what the monitors
+        computed at the same (t, y)."""
         const = ag.constant
         a0 = ag.value if const else 0.0
         mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
@@ -498,24 +499,33 @@ class FlexibleOscillator(RockingModel):
             udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else ag(t))
             return [ud, w, udd, wd]
 
+        last = [None, None, None]         # (t, y, (ag, u_dd, phi_dd, sin, cos, pivot force)) of the last monitors
+
         def monitors(t, y):
             u, phi, ud, w = y
-            udd, wd, sp, cp = accel(u, phi, ud, w, a0 if const else ag(t))
+            a = a0 if const else ag(t)
+            udd, wd, sp, cp = accel(u, phi, ud, w, a)
             # pivot force = y row of M v_dot - f (the tangential direction is horizontal)
             ydd = -sb * cp * wd + sb * sp * w * w
             Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
             lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
+            last[0], last[1], last[2] = t, y, (a, udd, wd, sp, cp, lam)
             margin = HALF_PI - abs(phi)
             return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
 
         def totals(t, y):
             u, phi, ud, w = y
-            a = a0 if const else ag(t)
-            udd, wd, sp, cp = accel(u, phi, ud, w, a)
             ww = w * w
-            xdd, ydd = sb * sp * wd + sb * cp * ww, -sb * cp * wd + sb * sp * ww
-            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            lam_N = D * sp * udd + Mt * ydd + Myp * wd + Mxp * ww + 2.0 * D * cp * ud * w + W
+            if last[1] is y and last[0] == t:
+                a, udd, wd, sp, cp, lam_N = last[2]
+                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+            else:
+                a = a0 if const else ag(t)
+                udd, wd, sp, cp = accel(u, phi, ud, w, a)
+                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+                lam_N = D * sp * udd + Mt * (-sb * cp * wd + sb * sp * ww) + Myp * wd + Mxp * ww \
+                    + 2.0 * D * cp * ud * w + W
+            xdd = sb * sp * wd + sb * cp * ww
             lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
             return lam_N, lam_T
         return rhs, monitors, totals

@@ -214,17 +214,36 @@ class RigidBlock(RockingModel):
     # ------------------------------------------------------------------ float-level mode functions
     def mode_functions(self, mode, ag):
         """Closed forms of `RockingModel.mode_functions` (rocking: Housner's equation and the pivot force)."""
+        return self.mode_closures(mode, ag)[:2]
+
+    def force_totals_of(self, mode, ag):
+        """Closed forms of `RockingModel.force_totals_of` for the sticking modes: Newton's law of the centroid,
+        sum lambda_T = m (x_dd + ag), sum lambda_N = m (y_dd + g)."""
+        totals = self.mode_closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
+        return totals or super().force_totals_of(mode, ag)
+
+    def mode_closures(self, mode, ag):
+        """(rhs, monitors, totals) in closed form; while rocking the totals reuse what the monitors computed at
+        the same (t, y)."""
         m, g, b, h = self.m, self.g, self.b, self.h
         const = ag.constant
         a0 = ag.value if const else 0.0
         if mode == Mode.FULL:
+            seen = [None, 0.0]            # (t, ag) of the last monitors call
+
             def rhs(t, y):
                 return []
 
             def monitors(t, y):
-                d = 0.5 * (a0 if const else ag(t)) * h / b / g
+                a = a0 if const else ag(t)
+                seen[0], seen[1] = t, a
+                d = 0.5 * a * h / b / g
                 return [0.5 + d, 0.5 - d, HALF_PI]
-            return rhs, monitors
+
+            def totals(t, y):
+                # vertical and horizontal equilibrium: the weight, and the sticking force m ag
+                return m * g, m * (a0 if const else seen[1] if seen[0] == t else ag(t))
+            return rhs, monitors, totals
         if mode == Mode.FLIGHT:
             def rhs(t, y):
                 return [y[3], y[4], y[5], -(a0 if const else ag(t)), -g, 0.0]
@@ -234,10 +253,11 @@ class RigidBlock(RockingModel):
                 bs, hc = b * math.sin(phi), h * math.cos(phi)
                 L = self._R
                 return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
-            return rhs, monitors
+            return rhs, monitors, None
         s = pivot_sign(mode)
         p2, al = self._p ** 2, self._alpha
         pivot_first = s < 0
+        last = [None, None, None]         # (t, y, (ag, phi_dd, sin, cos, pivot force / m g)) of the last monitors
 
         def rhs(t, y):
             phi = y[0]
@@ -246,38 +266,29 @@ class RigidBlock(RockingModel):
 
         def monitors(t, y):
             phi, w = y
+            a = a0 if const else ag(t)
             x = al + s * phi
-            acc = p2 * ((a0 if const else ag(t)) / g * math.cos(x) + s * math.sin(x))
+            acc = p2 * (a / g * math.cos(x) + s * math.sin(x))
             sp, cp = math.sin(phi), math.cos(phi)
             # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + 1
             lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
+            last[0], last[1], last[2] = t, y, (a, acc, sp, cp, lam)
             margin = HALF_PI - abs(phi)
             return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
-        return rhs, monitors
-
-    def force_totals_of(self, mode, ag):
-        """Closed forms of `RockingModel.force_totals_of` for the sticking modes: Newton's law of the centroid,
-        sum lambda_T = m (x_dd + ag), sum lambda_N = m (y_dd + g)."""
-        if mode not in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
-            return super().force_totals_of(mode, ag)
-        m, g, b, h = self.m, self.g, self.b, self.h
-        const = ag.constant
-        a0 = ag.value if const else 0.0
-        if mode == Mode.FULL:
-            def totals(t, y):
-                return m * g, m * (a0 if const else ag(t))
-            return totals
-        s = pivot_sign(mode)
 
         def totals(t, y):
             phi, w = y
-            a = a0 if const else ag(t)
-            acc = self.rocking_acceleration(phi, a, s)
-            sp, cp = math.sin(phi), math.cos(phi)
+            if last[1] is y and last[0] == t:
+                a, acc, sp, cp, lam = last[2]
+            else:
+                a = a0 if const else ag(t)
+                x = al + s * phi
+                acc = p2 * (a / g * math.cos(x) + s * math.sin(x))
+                sp, cp = math.sin(phi), math.cos(phi)
+                lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
             x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
-            y_dd = (-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w
-            return m * (y_dd + g), m * (x_dd + a)
-        return totals
+            return m * g * lam, m * (x_dd + a)
+        return rhs, monitors, totals
 
     def mode_outputs_array(self, mode, Y):
         Y = np.asarray(Y, dtype=float)
@@ -341,6 +352,8 @@ class RigidBlock(RockingModel):
             "phi": float(q[2]), "phi_dot": float(v[2]),
             "x": float(q[0]), "y": float(q[1] - self.h),
             "x_dot": float(v[0]), "y_dot": float(v[1]),
-            "slip": self.slip(q),
+            # the lower corner's displacement (the left one, s = -1, for phi > 0), as `slip`
+            "slip": float(q[0]) + (-1.0 if q[2] > 0.0 else 1.0) * self.b * (math.cos(q[2]) - 1.0)
+            + self.h * math.sin(q[2]),
             "energy": float(self.energy(q, v)),
         }
