@@ -2,7 +2,7 @@
 
     python -m benchmarks            # full run (about 6-8 minutes on 2 cores)
     python -m benchmarks --quick    # smoke run (< 1 minute), report in benchmarks/results/quick/
-    python benchmarks/run.py [--quick] [--skip-siconos] [--skip-fmu] [--skip-memory] [--repeats N]
+    python benchmarks/run.py [--quick] [--skip-siconos] [--skip-fmu] [--skip-memory] [--skip-friction] [--repeats N]
 
 Raw results go to benchmarks/results/latest.json (quick: benchmarks/results/quick/results.json), so that a
 later run (e.g. after an optimization) can be compared number by number.
@@ -461,6 +461,20 @@ def flexible_available() -> tuple[bool, str]:
         return False, f"rocking_model.models.flexible_oscillator not importable ({exc})"
 
 
+def bench_friction(args) -> dict:
+    """The friction reports of issue 15, each its own script writing its own page: the mu = inf path against
+    the pre-friction baseline and the finite-mu work-precision (docs/performance/friction.md), and the
+    cross-check against Siconos' NewtonImpactFrictionNSL where Siconos is installed
+    (docs/performance/siconos_friction.md). Returns {script: exit code}."""
+    out = {}
+    scripts = ["friction_performance.py"] + (["siconos_friction.py"] if args.siconos_ok else [])
+    for name in scripts:
+        log(f"friction: {name}")
+        cmd = [sys.executable, str(ROOT / "benchmarks" / name)] + (["--quick"] if args.quick else [])
+        out[name] = subprocess.run(cmd, cwd=ROOT).returncode
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="rocking_model benchmark suite")
     ap.add_argument("--quick", action="store_true", help="smoke run (< 1 min): short scenes, two settings each")
@@ -470,6 +484,9 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-siconos", action="store_true")
     ap.add_argument("--skip-fmu", action="store_true")
     ap.add_argument("--skip-memory", action="store_true")
+    ap.add_argument("--skip-friction", action="store_true",
+                    help="skip the friction reports (friction_performance.py; siconos_friction.py where Siconos is "
+                         "installed), which write docs/performance/friction*.md themselves")
     ap.add_argument("--scenes", nargs="*", help="only these scenes (free pulse_below pulse_above record "
                                                 "flex_soft flex_stiff)")
     ap.add_argument("--docs", default=None, help="where to write performance.md and the plots "
@@ -526,6 +543,10 @@ def main(argv=None) -> int:
         res["skipped"]["memory"] = "--skip-memory"
     else:
         res["memory"] = bench_memory(args)
+    if args.skip_friction:
+        res["skipped"]["friction"] = "--skip-friction"
+    else:
+        res["friction"] = bench_friction(args)
     res["total_wall"] = time.perf_counter() - t_start
     results_file.parent.mkdir(parents=True, exist_ok=True)
     results_file.write_text(json.dumps(res, indent=1, default=_json_default))
