@@ -23,6 +23,7 @@ if __package__ in (None, ""):
 
 import numpy as np
 
+from benchmarks.machine import cpu_name
 from rocking_model.ensemble import pulse_cases, read_results, run_ensemble
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -35,14 +36,7 @@ def grid(quick: bool) -> list[dict]:
 
 
 def machine() -> str:
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_name()
     vers = [f"Python {platform.python_version()}"]
     for mod in ("numpy", "scipy", "dask", "distributed"):
         try:

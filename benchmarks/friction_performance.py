@@ -397,14 +397,10 @@ def plot(wp: dict, path: Path) -> None:
 
 
 def machine_info() -> dict:
-    cpu = "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from benchmarks.machine import cpu_name
+    cpu = cpu_name()
     import scipy
     try:
         load = ", ".join(f"{x:.2f}" for x in os.getloadavg())

@@ -27,6 +27,7 @@ if __package__ in (None, ""):                       # python benchmarks/run.py
 import numpy as np
 
 from benchmarks import analysis, contenders as C, scenes as S
+from benchmarks.machine import cpu_name
 
 ROOT = Path(__file__).resolve().parent.parent
 LEVELS = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
@@ -38,14 +39,7 @@ def log(msg: str) -> None:
 
 # ------------------------------------------------------------------------------------------------ machine
 def machine_info() -> dict:
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_name()
     versions = {"python": platform.python_version()}
     for mod in ("numpy", "scipy", "fmpy", "pythonfmu", "matplotlib", "rocking_model"):
         try:
