@@ -53,8 +53,9 @@ SOLVER_PARAMETERS = (
 DT_MIN_REL = 1e-6
 
 
-#: version of the `Simulator.get_state` dict
-STATE_VERSION = 1
+#: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
+#: event-driven, the base's offset; states of version 1 are refused by their version)
+STATE_VERSION = 2
 _HEADER = ("version", "scheme", "model", "n_dof")
 
 
@@ -282,11 +283,12 @@ class Simulator:
         works; floats may be nan only where a field means "unset").
 
         Header: version (int, STATE_VERSION), scheme ("moreau_jean" / "event_driven"), model (class name),
-        n_dof (full dimension). Event-driven: t [s], mode (0-3, `Mode`), y (reduced state of the mode:
+        n_dof (full dimension). Event-driven: t [s], mode (0-9, `Mode`), y (reduced state of the mode:
         coordinates then velocities), impacts, overturned, n_steps, h (last step size [s], nan before the
-        first), impact_times [s], impact_log (rows t, v_minus, v_plus flattened, 1 + 2 n_dof floats each).
-        Moreau-Jean: t, q, v (full coordinates and velocities), mode, closed (corners that carried
-        impulse in the last step), impacts, overturned, n_steps, impact_times. The logs hold at most
+        first), impact_times [s], impact_log (rows t, v_minus, v_plus flattened, 1 + 2 n_dof floats each),
+        shift (horizontal offset [m] of the base of a sticking mode on the ground), friction_demand,
+        painleve. Moreau-Jean: t, q, v (full coordinates and velocities), mode, closed (corners that carried
+        impulse in the last step), impacts, overturned, n_steps, impact_times, friction_demand, painleve. The logs hold at most
         impact_log_size entries (impact_log at most min(1000, impact_log_size) rows).
 
         The model, its parameters and the solver settings are not in it: rebuild the Simulator from the same

@@ -148,7 +148,7 @@ def _rocking_sim(scheme):
 
 
 COMMON_JUNK = [
-    ("version", 2), ("version", "1"), ("version", True),
+    ("version", 1), ("version", 3), ("version", "2"), ("version", True),
     ("scheme", "other"), ("scheme", 1), ("scheme", "x" * 65),
     ("model", "FlexibleOscillator"), ("model", None),
     ("n_dof", 4), ("n_dof", 3.0),
