@@ -345,13 +345,11 @@ class RockingModel(ABC):
         rhs, monitors, totals = self.mode_closures(mode, ag)
         if math.isinf(self.mu) or not self.closed_of(mode):
             return rhs, monitors, totals
-        mu, F, k = self.mu, self.force_scale, len(self.mode_dofs(mode))
-        a_of = (lambda t: ag.value) if ag.constant else ag
+        mu, F = self.mu, self.force_scale
 
         def cone_monitors(t, y):
             out = monitors(t, y)
-            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            lam_N, lam_T = sliding.force_totals(self, mode, q, v, a_of(t))
+            lam_N, lam_T = totals(t, y)
             return out[:-1] + [(mu * lam_N - abs(lam_T)) / F, out[-1]]
         return rhs, cone_monitors, totals
 
