@@ -98,14 +98,16 @@ def solve_with_friction(model: "RockingModel", Minv, W_N, W_T, v_free, b_N, b_T,
         limit = solve_friction_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, mu, forced, rtol=rtol)
         return limit if limit.violation < sol.violation else sol
     states = None
-    if prefer is not None:
-        cand = sorted(set(candidates) | set(forced))
-        states = [prefer if i not in (sliding or {}) or prefer == OPEN else
-                  SLIDE_POS if sliding[i] > 0 else SLIDE_NEG for i in cand]
-    elif hint is not None:
-        cand = sorted(set(candidates) | set(forced))
-        states = [(STICK if i in hint else OPEN) if i not in (sliding or {}) else
-                  (OPEN if i not in hint else SLIDE_POS if sliding[i] > 0 else SLIDE_NEG) for i in cand]
+    if prefer is not None or hint is not None:
+        # the state tried first per candidate: ``prefer``, or stuck where the hint had it closed; a contact
+        # that already slides keeps its direction
+        sliding = sliding or {}
+        states = []
+        for i in sorted(set(candidates) | set(forced)):
+            s = prefer if prefer is not None else STICK if i in hint else OPEN
+            if s != OPEN and i in sliding:
+                s = SLIDE_POS if sliding[i] > 0 else SLIDE_NEG
+            states.append(s)
     return solve_friction_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, mu, forced, rtol=rtol,
                               sliding=sliding, count=count, hint=states)
 
@@ -160,10 +162,7 @@ def solution_sigma(sol: ContactSolution) -> int:
     The corners of a rigid base that are closed together slide together; where one sticks they all do (a
     stuck corner and one at its friction cone, with no slip, is the same motion with another split of the
     tangential force between them, which the per-corner law does not fix)."""
-    states = getattr(sol, "states", None)           # (a sticking solution has none: it sticks)
-    if not states:
-        return 0
-    states = [s for s in states if s != OPEN]
+    states = [s for s in sol.states if s != OPEN]   # (a sticking solution has none: it sticks)
     if states and all(s in SLIDE_SIGN for s in states):
         return int(SLIDE_SIGN[states[0]])
     return 0

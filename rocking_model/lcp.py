@@ -64,6 +64,10 @@ class ContactSolution:
     w_N: np.ndarray          #: w_N = W_N^T v + b_N, shape (n,) (nan for non-candidates)
     exact: bool = True       #: False when no active set met every condition (least-violating returned)
     violation: float = 0.0   #: [1] largest violation of the conditions, relative to the problem's scales
+    states: tuple = ()       #: per-contact states of a frictional solution (`FrictionSolution`); () : stuck
+
+    #: Painleve's paradox (`FrictionSolution`): never in the sticking problem
+    painleve = False
 
 
 _SETS_CACHE: dict = {}
@@ -304,7 +308,6 @@ class FrictionSolution(ContactSolution):
     asked for with ``count=True``) the number of state combinations that solve the problem exactly: 0 or
     more than 1 at the acceleration level is Painleve's paradox."""
 
-    states: tuple = ()
     w_T: np.ndarray = None
     n_solutions: int = -1
     sliding: dict = None       #: the ``sliding`` argument: contacts that already slid, and their direction

@@ -377,7 +377,9 @@ class EventDriven(Integrator):
                 self._work_end = self.n_steps + self._max_work
         if k == 0 and ag.constant:
             # nothing moves and the (positive) contact forces cannot change
-            self.note_demand(*self._functions(mode, ag)[2](self.t, self.y), self.force_floor)
+            totals = self._functions(mode, ag)[2]
+            if totals is not None:
+                self.note_demand(*totals(self.t, self.y), self.force_floor)
             self.t = t_stop
             while pending and pending[0] <= t_stop:
                 pending.popleft()
@@ -620,7 +622,7 @@ class EventDriven(Integrator):
         solution; with friction ``prefer`` (a sliding state) is tried first for the closed contacts. An inexact
         solve is reported unless it is a Painleve situation (which `_decide` resolves)."""
         mode, sol = next_mode(self.model, q, v, ag_t, self.gap_tol, self.v_tol, prefer=prefer)
-        if sol is not None and not sol.exact and not getattr(sol, "painleve", False):
+        if sol is not None and not sol.exact and not sol.painleve:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol
 
@@ -632,7 +634,7 @@ class EventDriven(Integrator):
         """(mode, v): the mode that follows the consistent state (q, v) (`_select_mode`), and v, changed only
         by the impact without collision of a Painleve situation (counted in ``painleve``)."""
         mode, sol = self._select_mode(q, v, ag_t, t, prefer)
-        if sol is not None and getattr(sol, "painleve", False):
+        if sol is not None and sol.painleve:
             # Painleve: sliding with no consistent acceleration (or several): an impact without collision, the
             # tangential impulse that makes the sliding corners stick (Genot & Brogliato 1999), then the
             # acceleration problem at rest tangentially, which has a solution

@@ -22,7 +22,6 @@ import math
 import numpy as np
 
 from ..contact import inverse_mass, project_to_ground, solution_sigma, solve_with_friction
-from ..lcp import solve_contact_lcp
 from ..modes import BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from ..validation import WorkLimitError, check_real, state_bool, state_float, state_floats, state_int, state_ints
@@ -62,8 +61,6 @@ class MoreauJean(Integrator):
         self.v_rest = tol.step_rest_velocity
         #: [N] a normal force below this carries no load (ContactTolerances.demand_floor)
         self.force_floor = tol.force_floor
-        #: the paper's sticking law (mu = inf): the sticking LCP first
-        self._sticking = math.isinf(model.mu)
         self.reports = []
         self.q = np.array(q, dtype=float)
         self.v = np.array(v, dtype=float)
@@ -160,17 +157,8 @@ class MoreauJean(Integrator):
             b_T = np.where(U < 0.0, model.e_T * (W_T.T @ v), 0.0) if model.e_T else np.zeros(model.n_contacts)
             # the friction law picks the LCP: sticking (the paper's), its mu -> inf limit where sticking has no
             # solution, or Coulomb; the last step's closed contacts are tried first
-            hint = [i for i in self._closed if i in active]
-            sol = None
-            if self._sticking:
-                # the paper's law, the hot path: the sticking LCP directly; where it has no exact solution,
-                # solve_with_friction takes its mu -> inf limit
-                tols = self.tolerances
-                sol = solve_contact_lcp(Winv, W_N, W_T, v_free, b_N, b_T, active, hint=hint, rtol=tols.lcp_exact,
-                                        hint_tol=tols.lcp_hint)
-            if sol is None or not sol.exact:
-                sol = solve_with_friction(model, Winv, W_N, W_T, v_free, b_N, b_T, active, hint=hint,
-                                          tolerances=self.tolerances)
+            sol = solve_with_friction(model, Winv, W_N, W_T, v_free, b_N, b_T, active,
+                                      hint=[i for i in self._closed if i in active], tolerances=self.tolerances)
             if not sol.exact:
                 self.report("inexact_contact", t + dt, inexact_message(sol, t + dt, "step LCP"))
             v_new = sol.v

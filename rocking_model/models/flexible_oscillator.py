@@ -514,17 +514,12 @@ class FlexibleOscillator(RockingModel):
             return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
 
         def totals(t, y):
+            if not (last[1] is y and last[0] == t):
+                monitors(t, y)            # (fills ``last``)
+            a, udd, wd, sp, cp, lam_N = last[2]
             u, phi, ud, w = y
             ww = w * w
-            if last[1] is y and last[0] == t:
-                a, udd, wd, sp, cp, lam_N = last[2]
-                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            else:
-                a = a0 if const else ag(t)
-                udd, wd, sp, cp = accel(u, phi, ud, w, a)
-                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-                lam_N = D * sp * udd + Mt * (-sb * cp * wd + sb * sp * ww) + Myp * wd + Mxp * ww \
-                    + 2.0 * D * cp * ud * w + W
+            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
             xdd = sb * sp * wd + sb * cp * ww
             lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
             return lam_N, lam_T

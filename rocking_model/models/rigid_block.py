@@ -277,15 +277,10 @@ class RigidBlock(RockingModel):
             return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
 
         def totals(t, y):
-            phi, w = y
-            if last[1] is y and last[0] == t:
-                a, acc, sp, cp, lam = last[2]
-            else:
-                a = a0 if const else ag(t)
-                x = al + s * phi
-                acc = p2 * (a / g * math.cos(x) + s * math.sin(x))
-                sp, cp = math.sin(phi), math.cos(phi)
-                lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
+            if not (last[1] is y and last[0] == t):
+                monitors(t, y)            # (fills ``last``)
+            a, acc, sp, cp, lam = last[2]
+            w = y[1]
             x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
             return m * g * lam, m * (x_dd + a)
         return rhs, monitors, totals
