@@ -591,23 +591,35 @@ class EventDriven(Integrator):
         self._set_state(mode, q, v_plus)
 
     def _impact_velocity(self, q, v, cand, closed, ag_t, t):
-        """Post-impact velocity by the impact LCP; corners of ``closed``, corners that would leave slower
-        than v_Zeno and (when all leave) corners whose free-flight bounce would stay within gap_tol of the
-        ground are closed plastically (the Zeno rule)."""
+        """Post-impact velocity by the impact LCP under the Zeno rule (module docstring; README, "Impact
+        accumulation (Zeno)"): corners of ``closed`` and corners at the ground that would leave slower than
+        v_Zeno are closed plastically; while every candidate leaves (flight) and none is closed, the corner
+        whose free-flight bounce U_N+^2 / (2 |a_N|) is the lowest is closed if that bounce stays within gap_tol
+        of the ground. Each closure re-solves the impact LCP from the pre-impact velocity, and the tests are
+        applied again to the new outcome: a corner that leaves while another is closed rotates about it and is
+        not in free flight, so only the velocity test applies to it."""
         model = self.model
-        sol = impact(model, q, v, cand)
         W_N, _ = model.contact_jacobians(q)
-        U_plus = W_N.T @ sol.v
-        slow = [i for i in cand if U_plus[i] < self.v_zeno]
-        # (a corner that takes impulse and stays at rest needs no second solve)
-        zeno = [i for i in cand if i in closed or (i in slow and (i not in sol.active or U_plus[i] > self.v_tol))]
-        if cand and not slow and not zeno:
-            # all leave (flight): apex of a bounce U+^2 / (2 |a_N|), a_N the corner's normal acceleration
-            acc = inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)
-            a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
-            zeno += [i for i in cand if i not in zeno and U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol]
-        if zeno:
-            sol = impact(model, q, v, cand, forced=tuple(zeno))
+        forced = [i for i in cand if i in closed]
+        sol = impact(model, q, v, cand, forced=tuple(forced))
+        while True:
+            U_plus = W_N.T @ sol.v
+            # velocity test (a corner that takes impulse and stays at rest needs no closure)
+            new = [i for i in cand if i not in forced and U_plus[i] < self.v_zeno
+                   and (i not in sol.active or U_plus[i] > self.v_tol)]
+            if not new and not forced and cand and all(U_plus[i] >= self.v_zeno for i in cand):
+                # bounce test, in flight only: a_N the corner's normal acceleration in free flight
+                acc = inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)
+                a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
+                falling = [i for i in cand if a_N[i] < 0.0]
+                if falling:
+                    i = min(falling, key=lambda j: U_plus[j] ** 2 / -a_N[j])
+                    if U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol:
+                        new = [i]
+            if not new:
+                break
+            forced += new
+            sol = impact(model, q, v, cand, forced=tuple(forced))
         if not sol.exact:
             self.report("inexact_contact", t, inexact_message(sol, t, "impact LCP"))
         return sol.v
