@@ -6,7 +6,9 @@
   either corner, flight, sliding);
 - `solve_with_friction`: the one place the friction law (mu) picks the LCP: sticking, its mu -> inf limit
   where sticking has no solution, or Coulomb;
-- `project_to_ground`, `closed_candidates`, `mode_forces`: the geometry and forces around them.
+- `project_to_ground`, `closed_candidates`, `mode_forces`: the geometry and forces around them;
+- `sliding_delassus`, `painleve_sticks`: Painleve's configuration of a sliding contact, and the contacts an
+  impact made stick in it (counted as Painleve resolutions by the event-driven scheme).
 """
 from __future__ import annotations
 
@@ -140,6 +142,35 @@ def closed_candidates(model: "RockingModel", q: np.ndarray, v: np.ndarray, gap_t
     W_N, _ = model.contact_jacobians(q)
     U = W_N.T @ v
     return [i for i in range(model.n_contacts) if g[i] <= gap_tol and abs(U[i]) <= v_tol]
+
+
+def sliding_delassus(model: "RockingModel", q: np.ndarray, i: int, sigma: float) -> float:
+    """a_sigma = W_N,i . M^-1 (W_N,i - sigma mu W_T,i) [1/kg]: the normal velocity (or acceleration) that a unit
+    normal percussion produces at contact i while it slides with direction sigma (+1, -1) and the friction
+    -sigma mu P_N. Painleve's configuration where a_sigma <= 0: sliding would need a pulling contact
+    (P_N < 0), so the contact cannot keep sliding pressed on the ground (mu above the critical
+    W_N,i M^-1 W_N,i / (sigma W_N,i M^-1 W_T,i)); with mu = inf, wherever sigma W_N,i M^-1 W_T,i > 0."""
+    W_N, W_T = model.contact_jacobians(q)
+    Minv = inverse_mass(model, q)
+    a = float(W_N[:, i] @ Minv @ W_N[:, i])
+    c = float(W_N[:, i] @ Minv @ W_T[:, i])
+    if math.isinf(model.mu):
+        return -math.inf if sigma * c > 0.0 else a if c == 0.0 else math.inf
+    return a - sigma * model.mu * c
+
+
+def painleve_sticks(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, v_plus: np.ndarray, candidates,
+                    v_tol: float) -> list[int]:
+    """The contacts of ``candidates`` that an impact (v_minus -> v_plus) made stick in Painleve's
+    configuration: sliding before (|U_T-| > v_tol [m/s]), closed and stuck after (U_N+, |U_T+| <= v_tol),
+    with a_sigma <= 0 (`sliding_delassus`): they could not slide through the impact (that needs P_N < 0),
+    so the tangential percussion that stopped them is the stick-making impulse of the paradox (Genot &
+    Brogliato 1999), not a consequence of the collision."""
+    W_N, W_T = model.contact_jacobians(q)
+    U_T_minus, U_T_plus, U_N_plus = W_T.T @ v_minus, W_T.T @ v_plus, W_N.T @ v_plus
+    return [i for i in candidates
+            if abs(U_T_minus[i]) > v_tol and abs(U_T_plus[i]) <= v_tol and U_N_plus[i] <= v_tol
+            and sliding_delassus(model, q, i, 1.0 if U_T_minus[i] > 0.0 else -1.0) <= 0.0]
 
 
 def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,

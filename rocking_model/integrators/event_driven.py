@@ -37,7 +37,7 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import closed_candidates, impact, inverse_mass, next_mode, project_to_ground
+from ..contact import closed_candidates, impact, inverse_mass, next_mode, painleve_sticks, project_to_ground
 from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
 from ..models.sliding import shift_of
 from ..modes import SLIDING, BoundedLog, bounded_log
@@ -575,20 +575,30 @@ class EventDriven(Integrator):
             v_plus = model.classical_impact_velocity(q, v, self.mode)
             if v_plus is not None:
                 self._record_impact(t, v, v_plus)
+                self._count_painleve(q, v, v_plus, cand)
                 self._enter(q, v_plus, ag_t, t)
                 return
-        v_plus = self._impact_velocity(q, v, cand, grazing, ag_t, t)
-        mode, v_plus = self._decide(q, v_plus, ag_t, t)
+        v_impact = self._impact_velocity(q, v, cand, grazing, ag_t, t)
+        mode, v_plus = self._decide(q, v_impact, ag_t, t)
         if any(i not in model.closed_of(mode) for i in grazing):
             # held closed, the corner is still sent into flight: the sticking LCP has no solution (the corner
             # should slide, bug 7); not held (that would be a chatter of grazing landings)
             q = q_found
-            v_plus = self._impact_velocity(q, v, cand, (), ag_t, t)
-            mode, v_plus = self._decide(q, v_plus, ag_t, t)
+            v_impact = self._impact_velocity(q, v, cand, (), ag_t, t)
+            mode, v_plus = self._decide(q, v_impact, ag_t, t)
         U_minus = model.contact_jacobians(q)[0].T @ v
         if any(U_minus[i] < -self.v_zeno for i in cand):
             self._record_impact(t, v, v_plus)
+        # (a Painleve impulse that `_decide` applied after the impact is counted there)
+        self._count_painleve(q, v, v_impact, cand)
         self._set_state(mode, q, v_plus)
+
+    def _count_painleve(self, q, v_minus, v_plus, cand):
+        """Count in ``painleve`` an impact that made a sliding corner stick in Painleve's configuration
+        (`painleve_sticks`): its tangential percussion is the paradox's stick-making impulse, whether the corner
+        also collided (then the impact counts in ``impacts`` too) or touched down slower than v_Zeno."""
+        if painleve_sticks(self.model, q, v_minus, v_plus, cand, self.v_tol):
+            self.painleve += 1
 
     def _impact_velocity(self, q, v, cand, closed, ag_t, t):
         """Post-impact velocity by the impact LCP under the Zeno rule (module docstring; README, "Impact
