@@ -161,16 +161,33 @@ def sliding_delassus(model: "RockingModel", q: np.ndarray, i: int, sigma: float)
 
 def painleve_sticks(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, v_plus: np.ndarray, candidates,
                     v_tol: float) -> list[int]:
-    """The contacts of ``candidates`` that an impact (v_minus -> v_plus) made stick in Painleve's
-    configuration: sliding before (|U_T-| > v_tol [m/s]), closed and stuck after (U_N+, |U_T+| <= v_tol),
-    with a_sigma <= 0 (`sliding_delassus`): they could not slide through the impact (that needs P_N < 0),
-    so the tangential percussion that stopped them is the stick-making impulse of the paradox (Genot &
-    Brogliato 1999), not a consequence of the collision."""
+    """The contacts of ``candidates`` that an impact (v_minus -> v_plus) made stick by Painleve's paradox rather
+    than by their collision (the impact without collision of Genot & Brogliato 1999, reached through an impact
+    event). Contact i counts when
+
+    - it slid before (|U_T-| > v_tol [m/s]) and is closed and stuck after (U_N+ and |U_T+| <= v_tol);
+    - it is in Painleve's configuration, a_sigma <= 0 (`sliding_delassus`, sigma = sign U_T-): it could not
+      slide through the impact (that needs P_N < 0), so it had to stick;
+    - its stick is made by the slip, not by the approach: with its Delassus block [[a, c], [c, d]]
+      (a = W_N M^-1 W_N, c = W_N M^-1 W_T, d = W_T M^-1 W_T), the normal percussion of its stick
+      P_N = (d (1 + e_N) |U_N-| + c U_T-) / (a d - c^2) is mostly the part that stopping the slip induces:
+      c U_T- >= d (1 + e_N) |U_N-|. (A collision of a corner with little slip also sticks it in this
+      configuration, as with mu = inf; that is an impact, not the paradox.)"""
     W_N, W_T = model.contact_jacobians(q)
-    U_T_minus, U_T_plus, U_N_plus = W_T.T @ v_minus, W_T.T @ v_plus, W_N.T @ v_plus
-    return [i for i in candidates
-            if abs(U_T_minus[i]) > v_tol and abs(U_T_plus[i]) <= v_tol and U_N_plus[i] <= v_tol
-            and sliding_delassus(model, q, i, 1.0 if U_T_minus[i] > 0.0 else -1.0) <= 0.0]
+    Minv = inverse_mass(model, q)
+    U_N_minus, U_T_minus = W_N.T @ v_minus, W_T.T @ v_minus
+    U_T_plus, U_N_plus = W_T.T @ v_plus, W_N.T @ v_plus
+    out = []
+    for i in candidates:
+        if not (abs(U_T_minus[i]) > v_tol and abs(U_T_plus[i]) <= v_tol and U_N_plus[i] <= v_tol):
+            continue
+        if sliding_delassus(model, q, i, 1.0 if U_T_minus[i] > 0.0 else -1.0) > 0.0:
+            continue
+        c = float(W_N[:, i] @ Minv @ W_T[:, i])
+        d = float(W_T[:, i] @ Minv @ W_T[:, i])
+        if c * U_T_minus[i] >= d * (1.0 + model.e_N) * max(-U_N_minus[i], 0.0):
+            out.append(i)
+    return out
 
 
 def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
