@@ -39,7 +39,16 @@ U_BOUNCE = math.sqrt(2.0 * G * DEFAULT_TOLERANCES.gap * R)
 
 # ============================================================================================== Zeno rule
 def test_bounce_threshold_is_45_v_zeno():
-    """The figure quoted in the README and in `ContactTolerances`: sqrt(2 g 1e-9 L) / (1e-6 sqrt(g L))."""
+    """The figure quoted in the README and in `rocking_model.tolerances`: sqrt(2 g 1e-9 L) / (1e-6 sqrt(g L)),
+    with the defaults that every entry point shares."""
+    import inspect
+
+    from rocking_model.integrators.base import SolverOptions
+    from rocking_model.integrators.event_driven import EventDriven
+    from rocking_model.tolerances import ZENO_TOL
+    assert ZENO_TOL == 1e-6 == SolverOptions().zeno_tol
+    for fn in (Simulator.__init__, EventDriven.__init__):
+        assert inspect.signature(fn).parameters["zeno_tol"].default == ZENO_TOL
     assert U_BOUNCE / V_ZENO == pytest.approx(math.sqrt(2e-9) / 1e-6) == pytest.approx(44.72, abs=0.01)
 
 

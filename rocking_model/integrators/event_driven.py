@@ -19,12 +19,18 @@
   below the ground beyond round-off (a grazing landing) is put back onto it (`project_to_ground`) and
   closed plastically, unless the sticking LCP then has no solution (the corner should slide: bug 7, not
   held then, as a chatter of grazing landings would cost thousands of events).
-- Zeno rule (end of impact accumulation): after an impact, a corner at the ground whose post-impact
-  separation velocity is below v_Zeno = zeno_tol * sqrt(g L) (L the model's length scale), or (all corners
-  leaving) whose free-flight bounce U_N^2 / (2 |a_N|) would stay within gap_tol of the ground, is closed
-  plastically and the impact LCP is solved again with that corner held closed. The kinetic energy this
-  removes is at most of the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not
-  counted.
+- Zeno rule (end of impact accumulation; thresholds in `rocking_model.tolerances`): after an impact, a corner at
+  the ground is closed plastically if its post-impact separation velocity is below v_Zeno = zeno_tol *
+  sqrt(g L) (L the model's length scale; velocity test) or, only while every corner leaves (free flight) and
+  none is closed, if it is the corner of lowest free-flight bounce U_N^2 / (2 |a_N|) and that bounce stays
+  within gap_tol of the ground (bounce test: U_N < sqrt(2 |a_N| gap_tol), 44.7 v_Zeno at |a_N| = g and the
+  defaults). The impact LCP is then solved again from the pre-impact velocities with the closed corners held
+  closed, and both tests are applied to the new outcome: a corner that leaves while another is closed rotates
+  about it (not a free flight) and is closed only below v_Zeno. The kinetic energy this removes is at most of
+  the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not counted.
+- Painleve count (``painleve``): each stick-making impulse of a Painleve situation, applied where the uplift LCP
+  of a sliding corner has no or several solutions (`_decide`) or made by an impact LCP on a corner that slid
+  in Painleve's configuration (`rocking_model.contact.painleve_sticks`).
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
 - Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus EVENT_WORK = 30 per event and
@@ -41,7 +47,7 @@ from ..contact import closed_candidates, impact, inverse_mass, next_mode, painle
 from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
 from ..models.sliding import shift_of
 from ..modes import SLIDING, BoundedLog, bounded_log
-from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from ..tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from ..validation import WorkLimitError, check_choice, check_real, state_bool, state_float, state_floats, state_int
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
@@ -93,7 +99,7 @@ class EventDriven(Integrator):
                    method=method, impact_log_size=options.impact_log_size, tolerances=options.tolerances)
 
     def __init__(self, model, mode, q: np.ndarray, v: np.ndarray, t0: float,
-                 tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = 1e-6,
+                 tolerance: float = 1e-8, dt_max: float = math.inf, zeno_tol: float = ZENO_TOL,
                  max_events: int = 100000, method: str = "DOP853", impact_log_size: int | None = None,
                  tolerances: ContactTolerances = DEFAULT_TOLERANCES):
         self.model = model
@@ -107,6 +113,7 @@ class EventDriven(Integrator):
         self.gap_tol = scaled.gap
         #: [m/s] a normal velocity this small is zero (ContactTolerances.rest_velocity)
         self.v_tol = scaled.rest_velocity
+        #: [m/s] the Zeno rule's velocity test (`rocking_model.tolerances.ZENO_TOL`)
         self.v_zeno = zeno_tol * scaled.velocity_scale
         #: [1] how far below zero a disarmed (normalised) event function may go before it fires
         self.event_tol = tolerances.event
@@ -654,7 +661,8 @@ class EventDriven(Integrator):
 
     def _decide(self, q, v, ag_t, t, prefer=None):
         """(mode, v): the mode that follows the consistent state (q, v) (`_select_mode`), and v, changed only
-        by the impact without collision of a Painleve situation (counted in ``painleve``)."""
+        by the impact without collision of a Painleve situation (counted in ``painleve``; the Painleve sticks
+        made by an impact LCP are counted by `_count_painleve`)."""
         mode, sol = self._select_mode(q, v, ag_t, t, prefer)
         if sol is not None and sol.painleve:
             # Painleve: sliding with no consistent acceleration (or several): an impact without collision, the
