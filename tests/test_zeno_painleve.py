@@ -96,12 +96,14 @@ def test_bounce_test_closes_only_a_free_flight_bounce_within_gap(f, mode):
         assert U_N[1] == pytest.approx(f * U_BOUNCE, rel=0.01)     # (gravity: -1e-6 m/s by 0.1 us)
 
 
-def _housner_reference(A, duration, e_N, t_max):
+def _housner_reference(A, duration, e_N, t_max, all_closed=True):
     """Exact rigid rocking of the b = 0.2, h = 1 block under ag = A for 0 < t <= duration, then 0, from rest:
     Housner's nonlinear equations between impacts (solve_ivp, DOP853 at rtol 1e-13, impacts located as
     events) and Housner's plastic coefficient r at every impact. That is the impact law of the rigid model
-    here: every impacting corner bounces at e_N U- below U_BOUNCE (checked), a bounce the Zeno rule closes.
-    Returns (phi(t) callable, impact times, post-impact speed of the leaving corner 2 b r |phi_dot-|)."""
+    where the impacting corner bounces at e_N U- below U_BOUNCE (``all_closed``: checked at every impact), a
+    bounce the Zeno rule closes; faster impacts send the rigid model into short flights that this reference
+    leaves out. Returns (phi(t) callable, impact times, post-impact speed of the leaving corner
+    2 b r |phi_dot-|)."""
     def rhs(t, y, ag, s):                   # s = +1: left pivot (phi > 0), -1: right pivot
         phi, w = y
         return [w, P2 * ((ag / G) * math.cos(ALPHA - s * phi) - s * math.sin(ALPHA - s * phi))]
@@ -118,7 +120,7 @@ def _housner_reference(A, duration, e_N, t_max):
         hit.direction = -s
         seg = solve_ivp(rhs, (t, t_max), y, args=(0.0, s), events=hit, **tol)
         te, w = seg.t_events[0][0], seg.y_events[0][0][1]
-        assert e_N * 2.0 * B * abs(w) < U_BOUNCE
+        assert e_N * 2.0 * B * abs(w) < U_BOUNCE or not all_closed
         segments.append((t, te, seg.sol))
         times.append(te)
         speeds.append(2.0 * B * R_HOUSNER * abs(w))
@@ -134,30 +136,32 @@ def _housner_reference(A, duration, e_N, t_max):
     return phi, np.array(times), np.array(speeds)
 
 
-def test_grazing_micro_rocking_follows_the_exact_solution():
-    """Grazing scene: ag = 1.005 g tan(alpha) held for 10 ms, e_N = 0.2: the block lifts by 3.6e-7 rad and
-    rocks down in an accumulation of about 80 impacts. The event-driven scheme follows the exact solution
-    (Housner's equations and coefficient, `_housner_reference`, its own solver) to 1e-3 of the amplitude
-    (measured 1.2e-11 rad) until the Zeno rule ends the accumulation where it says: at the impact whose
-    leaving corner is slower than v_Zeno. Before issue 20 it switched to full contact at 0.0269 s, at
-    36-44.7 v_Zeno (the bounce test run on the old pivot), 29 nm of the exact rocking lost."""
+@pytest.mark.parametrize("duration, amplitude, old_switch", [(0.01, 3.6e-7, 0.0269), (0.0673, 1.6e-5, 0.2214)])
+def test_grazing_micro_rocking_follows_the_exact_solution(duration, amplitude, old_switch):
+    """Grazing scenes: ag = 1.005 g tan(alpha) held for 10 ms (67.3 ms), e_N = 0.2: the block lifts by 3.6e-7 rad
+    (1.6e-5 rad) and rocks down in an accumulation of about 80 (140) impacts. The event-driven scheme follows
+    the exact solution (Housner's equations and coefficient, `_housner_reference`, its own solver) to 1e-3 of
+    the amplitude (measured 1.2e-11 rad; 2.1e-9 rad where the first impacts of the longer pulse fly, which the
+    reference leaves out) until the Zeno rule ends the accumulation where it says: at the impact whose leaving
+    corner is slower than v_Zeno (at 0.0337 s; 0.2283 s). Before issue 20 it switched to full contact at
+    0.0269 s (0.2214 s), at 36-44.7 v_Zeno (the bounce test run on the old pivot)."""
     A = 1.005 * G * math.tan(ALPHA)
-    phi_ref, times, speeds = _housner_reference(A, 0.01, 0.2, 1.0)
-    res = simulate(RigidBlock(b=B, h=H, e_N=0.2), RectangularPulse(A, 0.01), times[-1] + 2e-3,
-                   scheme="event_driven", tolerance=1e-10, output_interval=1e-5)
-    amplitude = np.max(np.abs(res.phi))
-    assert 3e-7 < amplitude < 4e-7
+    phi_ref, times, speeds = _housner_reference(A, duration, 0.2, 1.0, all_closed=duration < 0.02)
+    res = simulate(RigidBlock(b=B, h=H, e_N=0.2), RectangularPulse(A, duration), times[-1] + 2e-3,
+                   scheme="event_driven", tolerance=1e-10, output_interval=1e-5 if duration < 0.02 else 1e-4)
+    peak = np.max(np.abs(res.phi))
+    assert peak == pytest.approx(amplitude, rel=0.05)
     err = max(abs(p - phi_ref(t)) for t, p in zip(res.t, res.phi))
-    assert err < 1e-3 * amplitude, err
-    full = res.t[(res.contact == Mode.FULL) & (res.t > 0.01)]
+    assert err < 1e-3 * peak, err
+    full = res.t[(res.contact == Mode.FULL) & (res.t > duration)]
     t_switch = full[0]
     assert np.all(res.contact[res.t >= t_switch] == Mode.FULL)
     # between the exact impacts whose leaving corner is at 1.5 and at 0.67 v_Zeno (13 impacts apart)
     t_a = times[np.argmax(speeds < 1.5 * V_ZENO)]
     t_b = times[np.argmax(speeds < 0.67 * V_ZENO)]
-    assert t_a <= t_switch <= t_b + 1e-5
+    assert t_a - 1e-4 <= t_switch <= t_b + 1e-4
     # well past the impacts that the old rule ended on (leaving corner below 44.7 v_Zeno)
-    assert t_switch > times[np.argmax(speeds < U_BOUNCE)] + 5e-3
+    assert t_switch > times[np.argmax(speeds < U_BOUNCE)] + 5e-3 and t_switch > old_switch + 5e-3
 
 
 # ============================================================================================== Painleve
