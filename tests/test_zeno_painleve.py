@@ -189,6 +189,10 @@ def test_critical_mu_of_the_scene():
     theta = ALPHA + PHI_P
     closed = (1 + 3 * math.sin(theta) ** 2) / (-3 * math.sin(theta) * math.cos(theta))
     assert critical_mu(PHI_P) == pytest.approx(closed, rel=1e-12) == pytest.approx(1.357, abs=1e-3)
+    # the README's figure: at least 4/3, reached at tan(theta) = 1/2 (phi = -alpha - atan(1/2) = -0.661 rad)
+    phis = np.linspace(-1.5, -ALPHA - 0.01, 3001)
+    assert min(critical_mu(p) for p in phis) == pytest.approx(4.0 / 3.0, rel=1e-6)
+    assert critical_mu(-ALPHA - math.atan(0.5)) == pytest.approx(4.0 / 3.0, rel=1e-12)
 
 
 def _landing(mu, U_N, gap):
