@@ -39,6 +39,7 @@ import struct
 import sys
 import time
 import traceback
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence
@@ -75,6 +76,19 @@ def slave_bytes(data: bytes) -> bytes:
 
     i = data.find(MAGIC)
     return data[i:] if i >= 0 else data
+
+
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c: magic 22,
+#: time 8, three int32 fields), and the header's size
+SERIAL_CRC_OFFSET = 42
+SERIAL_HEADER_SIZE = SERIAL_CRC_OFFSET + 4
+
+
+def with_binary_header(header: bytes, payload: bytes) -> bytes:
+    """``payload`` (the slave's bytes) behind the binary's ``header`` with its CRC-32 recomputed: a state whose
+    checksums hold, so that the slave's own checks of the payload are reached."""
+    head = header[:SERIAL_CRC_OFFSET]
+    return head + struct.pack("<I", zlib.crc32(payload, zlib.crc32(head))) + payload
 
 
 def ag_of(k: int, amplitude: float) -> float:
@@ -1517,7 +1531,7 @@ def bad_state(h: Harness, what: str, fmu: str = RIGID):
         return max(st1, st2)
 
     if what != "other-fmu":  # the slave's bytes behind the binary's valid header (FMI state and time)
-        data = header + data
+        data = with_binary_header(header, data)
     refusal(h, s, f"state '{what}'", action, status=ERROR, fragments=("rejected",) + tuple(fragments),
             control=ctrl)
     h.check("state", "nothing was executed (no file 'pwned' in the working directory)",
@@ -1534,6 +1548,249 @@ for _what in ("pickle-gadget", "pickle-gadget-via-rocking_model.fmi", "pickle-in
 for _fmu in (FLEX, STOREY, GMS):
     for _what in ("pickle-gadget-via-rocking_model.fmi", "other-fmu", "value-wrong-type"):
         add(f"badstate/{SHORT[_fmu]}/{_what}", bad_state, what=_what, fmu=_fmu, desc=f"{_fmu}: FMU state '{_what}'")
+
+
+# ---------------------------------------------------------------------------------------------- declared values
+#: fragments of LAPACK's error printout (xerbla), which a library must never write into its host's output
+LAPACK_NOISE = ("illegal value", "DLASCL", "On entry to")
+
+
+def _message_range(message: str):
+    """(lo, hi) of the first "allowed range [lo, hi]" (or open brackets) in ``message``, as floats; None."""
+    m = re.search(r"allowed range [\[(]([^,\]]+), ([^\])]+)[\])]", message)
+    if not m:
+        return None
+    try:
+        return float(m.group(1)), float(m.group(2))
+    except ValueError:
+        return None
+
+
+def _declared(h: Harness, fmu: str, name: str):
+    var = next(v for v in h.md(fmu).modelVariables if v.name == name)
+    return (None if var.min is None else float(var.min)), (None if var.max is None else float(var.max))
+
+
+def _no_lapack_noise(h: Harness) -> None:
+    """The case's own stdout/stderr (files in its working directory, written by the forked child) carry no
+    LAPACK error printout."""
+    found = []
+    for fname in ("stdout.txt", "stderr.txt"):
+        path = h.workdir / fname
+        if path.exists():
+            sys.stdout.flush()
+            sys.stderr.flush()
+            text = path.read_text(errors="replace")
+            found += [f"{fname}: {line[:160]}" for line in text.splitlines() if any(n in line for n in LAPACK_NOISE)]
+    h.check("message", "no LAPACK error printout in the host's output", not found, found[:5] or None)
+
+
+def declared_refused(h: Harness, fmu: str, name: str, value, params: Optional[dict] = None):
+    """A value outside the range its modelDescription declares (or at the edge of the floating-point range,
+    where the numerics fail): refused at fmi2ExitInitializationMode with fmi2Error, and the range the message
+    states is the declared one (min and max of the modelDescription): the declaration, the check and the
+    message agree."""
+    lo, hi = _declared(h, fmu, name)
+    s = h.instance(fmu)
+    s.setup()
+    s.enter()
+    s.set(**(params or {}), **{name: value})
+    mark = h.mark()
+    h.expect_status(f"fmi2ExitInitializationMode with {name} = {value!r}", s.exit(), ERROR)
+    h.expect_log("the message names the variable and its allowed range", mark, s, (word(name), "allowed range"))
+    got = [_message_range(m["message"]) for m in h.messages_since(mark, s)]
+    got = [r for r in got if r is not None]
+    want = (-math.inf if lo is None else lo, math.inf if hi is None else hi)
+    h.check("message", f"the range in the message is the declared one (modelDescription min = {lo}, max = {hi})",
+            bool(got) and got[0] == want, {"message": got, "declared": want})
+    h.check("status", f"the value is outside the declared range [{lo}, {hi}]",
+            (lo is not None and value < lo) or (hi is not None and value > hi), None)
+    _no_lapack_noise(h)
+    after_error(h, s, fmu)
+
+
+for _fmu in (RIGID, FLEX):
+    for _scheme in (0, 1):
+        add(f"declared/{SHORT[_fmu]}/mu=5e-324-scheme={_scheme}", declared_refused, fmu=_fmu, name="mu",
+            value=5e-324, params={"scheme": _scheme},
+            desc=f"{_fmu}: mu = 5e-324 (1/mu = inf: used to hang the event-driven step in LAPACK), scheme {_scheme}")
+    for _v in (2**31 - 1, 10**9 + 1):
+        add(f"declared/{SHORT[_fmu]}/max_steps={_v}", declared_refused, fmu=_fmu, name="max_steps", value=_v,
+            desc=f"{_fmu}: max_steps = {_v}, beyond its declared max")
+
+
+def _edges():
+    """(FMU, parameter, value) for the two edges of every declared Real parameter of the rocking FMUs (a closed
+    bound itself, an open one's nearest double inside, a missing one 1e300), from the same declarations the
+    FMUs are built from."""
+    from rocking_model.models import FlexibleOscillator, RigidBlock
+    from rocking_model.simulation import SOLVER_PARAMETERS
+
+    out = []
+    for fmu, cls in ((RIGID, RigidBlock), (FLEX, FlexibleOscillator)):
+        for q in (*cls.parameters(), *cls.INITIAL, *SOLVER_PARAMETERS):
+            if q.items or not q.fmu or q.unit is None:
+                continue
+            lo = -1e300 if q.lo is None else (math.nextafter(q.lo, math.inf) if q.lo_open else q.lo)
+            hi = 1e300 if q.hi is None else (math.nextafter(q.hi, -math.inf) if q.hi_open else q.hi)
+            for v in dict.fromkeys((lo, hi)):
+                out.append((fmu, q.name, v))
+    return out
+
+
+def declared_edge(h: Harness, fmu: str, name: str, value: float, scheme: int):
+    """A parameter at an edge of its declared range: either refused at initialization (fmi2Error, a message
+    naming it) or the scene's steps run in bounded time (the case's timeout) with fmi2OK / fmi2Warning, or
+    fmi2Discard with a message; outputs finite; no LAPACK printout in the host's output."""
+    s = h.instance(fmu)
+    s.setup()
+    s.enter()
+    s.set(scheme=scheme, **{name: value})
+    mark = h.mark()
+    st = s.exit()
+    if st == ERROR:
+        h.check("status", f"refused at initialization (fmi2Error)", True)
+        h.expect_log("the message names the parameter", mark, s, (word(name),))
+        _no_lapack_noise(h)
+        return
+    h.expect_status("fmi2ExitInitializationMode (or fmi2Error naming the parameter)", st, OK)
+    if st != OK:
+        return
+    statuses = []
+    for _ in range(N_BEFORE):
+        mark = h.mark()
+        st = s.drive_step()
+        statuses.append(st)
+        if st == DISCARD:
+            h.expect_log("a refused step says why", mark, s, ("refused",))
+            break
+        if st not in (OK, WARNING):
+            break
+    h.check("status", "every step fmi2OK or fmi2Warning (or fmi2Discard with a message)",
+            all(x in (OK, WARNING, DISCARD) for x in statuses), [STATUS_NAMES.get(x) for x in statuses])
+    vals = s.outputs()
+    bad = {k: v for k, v in vals.items() if isinstance(v, str) and v.lstrip("-") in ("nan", "inf")}
+    h.check("state", "finite outputs", not bad, bad or None)
+    _no_lapack_noise(h)
+
+
+for _fmu, _name, _v in _edges():
+    for _scheme in (0, 1):
+        add(f"declared/{SHORT[_fmu]}/{_name}={_v!r}-scheme={_scheme}", declared_edge, fmu=_fmu, name=_name,
+            value=_v, scheme=_scheme, kinds=("status", "message"),
+            desc=f"{_fmu}: {_name} = {_v!r} (an edge of its declared range), scheme {_scheme}")
+
+
+# ---------------------------------------------------------------------------------------------- input derivatives
+#: [m/s2], [m/s2 / s] the input and its rate set before the first step, and the start time [s]
+INPUT_0, INPUT_RATE, START_TIME = 0.5, 50.0, 1.0
+
+
+def rate_before_init(h: Harness, fmu: str, where: str):
+    """fmi2SetRealInputDerivatives before initialization (FMI 2.0 section 4.2.1 allows it in the instantiated
+    state and in initialization mode), with startTime = 1 s: the derivative refers to the start of the first
+    communication step (the start time), so the run equals a control that set the same value and rate after
+    initialization, at t = 1 s (today's code measured it from t = 0: ag = 50.5 instead of 0.5)."""
+    s, ctrl = h.instance(fmu), h.instance(fmu, "control")
+    vr = s.vars["ag"].valueReference
+
+    def rate(inst):
+        return inst.call("fmi2SetRealInputDerivatives", inst.fmu.setRealInputDerivatives, [vr], [1], [INPUT_RATE])
+
+    if where == "instantiated":
+        h.expect_status("fmi2SetReal(ag) when instantiated", s.set(ag=INPUT_0), OK)
+        h.expect_status("fmi2SetRealInputDerivatives when instantiated", rate(s), OK)
+    h.expect_status("fmi2SetupExperiment(startTime = 1)", s.setup(START_TIME), OK)
+    h.expect_status("fmi2EnterInitializationMode", s.enter(), OK)
+    if where == "initialization":
+        h.expect_status("fmi2SetReal(ag) in initialization mode", s.set(ag=INPUT_0), OK)
+        h.expect_status("fmi2SetRealInputDerivatives in initialization mode", rate(s), OK)
+    h.expect_status("fmi2ExitInitializationMode", s.exit(), OK)
+    s.t = s.k = 0
+    s.t = START_TIME
+    ctrl.init(START_TIME)
+    ctrl.set(ag=INPUT_0)
+    rate(ctrl)
+    problems = []
+    for i in range(10):  # ag from 0.5 to 1.0 m/s2 over the first step (no uplift), 5.5 m/s2 after the tenth
+        a, b = s.step(), ctrl.step()
+        if a != b or a not in (OK, WARNING):
+            problems.append(f"step {i + 1}: subject {STATUS_NAMES.get(a)}, control {STATUS_NAMES.get(b)}")
+            break
+        oa, ob = s.outputs(), ctrl.outputs()
+        if oa != ob:
+            problems.append({"step": i + 1, "outputs differ": _dict_diff(oa, ob)})
+            break
+    h.check("state", "the steps equal those of a control that set the rate at the start time", not problems,
+            problems or None)
+    h.expect_same("same serialized state (value, rate and its reference time)", ctrl.snapshot(), s.snapshot())
+
+
+for _fmu in (RIGID, FLEX):
+    add(f"inputderiv/{SHORT[_fmu]}/rate-in-initialization-mode-startTime=1", rate_before_init, fmu=_fmu,
+        where="initialization", kinds=("status", "state"),
+        desc=f"{_fmu}: fmi2SetRealInputDerivatives in initialization mode, startTime = 1 s")
+add("inputderiv/rigid/rate-when-instantiated-startTime=1", rate_before_init, fmu=RIGID, where="instantiated",
+    kinds=("status", "state"), desc="RigidRockingBlock: fmi2SetRealInputDerivatives before fmi2SetupExperiment, "
+                                    "startTime = 1 s")
+
+
+# ---------------------------------------------------------------------------------------------- corrupted bytes
+def _status_fields(s: Inst):
+    """(fmi2LastSuccessfulTime, fmi2Terminated): the binary's own fields, readable in the error state too."""
+    t, term = ctypes.c_double(), ctypes.c_int()
+    st1 = s.call("fmi2GetRealStatus", s.fmu.fmi2GetRealStatus, s.fmu.component, 2, ctypes.byref(t))
+    st2 = s.call("fmi2GetBooleanStatus", s.fmu.fmi2GetBooleanStatus, s.fmu.component, 3, ctypes.byref(term))
+    return (st1, t.value.hex(), st2, term.value)
+
+
+#: every PAYLOAD_STRIDE-th byte of the slave's payload is flipped (every byte of both headers is)
+PAYLOAD_STRIDE = 7
+
+
+def flipped_bytes(h: Harness, fmu: str):
+    """A serialized state with one bit flipped -- every byte of the binary's header (time, instance state,
+    fmi2Terminated flag, last status, CRC) and of the slave's header, every 7th byte of the payload: each is
+    refused with fmi2Error (fmi2DeSerializeFMUstate or fmi2SetFMUstate), and the instance keeps its state (every
+    variable, fmi2LastSuccessfulTime and fmi2Terminated read in the error state, and the serialized bytes after
+    leaving it by a state saved before); then it steps on like a control instance."""
+    s, ctrl = h.scene(fmu)
+    full, problem = s.state_bytes()
+    if problem is not None or not full:
+        raise HarnessError(f"no valid state to corrupt: {problem}")
+    n_binary = len(full) - len(slave_bytes(full))
+    h.check("state", f"the binary's header has {SERIAL_HEADER_SIZE} bytes", n_binary == SERIAL_HEADER_SIZE, n_binary)
+    positions = list(range(min(len(full), n_binary + 64))) + list(range(n_binary + 64, len(full), PAYLOAD_STRIDE))
+    values, fields = s.values(), _status_fields(s)
+    st, saved = s.get_state()
+    accepted, changed = [], []
+    mark = h.mark()
+    for i in positions:
+        data = full[:i] + bytes([full[i] ^ 0x01]) + full[i + 1:]
+        st1, state = s.deserialize(data)
+        status = st1
+        if st1 in (OK, WARNING):
+            status = max(status, s.set_state(state))
+            s.free_state(state)
+        if status != ERROR:
+            accepted.append({"byte": i, "status": STATUS_NAMES.get(status)})
+        if s.values() != values or _status_fields(s) != fields:
+            changed.append({"byte": i, "what": "variables or status fields"})
+        s.set_state(saved)  # out of the error state (or back from an accepted corrupted state)
+        if s.state_bytes()[0] != full:
+            changed.append({"byte": i, "what": "serialized state after fmi2SetFMUstate of the saved one"})
+    h.figure("bytes_flipped", len(positions))
+    h.check("status", f"each of the {len(positions)} corrupted states is refused with fmi2Error", not accepted,
+            accepted[:20] or None)
+    h.check("state", "the instance keeps its state after each refusal", not changed, changed[:20] or None)
+    h.expect_log("the refusal says the state is corrupted", mark, s, ("rejected", ("corrupt", "SHA", "CRC")))
+    s.free_state(saved)
+    h.expect_same_run("after the corrupted states", s, ctrl)
+
+
+for _fmu in (RIGID, FLEX):
+    add(f"badstate/{SHORT[_fmu]}/every-header-byte-flipped", flipped_bytes, fmu=_fmu,
+        desc=f"{_fmu}: serialized states with one bit flipped in every header byte and a sample of the payload")
 
 
 # ---------------------------------------------------------------------------------------------- reset
