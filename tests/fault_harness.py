@@ -1676,7 +1676,7 @@ def declared_edge(h: Harness, fmu: str, name: str, value: float, scheme: int):
 
 for _fmu, _name, _v in _edges():
     for _scheme in (0, 1):
-        add(f"declared/{SHORT[_fmu]}/{_name}={_v!r}-scheme={_scheme}", declared_edge, fmu=_fmu, name=_name,
+        add(f"declared/{SHORT[_fmu]}/edge-{_name}={_v!r}-scheme={_scheme}", declared_edge, fmu=_fmu, name=_name,
             value=_v, scheme=_scheme, kinds=("status", "message"),
             desc=f"{_fmu}: {_name} = {_v!r} (an edge of its declared range), scheme {_scheme}")
 
