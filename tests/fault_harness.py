@@ -2156,6 +2156,203 @@ for _fmu in FMUS:
         desc=f"{_fmu}: refusals with loggingOn = false")
 
 
+# ============================================================================================== the page
+#: what each class (case family) tries, the statuses its cases assert, and what holds: the rows of
+#: docs/robustness.md, written by `robustness_page` (tests/test_fault_suite.py checks the committed page)
+FAMILIES = {
+    "param": ("invalid start values: outside the declared range, NaN, inf; a singular mass matrix; a record file "
+              "missing, empty, malformed or going back in time",
+              "`fmi2ExitInitializationMode`: fmi2Error; `fmi2DoStep` then: fmi2Error (error state); `fmi2Reset`: "
+              "fmi2OK",
+              "the message names the variable and its allowed range (or the file and the line); the getters, "
+              "`fmi2GetFMUstate`, `fmi2Terminate` and `fmi2Reset` are safe; after `fmi2Reset` and valid values "
+              "the instance runs like a fresh one"),
+    "param-logging-off": ("an invalid start value with `loggingOn = false`", "as `param`",
+                          "the error message still reaches the logger (only debug messages need logging on)"),
+    "declared": ("values at and beyond the edges of the declared ranges: `mu` = 5e-324 (1/mu = inf used to hang the "
+                 "event-driven step in LAPACK), `max_steps` = 2^31-1 and 1e9+1, and both edges of every declared "
+                 "Real parameter of the two rocking FMUs under both schemes",
+                 "beyond: fmi2Error at `fmi2ExitInitializationMode`; at an edge: fmi2Error naming the parameter, or "
+                 "every step fmi2OK / fmi2Warning (fmi2Discard with a message)",
+                 "the range the message states is the modelDescription's min and max (one declaration read by "
+                 "both); an edge simulates in bounded time with finite outputs or is refused with a message "
+                 "(a subnormal value whose reciprocal overflows is named); LAPACK prints nothing into the "
+                 "host's output"),
+    "simulate_fmu": ("`fmpy.simulate_fmu` and `rocking_model.fmi.run_fmu` with an invalid start value",
+                     "fmpy raises; `run_fmu` raises `FMUError`",
+                     "the `FMUError` names the variable and its allowed range"),
+    "sequence": ("calls out of sequence: `fmi2DoStep` before initialization or after `fmi2Terminate`; "
+                 "`fmi2SetupExperiment`, `fmi2EnterInitializationMode`, `fmi2ExitInitializationMode` after "
+                 "initialization; `startTime` NaN or inf; `fmi2FreeInstance` without `fmi2Terminate`",
+                 "fmi2Error (the instance in the error state); `fmi2FreeInstance`: fmi2OK",
+                 "the message names the call and the state of the instance; every variable bit-identical; after "
+                 "`fmi2SetFMUstate` of a saved state or `fmi2Reset` it steps like a control instance"),
+    "doStep": ("`fmi2DoStep` with a step size 0, < 0, NaN, inf; a communication point NaN, inf, ahead of or behind "
+               "the instance's time",
+               "fmi2Error",
+               "the message names `communicationStepSize` or `currentCommunicationPoint`; the state bit-identical; "
+               "out of the error state by a saved state, it steps on like a control instance"),
+    "input": ("the input `ag` NaN, ±inf, 1e308, ±1500 m/s² (declared range [-1000, 1000], written as min and max "
+              "in the modelDescription)",
+              "`fmi2SetReal`: fmi2Error",
+              "the message names `ag` and its range; nothing is set; the run goes on like a control instance"),
+    "inputderiv": ("`fmi2SetRealInputDerivatives` before initialization (instantiated, initialization mode) "
+                   "with `startTime` = 1 s",
+                   "fmi2OK",
+                   "the derivative refers to the start of the first communication step (the start time, FMI 2.0 "
+                   "§4.2.1): the steps and the serialized state equal those of a control that set value and rate "
+                   "at t = 1 s"),
+    "vr": ("value references: unknown, 2^32-1, of another type, an output set, a `fixed` parameter changed after "
+           "initialization, a batch with one bad reference, `nvr` = 0, a fixed parameter set to its own value",
+           "fmi2Error; `nvr` = 0 and the same value: fmi2OK",
+           "the message names the reference (and the variable and its type); nothing of the call is set; the run "
+           "goes on like a control instance"),
+    "string": ("`fmi2SetString` / `fmi2GetString` on FMUs without String variables, unknown references, on a "
+               "Real; `record` changed after initialization, 100 000 characters long, not UTF-8; a record path "
+               "with é # [ % read back; printf conversions in a record name",
+               "fmi2Error; the round trip: fmi2OK",
+               "the message names the reference or `record`; `%` is shown literally (messages are passed as "
+               "data); the string set comes back unchanged"),
+    "bounded": ("steps that used to hang: `fmi2DoStep` of 1e12 s and 1e308 s, `dt_max` 1e-300 and 1e-9, "
+                "`EI` = 1e15, `ag` at ±1000 m/s² for 1 s and 999 m/s² for 10 s, `ag` = 1.797e308",
+                "fmi2Discard (work budget `max_steps`), fmi2Error at initialization (a parameter outside its "
+                "narrowed range) or at `fmi2SetReal`, or fmi2OK",
+                "every case ends in bounded time; a refused step names the cause and the way out, the state "
+                "unchanged; a completed one has finite outputs"),
+    "state": ("FMU state: get, steps, set, the same steps; serialize in one instance and deserialize in another; "
+              "`fmi2GetFMUstate` 3000 times onto one pointer; a freed pointer reused; the size over many impacts; "
+              "`fmi2SerializeFMUstate` into a buffer 16 bytes short",
+              "fmi2OK; the short buffer: fmi2Error",
+              "restored states are bit-identical and the redone steps too; no memory growth per call; the size "
+              "does not grow with impacts; nothing is written past a short buffer"),
+    "badstate": ("states to reject: pickle gadgets, random, short, NUL and empty bytes, truncated, padded, "
+                 "version 0 or 2, declared length 2^32-1, another FMU's state, JSON that is not an object, invalid "
+                 "or nested 100 000 deep, 2 MiB, fields of the wrong type, missing or out of range; one bit "
+                 "flipped in every byte of both headers (the binary's: time, instance state, fmi2Terminated, last "
+                 "status, CRC-32) and in every 7th byte of the payload",
+                 "fmi2Error (`fmi2DeSerializeFMUstate` or `fmi2SetFMUstate`)",
+                 "the message says the state is rejected and why (header, version, length, checksum, JSON, the "
+                 "field); nothing is executed; every variable, `fmi2LastSuccessfulTime` and `fmi2Terminated` are "
+                 "kept; the run goes on like a control instance"),
+    "reset": ("`fmi2Reset` before and after initialization, after an error, after `fmi2Terminate`, after a "
+              "discarded step, in initialization mode; 50 instances created, run and freed in one process",
+              "fmi2OK",
+              "the start values and state of a fresh instance, which then runs like one; `sys.path` keeps its "
+              "length"),
+    "resources": ("the FMU extracted into folders named with a space, é, #, [, %; `run_fmu` and the co-simulation "
+                  "master with the .fmu in `FMUs é #[%] x/`",
+                  "fmi2OK",
+                  "the resource URI is decoded: the instance runs like a control; the helpers give the results "
+                  "of a plain folder"),
+    "misc": ("`fmi2GetRealOutputDerivatives`, `fmi2CancelStep`; the status queries after a discarded step; "
+             "`fmi2GetVersion`, `fmi2GetTypesPlatform`, `fmi2SetDebugLogging` with an unknown category",
+             "not provided: fmi2Error; the queries: fmi2OK (fmi2Discard for a status FMI 2.0 does not define)",
+             "fmi2DoStepStatus is fmi2Discard and fmi2Terminated true after a discard, "
+             "fmi2LastSuccessfulTime the slave's time; \"2.0\", \"default\""),
+    "report": ("a failed adaptive step; a contact LCP without an exact solution",
+               "fmi2Discard; fmi2Warning",
+               "the failed step is refused with the state kept and a message; the inexact solve is reported as a "
+               "warning and the step done"),
+    "instantiate": ("`fmi2Instantiate` with a wrong GUID, `fmi2ModelExchange`, a resource location NULL, not a "
+                    "local file URI, on a remote host, missing or badly escaped; `file:/…` and "
+                    "`file://localhost/…`",
+                    "NULL (refused); the last two: an instance",
+                    "the message names the cause; the accepted spellings run"),
+    "logging-off": ("refusals with `loggingOn = false`: an unknown reference, `fmi2GetString`, a second "
+                    "`fmi2ExitInitializationMode`, `ag` = NaN, a pickle gadget",
+                    "fmi2Error",
+                    "the same statuses and state as with logging on; the errors reach the logger"),
+}
+
+_PAGE_HEAD = """\
+# Robustness of the FMUs: classes of misuse and what the FMUs do
+
+<!-- generated by `python tests/fault_harness.py --write-doc docs/robustness.md` from the case list of
+tests/fault_harness.py; tests/test_fault_suite.py checks that this page is what the list generates -->
+
+The four FMUs (RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource, LinearBuildingStorey) run
+inside the importer's process. `tests/test_fault_suite.py` drives every FMI 2.0 co-simulation function
+through fmpy's low-level `fmpy.fmi2.FMU2Slave` with {n_cases} cases in {n_classes} classes, each case in a process
+of its own with a timeout (a crash or a hang is a failed case, never a dead test run). Every case asserts:
+
+1. the process survives (exit code 0, no signal) and finishes within its timeout;
+2. the status is exactly the one FMI 2.0 gives the call (the column "statuses" below);
+3. the logged message names the variable or the call (messages are read through fmpy's native logger
+   proxy, which formats them with `vsnprintf` like any C importer);
+4. every variable is bit-identical after a refused call (read back as exact floats); after an fmi2Error,
+   `fmi2SetFMUstate` of a state saved before the call leaves the error state and the instance is
+   bit-identical to before (the bytes of `fmi2SerializeFMUstate`); further identical steps give the outputs
+   of a control instance that never saw the refused call.
+
+Run it: `bash run.sh test tests/test_fault_suite.py`; one case by hand: `python tests/fault_harness.py
+--list`, then `--case <id> --config <fmus.json>`. The session prints the classes tried and passing, the
+longest case and the longest single `fmi2DoStep`.
+
+## Statuses (FMI 2.0 §2.1.3, the project's binary `fmi_binary/fmi2_cs.c`)
+
+* **fmi2Error** for an invalid argument, value or call sequence, or a rejected FMU state: nothing of the call
+  is applied; the instance is in the error state, where the getters, the status queries, `fmi2SetFMUstate`,
+  `fmi2Reset`, `fmi2Terminate` and `fmi2FreeInstance` remain;
+* **fmi2Discard** for a step the simulator refuses with its state unchanged (the work budget `max_steps`, an
+  input ramp leaving its range, a failed step): `fmi2Terminated` is true and `fmi2LastSuccessfulTime` the
+  time the step started, until a retried step succeeds;
+* **fmi2Warning** for a step done with something to report (an overturning, an inexact contact solve);
+* `fmi2Instantiate` returns NULL with a message when it refuses;
+* errors and warnings reach the importer's logger with logging on or off; every message is passed as data
+  (`"%s"`), so `%` in a file name prints literally.
+
+## Classes
+
+Case ids are `<class>/<fmu>/<what>` in `tests/fault_harness.py`.
+
+| class | cases | FMUs | what is tried | statuses | what holds |
+| --- | --- | --- | --- | --- | --- |
+"""
+
+_PAGE_TAIL = """
+## History
+
+Issue 12 wrote the suite against pythonfmu 0.7's wrapper (SIGSEGV for `é # [ %` in the resource path, GUID not
+checked, no input derivatives, fmi2Fatal for a string that is not UTF-8, aborts at process exit); issue 13
+replaced the wrapper by the project's binary, which passes every class. Issue 20 added the classes `declared`,
+`inputderiv` and the flipped bytes of `badstate`, with the faults they found fixed: a minimum of `mu` (1e-3),
+the declared range of `max_steps` checked, input derivatives set before initialization measured from the start
+time, and a CRC-32 over the whole serialized state.
+"""
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def _fmu_of(case: Case) -> Optional[str]:
+    """The FMU a case drives (its ``fmu`` argument, or the FMU named in its id) or the importer's helpers;
+    None when the id names neither ("all": the case's FMUs are those of the other cases of its class)."""
+    if case.kwargs.get("fmu") in FMUS:
+        return case.kwargs["fmu"]
+    part = case.cid.split("/")[1]
+    named = {v: k for k, v in SHORT.items()}
+    return named.get(part) or {"helpers": "importer helpers"}.get(part)
+
+
+def robustness_page() -> str:
+    """docs/robustness.md, from the case list (`CASES`) and the class descriptions (`FAMILIES`): one row per
+    class with its number of cases and the FMUs they drive. A class without a description is an error."""
+    order = list(dict.fromkeys(case.family for case in CASES.values()))
+    missing = [f for f in order if f not in FAMILIES]
+    if missing:
+        raise ValueError(f"classes without a description in FAMILIES: {missing}")
+    rows = []
+    for family in order:
+        cases = [c for c in CASES.values() if c.family == family]
+        fmus = list(dict.fromkeys(f for c in cases for f in [_fmu_of(c)] if f))
+        shown = ", ".join(fmus)
+        tried, statuses, holds = FAMILIES[family]
+        rows.append(f"| `{family}` | {len(cases)} | {_cell(shown)} | {_cell(tried)} | {_cell(statuses)} | "
+                    f"{_cell(holds)} |")
+    return (_PAGE_HEAD.format(n_cases=len(CASES), n_classes=len(order)) + "\n".join(rows) + "\n" + _PAGE_TAIL)
+
+
 # ============================================================================================== running
 def run_case(cid: str, config: dict, workdir: Path) -> dict:
     case = CASES[cid]
@@ -2282,7 +2479,11 @@ def main(argv=None) -> int:
     parser.add_argument("--case", help="run one case in this process")
     parser.add_argument("--config", help="JSON file: {'fmus': {name: {'path': ..., 'unzip': ...}}}")
     parser.add_argument("--out", help="record file (JSON)")
+    parser.add_argument("--write-doc", metavar="PATH", help="write the page of the classes (docs/robustness.md)")
     args = parser.parse_args(argv)
+    if args.write_doc:
+        Path(args.write_doc).write_text(robustness_page(), encoding="utf-8")
+        return 0
     if args.list:
         for case in CASES.values():
             print(f"{case.cid:60s} {case.what}")
