@@ -1615,7 +1615,7 @@ for _fmu in (RIGID, FLEX):
             value=5e-324, params={"scheme": _scheme},
             desc=f"{_fmu}: mu = 5e-324 (1/mu = inf: used to hang the event-driven step in LAPACK), scheme {_scheme}")
     for _v in (2**31 - 1, 10**9 + 1):
-        add(f"declared/{SHORT[_fmu]}/max_steps={_v}", declared_refused, fmu=_fmu, name="max_steps", value=_v,
+        add(f"range/{SHORT[_fmu]}/max_steps={_v}", declared_refused, fmu=_fmu, name="max_steps", value=_v,
             desc=f"{_fmu}: max_steps = {_v}, beyond its declared max")
 
 
@@ -1789,7 +1789,7 @@ def flipped_bytes(h: Harness, fmu: str):
 
 
 for _fmu in (RIGID, FLEX):
-    add(f"badstate/{SHORT[_fmu]}/every-header-byte-flipped", flipped_bytes, fmu=_fmu,
+    add(f"corrupt/{SHORT[_fmu]}/every-header-byte-flipped", flipped_bytes, fmu=_fmu,
         desc=f"{_fmu}: serialized states with one bit flipped in every header byte and a sample of the payload")
 
 
@@ -2169,9 +2169,9 @@ FAMILIES = {
               "the instance runs like a fresh one"),
     "param-logging-off": ("an invalid start value with `loggingOn = false`", "as `param`",
                           "the error message still reaches the logger (only debug messages need logging on)"),
-    "declared": ("values at and beyond the edges of the declared ranges: `mu` = 5e-324 (1/mu = inf used to hang the "
-                 "event-driven step in LAPACK), `max_steps` = 2^31-1 and 1e9+1, and both edges of every declared "
-                 "Real parameter of the two rocking FMUs under both schemes",
+    "declared": ("declared values that hung or overflowed a step: `mu` = 5e-324 (1/mu = inf hung the event-driven "
+                 "step in LAPACK), now below the stated minimum 1e-3; both edges of every declared Real parameter "
+                 "of the two rocking FMUs under both schemes",
                  "beyond: fmi2Error at `fmi2ExitInitializationMode`; at an edge: fmi2Error naming the parameter, or "
                  "every step fmi2OK / fmi2Warning (fmi2Discard with a message)",
                  "the range the message states is the modelDescription's min and max (one declaration read by "
@@ -2227,13 +2227,22 @@ FAMILIES = {
               "does not grow with impacts; nothing is written past a short buffer"),
     "badstate": ("states to reject: pickle gadgets, random, short, NUL and empty bytes, truncated, padded, "
                  "version 0 or 2, declared length 2^32-1, another FMU's state, JSON that is not an object, invalid "
-                 "or nested 100 000 deep, 2 MiB, fields of the wrong type, missing or out of range; one bit "
-                 "flipped in every byte of both headers (the binary's: time, instance state, fmi2Terminated, last "
-                 "status, CRC-32) and in every 7th byte of the payload",
+                 "or nested 100 000 deep, 2 MiB, fields of the wrong type, missing or out of range (behind a "
+                 "binary header whose CRC-32 holds, so that the slave's checks are reached)",
                  "fmi2Error (`fmi2DeSerializeFMUstate` or `fmi2SetFMUstate`)",
-                 "the message says the state is rejected and why (header, version, length, checksum, JSON, the "
-                 "field); nothing is executed; every variable, `fmi2LastSuccessfulTime` and `fmi2Terminated` are "
-                 "kept; the run goes on like a control instance"),
+                 "the message says the state is rejected and why (header, version, length, digest, JSON, the "
+                 "field); nothing is executed; the state kept; the run goes on like a control instance"),
+    "corrupt": ("a serialized state with one bit flipped in every byte of both headers (the binary's: time, "
+                "instance state, fmi2Terminated flag, last status, CRC-32; the slave's: magic, version, length, "
+                "SHA-256) and in every 7th byte of the payload",
+                "fmi2Error for every one (`fmi2DeSerializeFMUstate` or `fmi2SetFMUstate`)",
+                "the CRC-32 over the whole state (and the slave's SHA-256) refuse each: every variable, "
+                "`fmi2LastSuccessfulTime` and `fmi2Terminated` are kept, the message says the state is rejected "
+                "as corrupted; the run goes on like a control instance"),
+    "range": ("`max_steps` beyond its declared max (2^31-1, 1e9+1)",
+              "`fmi2ExitInitializationMode`: fmi2Error",
+              "the range the message states is the modelDescription's min and max (the FMU checks the declaration "
+              "itself), the variable named"),
     "reset": ("`fmi2Reset` before and after initialization, after an error, after `fmi2Terminate`, after a "
               "discarded step, in initialization mode; 50 instances created, run and freed in one process",
               "fmi2OK",
@@ -2315,9 +2324,9 @@ _PAGE_TAIL = """
 Issue 12 wrote the suite against pythonfmu 0.7's wrapper (SIGSEGV for `é # [ %` in the resource path, GUID not
 checked, no input derivatives, fmi2Fatal for a string that is not UTF-8, aborts at process exit); issue 13
 replaced the wrapper by the project's binary, which passes every class. Issue 20 added the classes `declared`,
-`inputderiv` and the flipped bytes of `badstate`, with the faults they found fixed: a minimum of `mu` (1e-3),
-the declared range of `max_steps` checked, input derivatives set before initialization measured from the start
-time, and a CRC-32 over the whole serialized state.
+`inputderiv`, `corrupt` and `range`, with the faults they found fixed: a minimum of `mu` (1e-3), input
+derivatives set before initialization measured from the start time, a CRC-32 over the whole serialized state,
+and the declared range of `max_steps` checked.
 """
 
 
