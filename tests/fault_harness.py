@@ -1621,8 +1621,8 @@ for _fmu in (RIGID, FLEX):
 
 def _edges():
     """(FMU, parameter, value) for the two edges of every declared Real parameter of the rocking FMUs (a closed
-    bound itself, an open one's nearest double inside, a missing one 1e300), from the same declarations the
-    FMUs are built from."""
+    bound itself, an open one's nearest double inside, a missing one 1e300; a range closed at 0 also the
+    smallest positive double, whose reciprocal is inf), from the same declarations the FMUs are built from."""
     from rocking_model.models import FlexibleOscillator, RigidBlock
     from rocking_model.simulation import SOLVER_PARAMETERS
 
@@ -1633,7 +1633,8 @@ def _edges():
                 continue
             lo = -1e300 if q.lo is None else (math.nextafter(q.lo, math.inf) if q.lo_open else q.lo)
             hi = 1e300 if q.hi is None else (math.nextafter(q.hi, -math.inf) if q.hi_open else q.hi)
-            for v in dict.fromkeys((lo, hi)):
+            tiny = (5e-324,) if lo == 0.0 else ()
+            for v in dict.fromkeys((lo, *tiny, hi)):
                 out.append((fmu, q.name, v))
     return out
 
