@@ -70,8 +70,8 @@ PWNED = "pwned"
 
 
 def slave_bytes(data: bytes) -> bytes:
-    """The slave's own state format inside a serialized FMU state (after the binary's header: the FMI state
-    and the communication time, fmi_binary/fmi2_cs.c)."""
+    """The slave's own state format inside a serialized FMU state (after the binary's header: the
+    communication time, the FMI state fields and the CRC-32, fmi_binary/fmi2_cs.c)."""
     from rocking_model.fmi_state import MAGIC
 
     i = data.find(MAGIC)
