@@ -570,8 +570,8 @@ _MAX_TEXT = 4096
 _INT32 = (-2**31, 2**31 - 1)
 
 
-#: [1] magnitudes below which a nonzero parameter is named as the likely cause of an overflow: the smallest
-#: normal double (a smaller one is subnormal, and its reciprocal is inf)
+#: magnitude (in the parameter's own unit) below which a nonzero parameter is named as the likely cause of an
+#: overflow: the smallest normal double (a smaller one is subnormal, and its reciprocal is inf)
 _TINY = sys.float_info.min
 
 
