@@ -317,16 +317,28 @@ def cross_check_input(name: str):
     return np.array([(ti, *[f(ti) for f in spec["inputs"].values()]) for ti in t], dtype=cols)
 
 
-def simulate_cross_check(fmu: Path, input_table, opts: dict):
+def simulate_cross_check(fmu: Path, input_table, opts: dict, messages: list | None = None):
     """The reference run: fmpy.simulate_fmu with the default start values, the input table and the
-    options of the _ref.opt file; every output recorded."""
+    options of the _ref.opt file; every output recorded. The FMU's messages (an overturning of the reference
+    scene is one) are collected into ``messages`` as (status, category, text), not printed: they describe
+    the reference scene, not the user's run."""
     import fmpy
     from fmpy import read_model_description
 
+    sys.path.insert(0, str(ROOT))
+    try:
+        from rocking_model.fmi import collect_fmu_messages
+    finally:
+        sys.path.pop(0)
     outputs = [v.name for v in read_model_description(str(fmu)).modelVariables if v.causality == "output"]
-    return fmpy.simulate_fmu(str(fmu), start_time=opts["StartTime"], stop_time=opts["StopTime"],
-                             output_interval=opts["StepSize"], relative_tolerance=opts["RelTol"],
-                             input=input_table, output=outputs)
+    with collect_fmu_messages() as collected:
+        try:
+            return fmpy.simulate_fmu(str(fmu), start_time=opts["StartTime"], stop_time=opts["StopTime"],
+                                     output_interval=opts["StepSize"], relative_tolerance=opts["RelTol"],
+                                     input=input_table, output=outputs)
+        finally:
+            if messages is not None:
+                messages.extend(collected)
 
 
 def write_cross_check(fmu: Path, root) -> Path:
@@ -346,10 +358,14 @@ def write_cross_check(fmu: Path, root) -> Path:
     table = cross_check_input(name)
     if table is not None:
         write_cross_check_csv(folder / f"{name}_in.csv", table)
-    result = simulate_cross_check(fmu, table, opts)
+    messages: list = []
+    result = simulate_cross_check(fmu, table, opts, messages)
     t_last = float(result["time"][-1])
-    if not math.isclose(t_last, spec["stop"], rel_tol=1e-9):
-        raise ValueError(f"{name}: the cross-check run ended at t = {t_last:g} s before StopTime")
+    errors = [text for status, _, text in messages if status >= 3]   # fmi2Error or worse
+    if errors or not math.isclose(t_last, spec["stop"], rel_tol=1e-9):
+        raise ValueError(f"{name}: the cross-check run ended at t = {t_last:g} s (StopTime {spec['stop']:g} s): "
+                         + ("; ".join(errors) or "no error message"))
+    notes = [text for status, _, text in messages if status == 1]    # fmi2Warning: part of the scene
     write_cross_check_csv(folder / f"{name}_ref.csv", result)
     inputs = ", ".join(spec["inputs"]) or "none"
     (folder / "ReadMe.md").write_text(
@@ -357,7 +373,9 @@ def write_cross_check(fmu: Path, root) -> Path:
         f"simulate_fmu with the default start values, communication step {spec['step']} s, inputs ({inputs}) "
         f"from {name}_in.csv held over each step (the table is sampled at the communication points). "
         f"The FMU embeds Python: the importer needs libpython loaded and numpy and scipy importable "
-        f"(see the README of rocking_model).\n")
+        f"(see the README of rocking_model).\n"
+        + ("\nWarnings of the reference run (expected: they belong to this reference scene):\n\n"
+           + "".join(f"- {text}\n" for text in notes) if notes else ""))
     return folder
 
 

@@ -20,6 +20,7 @@
 
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -115,10 +116,34 @@ typedef struct {
     fmi2Status last_step_status;
 } SavedState;
 
-/* serialized FMU state: this header, then the slave's bytes */
-#define SERIAL_MAGIC "rocking FMI2 state v1\n"
+/* serialized FMU state: this header, then the slave's bytes.
+ *   offset  size  field
+ *   0       22    SERIAL_MAGIC
+ *   22      8     time [s] (double)
+ *   30      12    instance state, fmi2Terminated flag, last fmi2DoStep status (int32 each)
+ *   42      4     CRC-32 (IEEE 802.3) of bytes 0..41 and of the slave's bytes that follow
+ *   46      n     the slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256)
+ * The CRC covers every byte of the state but its own four: any corrupted byte (indeed any error burst of up
+ * to 32 bits) is detected before anything is set, and the state is refused with fmi2Error. Like the slave's
+ * SHA-256 it guards against accidents, not against someone who rewrites the checksum. */
+#define SERIAL_MAGIC "rocking FMI2 state v2\n"
 #define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
-#define SERIAL_HEADER_SIZE (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
+
+/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
+static uint32_t crc32_update(uint32_t crc, const unsigned char *p, size_t n) {
+    crc = ~crc;
+    while (n--) {
+        crc ^= *p++;
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static uint32_t serial_crc(const unsigned char *header, const unsigned char *payload, size_t n) {
+    return crc32_update(crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
+}
 
 /* ------------------------------------------------------------------------------------------ messages */
 static int category_enabled(const Instance *S, const char *category) {
@@ -976,6 +1001,8 @@ static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
     memcpy(p + SERIAL_MAGIC_SIZE, &st->time, 8);
     memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
     memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
+    uint32_t crc = serial_crc((const unsigned char *)p, (const unsigned char *)bytes, (size_t)n);
+    memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
     py.DecRef(data);
     return out;
 }
@@ -1037,6 +1064,14 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     double time;
     if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
         log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
+        return fail(S, fmi2Error);
+    }
+    uint32_t crc;
+    memcpy(&crc, serializedState + SERIAL_CRC_OFFSET, 4);
+    if (crc != serial_crc((const unsigned char *)serializedState,
+                          (const unsigned char *)serializedState + SERIAL_HEADER_SIZE, size - SERIAL_HEADER_SIZE)) {
+        log_error(S, "fmi2DeSerializeFMUstate: state rejected, the instance keeps its current state: the %zu "
+                  "bytes are corrupted (CRC-32 mismatch)", size);
         return fail(S, fmi2Error);
     }
     memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);

@@ -39,6 +39,7 @@ import struct
 import sys
 import time
 import traceback
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence
@@ -69,12 +70,25 @@ PWNED = "pwned"
 
 
 def slave_bytes(data: bytes) -> bytes:
-    """The slave's own state format inside a serialized FMU state (after the binary's header: the FMI state
-    and the communication time, fmi_binary/fmi2_cs.c)."""
+    """The slave's own state format inside a serialized FMU state (after the binary's header: the
+    communication time, the FMI state fields and the CRC-32, fmi_binary/fmi2_cs.c)."""
     from rocking_model.fmi_state import MAGIC
 
     i = data.find(MAGIC)
     return data[i:] if i >= 0 else data
+
+
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c: magic 22,
+#: time 8, three int32 fields), and the header's size
+SERIAL_CRC_OFFSET = 42
+SERIAL_HEADER_SIZE = SERIAL_CRC_OFFSET + 4
+
+
+def with_binary_header(header: bytes, payload: bytes) -> bytes:
+    """``payload`` (the slave's bytes) behind the binary's ``header`` with its CRC-32 recomputed: a state whose
+    checksums hold, so that the slave's own checks of the payload are reached."""
+    head = header[:SERIAL_CRC_OFFSET]
+    return head + struct.pack("<I", zlib.crc32(payload, zlib.crc32(head))) + payload
 
 
 def ag_of(k: int, amplitude: float) -> float:
@@ -1517,7 +1531,7 @@ def bad_state(h: Harness, what: str, fmu: str = RIGID):
         return max(st1, st2)
 
     if what != "other-fmu":  # the slave's bytes behind the binary's valid header (FMI state and time)
-        data = header + data
+        data = with_binary_header(header, data)
     refusal(h, s, f"state '{what}'", action, status=ERROR, fragments=("rejected",) + tuple(fragments),
             control=ctrl)
     h.check("state", "nothing was executed (no file 'pwned' in the working directory)",
@@ -1534,6 +1548,250 @@ for _what in ("pickle-gadget", "pickle-gadget-via-rocking_model.fmi", "pickle-in
 for _fmu in (FLEX, STOREY, GMS):
     for _what in ("pickle-gadget-via-rocking_model.fmi", "other-fmu", "value-wrong-type"):
         add(f"badstate/{SHORT[_fmu]}/{_what}", bad_state, what=_what, fmu=_fmu, desc=f"{_fmu}: FMU state '{_what}'")
+
+
+# ---------------------------------------------------------------------------------------------- declared values
+#: fragments of LAPACK's error printout (xerbla), which a library must never write into its host's output
+LAPACK_NOISE = ("illegal value", "DLASCL", "On entry to")
+
+
+def _message_range(message: str):
+    """(lo, hi) of the first "allowed range [lo, hi]" (or open brackets) in ``message``, as floats; None."""
+    m = re.search(r"allowed range [\[(]([^,\]]+), ([^\])]+)[\])]", message)
+    if not m:
+        return None
+    try:
+        return float(m.group(1)), float(m.group(2))
+    except ValueError:
+        return None
+
+
+def _declared(h: Harness, fmu: str, name: str):
+    var = next(v for v in h.md(fmu).modelVariables if v.name == name)
+    return (None if var.min is None else float(var.min)), (None if var.max is None else float(var.max))
+
+
+def _no_lapack_noise(h: Harness) -> None:
+    """The case's own stdout/stderr (files in its working directory, written by the forked child) carry no
+    LAPACK error printout."""
+    found = []
+    for fname in ("stdout.txt", "stderr.txt"):
+        path = h.workdir / fname
+        if path.exists():
+            sys.stdout.flush()
+            sys.stderr.flush()
+            text = path.read_text(errors="replace")
+            found += [f"{fname}: {line[:160]}" for line in text.splitlines() if any(n in line for n in LAPACK_NOISE)]
+    h.check("message", "no LAPACK error printout in the host's output", not found, found[:5] or None)
+
+
+def declared_refused(h: Harness, fmu: str, name: str, value, params: Optional[dict] = None):
+    """A value outside the range its modelDescription declares (or at the edge of the floating-point range,
+    where the numerics fail): refused at fmi2ExitInitializationMode with fmi2Error, and the range the message
+    states is the declared one (min and max of the modelDescription): the declaration, the check and the
+    message agree."""
+    lo, hi = _declared(h, fmu, name)
+    s = h.instance(fmu)
+    s.setup()
+    s.enter()
+    s.set(**(params or {}), **{name: value})
+    mark = h.mark()
+    h.expect_status(f"fmi2ExitInitializationMode with {name} = {value!r}", s.exit(), ERROR)
+    h.expect_log("the message names the variable and its allowed range", mark, s, (word(name), "allowed range"))
+    got = [_message_range(m["message"]) for m in h.messages_since(mark, s)]
+    got = [r for r in got if r is not None]
+    want = (-math.inf if lo is None else lo, math.inf if hi is None else hi)
+    h.check("message", f"the range in the message is the declared one (modelDescription min = {lo}, max = {hi})",
+            bool(got) and got[0] == want, {"message": got, "declared": want})
+    h.check("status", f"the value is outside the declared range [{lo}, {hi}]",
+            (lo is not None and value < lo) or (hi is not None and value > hi), None)
+    _no_lapack_noise(h)
+    after_error(h, s, fmu)
+
+
+for _fmu in (RIGID, FLEX):
+    for _scheme in (0, 1):
+        add(f"declared/{SHORT[_fmu]}/mu=5e-324-scheme={_scheme}", declared_refused, fmu=_fmu, name="mu",
+            value=5e-324, params={"scheme": _scheme},
+            desc=f"{_fmu}: mu = 5e-324 (1/mu = inf: used to hang the event-driven step in LAPACK), scheme {_scheme}")
+    for _v in (2**31 - 1, 10**9 + 1):
+        add(f"range/{SHORT[_fmu]}/max_steps={_v}", declared_refused, fmu=_fmu, name="max_steps", value=_v,
+            desc=f"{_fmu}: max_steps = {_v}, beyond its declared max")
+
+
+def _edges():
+    """(FMU, parameter, value) for the two edges of every declared Real parameter of the rocking FMUs (a closed
+    bound itself, an open one's nearest double inside, a missing one 1e300; a range closed at 0 also the
+    smallest positive double, whose reciprocal is inf), from the same declarations the FMUs are built from."""
+    from rocking_model.models import FlexibleOscillator, RigidBlock
+    from rocking_model.simulation import SOLVER_PARAMETERS
+
+    out = []
+    for fmu, cls in ((RIGID, RigidBlock), (FLEX, FlexibleOscillator)):
+        for q in (*cls.parameters(), *cls.INITIAL, *SOLVER_PARAMETERS):
+            if q.items or not q.fmu or q.unit is None:
+                continue
+            lo = -1e300 if q.lo is None else (math.nextafter(q.lo, math.inf) if q.lo_open else q.lo)
+            hi = 1e300 if q.hi is None else (math.nextafter(q.hi, -math.inf) if q.hi_open else q.hi)
+            tiny = (5e-324,) if lo == 0.0 else ()
+            for v in dict.fromkeys((lo, *tiny, hi)):
+                out.append((fmu, q.name, v))
+    return out
+
+
+def declared_edge(h: Harness, fmu: str, name: str, value: float, scheme: int):
+    """A parameter at an edge of its declared range: either refused at initialization (fmi2Error, a message
+    naming it) or the scene's steps run in bounded time (the case's timeout) with fmi2OK / fmi2Warning, or
+    fmi2Discard with a message; outputs finite; no LAPACK printout in the host's output."""
+    s = h.instance(fmu)
+    s.setup()
+    s.enter()
+    s.set(scheme=scheme, **{name: value})
+    mark = h.mark()
+    st = s.exit()
+    if st == ERROR:
+        h.check("status", f"refused at initialization (fmi2Error)", True)
+        h.expect_log("the message names the parameter", mark, s, (word(name),))
+        _no_lapack_noise(h)
+        return
+    h.expect_status("fmi2ExitInitializationMode (or fmi2Error naming the parameter)", st, OK)
+    if st != OK:
+        return
+    statuses = []
+    for _ in range(N_BEFORE):
+        mark = h.mark()
+        st = s.drive_step()
+        statuses.append(st)
+        if st == DISCARD:
+            h.expect_log("a refused step says why", mark, s, ("refused",))
+            break
+        if st not in (OK, WARNING):
+            break
+    h.check("status", "every step fmi2OK or fmi2Warning (or fmi2Discard with a message)",
+            all(x in (OK, WARNING, DISCARD) for x in statuses), [STATUS_NAMES.get(x) for x in statuses])
+    vals = s.outputs()
+    bad = {k: v for k, v in vals.items() if isinstance(v, str) and v.lstrip("-") in ("nan", "inf")}
+    h.check("state", "finite outputs", not bad, bad or None)
+    _no_lapack_noise(h)
+
+
+for _fmu, _name, _v in _edges():
+    for _scheme in (0, 1):
+        add(f"declared/{SHORT[_fmu]}/edge-{_name}={_v!r}-scheme={_scheme}", declared_edge, fmu=_fmu, name=_name,
+            value=_v, scheme=_scheme, kinds=("status", "message"),
+            desc=f"{_fmu}: {_name} = {_v!r} (an edge of its declared range), scheme {_scheme}")
+
+
+# ---------------------------------------------------------------------------------------------- input derivatives
+#: [m/s2], [m/s2 / s] the input and its rate set before the first step, and the start time [s]
+INPUT_0, INPUT_RATE, START_TIME = 0.5, 50.0, 1.0
+
+
+def rate_before_init(h: Harness, fmu: str, where: str):
+    """fmi2SetRealInputDerivatives before initialization (FMI 2.0 section 4.2.1 allows it in the instantiated
+    state and in initialization mode), with startTime = 1 s: the derivative refers to the start of the first
+    communication step (the start time), so the run equals a control that set the same value and rate after
+    initialization, at t = 1 s (today's code measured it from t = 0: ag = 50.5 instead of 0.5)."""
+    s, ctrl = h.instance(fmu), h.instance(fmu, "control")
+    vr = s.vars["ag"].valueReference
+
+    def rate(inst):
+        return inst.call("fmi2SetRealInputDerivatives", inst.fmu.setRealInputDerivatives, [vr], [1], [INPUT_RATE])
+
+    if where == "instantiated":
+        h.expect_status("fmi2SetReal(ag) when instantiated", s.set(ag=INPUT_0), OK)
+        h.expect_status("fmi2SetRealInputDerivatives when instantiated", rate(s), OK)
+    h.expect_status("fmi2SetupExperiment(startTime = 1)", s.setup(START_TIME), OK)
+    h.expect_status("fmi2EnterInitializationMode", s.enter(), OK)
+    if where == "initialization":
+        h.expect_status("fmi2SetReal(ag) in initialization mode", s.set(ag=INPUT_0), OK)
+        h.expect_status("fmi2SetRealInputDerivatives in initialization mode", rate(s), OK)
+    h.expect_status("fmi2ExitInitializationMode", s.exit(), OK)
+    s.t = s.k = 0
+    s.t = START_TIME
+    ctrl.init(START_TIME)
+    ctrl.set(ag=INPUT_0)
+    rate(ctrl)
+    problems = []
+    for i in range(10):  # ag from 0.5 to 1.0 m/s2 over the first step (no uplift), 5.5 m/s2 after the tenth
+        a, b = s.step(), ctrl.step()
+        if a != b or a not in (OK, WARNING):
+            problems.append(f"step {i + 1}: subject {STATUS_NAMES.get(a)}, control {STATUS_NAMES.get(b)}")
+            break
+        oa, ob = s.outputs(), ctrl.outputs()
+        if oa != ob:
+            problems.append({"step": i + 1, "outputs differ": _dict_diff(oa, ob)})
+            break
+    h.check("state", "the steps equal those of a control that set the rate at the start time", not problems,
+            problems or None)
+    h.expect_same("same serialized state (value, rate and its reference time)", ctrl.snapshot(), s.snapshot())
+
+
+for _fmu in (RIGID, FLEX):
+    add(f"inputderiv/{SHORT[_fmu]}/rate-in-initialization-mode-startTime=1", rate_before_init, fmu=_fmu,
+        where="initialization", kinds=("status", "state"),
+        desc=f"{_fmu}: fmi2SetRealInputDerivatives in initialization mode, startTime = 1 s")
+add("inputderiv/rigid/rate-when-instantiated-startTime=1", rate_before_init, fmu=RIGID, where="instantiated",
+    kinds=("status", "state"), desc="RigidRockingBlock: fmi2SetRealInputDerivatives before fmi2SetupExperiment, "
+                                    "startTime = 1 s")
+
+
+# ---------------------------------------------------------------------------------------------- corrupted bytes
+def _status_fields(s: Inst):
+    """(fmi2LastSuccessfulTime, fmi2Terminated): the binary's own fields, readable in the error state too."""
+    t, term = ctypes.c_double(), ctypes.c_int()
+    st1 = s.call("fmi2GetRealStatus", s.fmu.fmi2GetRealStatus, s.fmu.component, 2, ctypes.byref(t))
+    st2 = s.call("fmi2GetBooleanStatus", s.fmu.fmi2GetBooleanStatus, s.fmu.component, 3, ctypes.byref(term))
+    return (st1, t.value.hex(), st2, term.value)
+
+
+#: every PAYLOAD_STRIDE-th byte of the slave's payload is flipped (every byte of both headers is)
+PAYLOAD_STRIDE = 7
+
+
+def flipped_bytes(h: Harness, fmu: str):
+    """A serialized state with one bit flipped -- every byte of the binary's header (time, instance state,
+    fmi2Terminated flag, last status, CRC) and of the slave's header, every 7th byte of the payload: each is
+    refused with fmi2Error (fmi2DeSerializeFMUstate or fmi2SetFMUstate), and the instance keeps its state (every
+    variable, fmi2LastSuccessfulTime and fmi2Terminated read in the error state, and the serialized bytes after
+    leaving it by a state saved before); then it steps on like a control instance."""
+    s, ctrl = h.scene(fmu)
+    full, problem = s.state_bytes()
+    if problem is not None or not full:
+        raise HarnessError(f"no valid state to corrupt: {problem}")
+    n_binary = len(full) - len(slave_bytes(full))
+    h.check("state", f"the binary's header has {SERIAL_HEADER_SIZE} bytes", n_binary == SERIAL_HEADER_SIZE, n_binary)
+    positions = list(range(min(len(full), n_binary + 64))) + list(range(n_binary + 64, len(full), PAYLOAD_STRIDE))
+    values, fields = s.values(), _status_fields(s)
+    st, saved = s.get_state()
+    accepted, changed = [], []
+    mark = h.mark()
+    for i in positions:
+        data = full[:i] + bytes([full[i] ^ 0x01]) + full[i + 1:]
+        st1, state = s.deserialize(data)
+        status = st1
+        if st1 in (OK, WARNING):
+            status = max(status, s.set_state(state))
+            s.free_state(state)
+        if status != ERROR:
+            accepted.append({"byte": i, "status": STATUS_NAMES.get(status)})
+        if s.values() != values or _status_fields(s) != fields:
+            changed.append({"byte": i, "what": "variables or status fields"})
+        s.set_state(saved)  # out of the error state (or back from an accepted corrupted state)
+        if s.state_bytes()[0] != full:
+            changed.append({"byte": i, "what": "serialized state after fmi2SetFMUstate of the saved one"})
+    h.figure("bytes_flipped", len(positions))
+    h.check("status", f"each of the {len(positions)} corrupted states is refused with fmi2Error", not accepted,
+            accepted[:20] or None)
+    h.check("state", "the instance keeps its state after each refusal", not changed, changed[:20] or None)
+    h.expect_log("the refusal says the state is corrupted", mark, s, ("rejected", ("corrupt", "SHA", "CRC")))
+    s.free_state(saved)
+    h.expect_same_run("after the corrupted states", s, ctrl)
+
+
+for _fmu in (RIGID, FLEX):
+    add(f"corrupt/{SHORT[_fmu]}/every-header-byte-flipped", flipped_bytes, fmu=_fmu,
+        desc=f"{_fmu}: serialized states with one bit flipped in every header byte and a sample of the payload")
 
 
 # ---------------------------------------------------------------------------------------------- reset
@@ -1899,6 +2157,212 @@ for _fmu in FMUS:
         desc=f"{_fmu}: refusals with loggingOn = false")
 
 
+# ============================================================================================== the page
+#: what each class (case family) tries, the statuses its cases assert, and what holds: the rows of
+#: docs/robustness.md, written by `robustness_page` (tests/test_fault_suite.py checks the committed page)
+FAMILIES = {
+    "param": ("invalid start values: outside the declared range, NaN, inf; a singular mass matrix; a record file "
+              "missing, empty, malformed or going back in time",
+              "`fmi2ExitInitializationMode`: fmi2Error; `fmi2DoStep` then: fmi2Error (error state); `fmi2Reset`: "
+              "fmi2OK",
+              "the message names the variable and its allowed range (or the file and the line); the getters, "
+              "`fmi2GetFMUstate`, `fmi2Terminate` and `fmi2Reset` are safe; after `fmi2Reset` and valid values "
+              "the instance runs like a fresh one"),
+    "param-logging-off": ("an invalid start value with `loggingOn = false`", "as `param`",
+                          "the error message still reaches the logger (only debug messages need logging on)"),
+    "declared": ("declared values that hung or overflowed a step: `mu` = 5e-324 (1/mu = inf hung the event-driven "
+                 "step in LAPACK), now below the stated minimum 1e-3; both edges of every declared Real parameter "
+                 "of the two rocking FMUs under both schemes",
+                 "beyond: fmi2Error at `fmi2ExitInitializationMode`; at an edge: fmi2Error naming the parameter, or "
+                 "every step fmi2OK / fmi2Warning (fmi2Discard with a message)",
+                 "the range the message states is the modelDescription's min and max (one declaration read by "
+                 "both); an edge simulates in bounded time with finite outputs or is refused with a message "
+                 "(a subnormal value whose reciprocal overflows is named); LAPACK prints nothing into the "
+                 "host's output"),
+    "simulate_fmu": ("`fmpy.simulate_fmu` and `rocking_model.fmi.run_fmu` with an invalid start value",
+                     "fmpy raises; `run_fmu` raises `FMUError`",
+                     "the `FMUError` names the variable and its allowed range"),
+    "sequence": ("calls out of sequence: `fmi2DoStep` before initialization or after `fmi2Terminate`; "
+                 "`fmi2SetupExperiment`, `fmi2EnterInitializationMode`, `fmi2ExitInitializationMode` after "
+                 "initialization; `startTime` NaN or inf; `fmi2FreeInstance` without `fmi2Terminate`",
+                 "fmi2Error (the instance in the error state); `fmi2FreeInstance`: fmi2OK",
+                 "the message names the call and the state of the instance; every variable bit-identical; after "
+                 "`fmi2SetFMUstate` of a saved state or `fmi2Reset` it steps like a control instance"),
+    "doStep": ("`fmi2DoStep` with a step size 0, < 0, NaN, inf; a communication point NaN, inf, ahead of or behind "
+               "the instance's time",
+               "fmi2Error",
+               "the message names `communicationStepSize` or `currentCommunicationPoint`; the state bit-identical; "
+               "out of the error state by a saved state, it steps on like a control instance"),
+    "input": ("the input `ag` NaN, ±inf, 1e308, ±1500 m/s² (declared range [-1000, 1000], written as min and max "
+              "in the modelDescription)",
+              "`fmi2SetReal`: fmi2Error",
+              "the message names `ag` and its range; nothing is set; the run goes on like a control instance"),
+    "inputderiv": ("`fmi2SetRealInputDerivatives` before initialization (instantiated, initialization mode) "
+                   "with `startTime` = 1 s",
+                   "fmi2OK",
+                   "the derivative refers to the start of the first communication step (the start time, FMI 2.0 "
+                   "§4.2.1): the steps and the serialized state equal those of a control that set value and rate "
+                   "at t = 1 s"),
+    "vr": ("value references: unknown, 2^32-1, of another type, an output set, a `fixed` parameter changed after "
+           "initialization, a batch with one bad reference, `nvr` = 0, a fixed parameter set to its own value",
+           "fmi2Error; `nvr` = 0 and the same value: fmi2OK",
+           "the message names the reference (and the variable and its type); nothing of the call is set; the run "
+           "goes on like a control instance"),
+    "string": ("`fmi2SetString` / `fmi2GetString` on FMUs without String variables, unknown references, on a "
+               "Real; `record` changed after initialization, 100 000 characters long, not UTF-8; a record path "
+               "with é # [ % read back; printf conversions in a record name",
+               "fmi2Error; the round trip: fmi2OK",
+               "the message names the reference or `record`; `%` is shown literally (messages are passed as "
+               "data); the string set comes back unchanged"),
+    "bounded": ("steps that used to hang: `fmi2DoStep` of 1e12 s and 1e308 s, `dt_max` 1e-300 and 1e-9, "
+                "`EI` = 1e15, `ag` at ±1000 m/s² for 1 s and 999 m/s² for 10 s, `ag` = 1.797e308",
+                "fmi2Discard (work budget `max_steps`), fmi2Error at initialization (a parameter outside its "
+                "narrowed range) or at `fmi2SetReal`, or fmi2OK",
+                "every case ends in bounded time; a refused step names the cause and the way out, the state "
+                "unchanged; a completed one has finite outputs"),
+    "state": ("FMU state: get, steps, set, the same steps; serialize in one instance and deserialize in another; "
+              "`fmi2GetFMUstate` 3000 times onto one pointer; a freed pointer reused; the size over many impacts; "
+              "`fmi2SerializeFMUstate` into a buffer 16 bytes short",
+              "fmi2OK; the short buffer: fmi2Error",
+              "restored states are bit-identical and the redone steps too; no memory growth per call; the size "
+              "does not grow with impacts; nothing is written past a short buffer"),
+    "badstate": ("states to reject: pickle gadgets, random, short, NUL and empty bytes, truncated, padded, "
+                 "version 0 or 2, declared length 2^32-1, another FMU's state, JSON that is not an object, invalid "
+                 "or nested 100 000 deep, 2 MiB, fields of the wrong type, missing or out of range (behind a "
+                 "binary header whose CRC-32 holds, so that the slave's checks are reached)",
+                 "fmi2Error (`fmi2DeSerializeFMUstate` or `fmi2SetFMUstate`)",
+                 "the message says the state is rejected and why (header, version, length, digest, JSON, the "
+                 "field); nothing is executed; the state kept; the run goes on like a control instance"),
+    "corrupt": ("a serialized state with one bit flipped in every byte of both headers (the binary's: time, "
+                "instance state, fmi2Terminated flag, last status, CRC-32; the slave's: magic, version, length, "
+                "SHA-256) and in every 7th byte of the payload",
+                "fmi2Error for every one (`fmi2DeSerializeFMUstate` or `fmi2SetFMUstate`)",
+                "the CRC-32 over the whole state (and the slave's SHA-256) refuse each: every variable, "
+                "`fmi2LastSuccessfulTime` and `fmi2Terminated` are kept, the message says the state is rejected "
+                "as corrupted; the run goes on like a control instance"),
+    "range": ("`max_steps` beyond its declared max (2^31-1, 1e9+1)",
+              "`fmi2ExitInitializationMode`: fmi2Error",
+              "the range the message states is the modelDescription's min and max (the FMU checks the declaration "
+              "itself), the variable named"),
+    "reset": ("`fmi2Reset` before and after initialization, after an error, after `fmi2Terminate`, after a "
+              "discarded step, in initialization mode; 50 instances created, run and freed in one process",
+              "fmi2OK",
+              "the start values and state of a fresh instance, which then runs like one; `sys.path` keeps its "
+              "length"),
+    "resources": ("the FMU extracted into folders named with a space, é, #, [, %; `run_fmu` and the co-simulation "
+                  "master with the .fmu in `FMUs é #[%] x/`",
+                  "fmi2OK",
+                  "the resource URI is decoded: the instance runs like a control; the helpers give the results "
+                  "of a plain folder"),
+    "misc": ("`fmi2GetRealOutputDerivatives`, `fmi2CancelStep`; the status queries after a discarded step; "
+             "`fmi2GetVersion`, `fmi2GetTypesPlatform`, `fmi2SetDebugLogging` with an unknown category",
+             "not provided: fmi2Error; the queries: fmi2OK (fmi2Discard for a status FMI 2.0 does not define)",
+             "fmi2DoStepStatus is fmi2Discard and fmi2Terminated true after a discard, "
+             "fmi2LastSuccessfulTime the slave's time; \"2.0\", \"default\""),
+    "report": ("a failed adaptive step; a contact LCP without an exact solution",
+               "fmi2Discard; fmi2Warning",
+               "the failed step is refused with the state kept and a message; the inexact solve is reported as a "
+               "warning and the step done"),
+    "instantiate": ("`fmi2Instantiate` with a wrong GUID, `fmi2ModelExchange`, a resource location NULL, not a "
+                    "local file URI, on a remote host, missing or badly escaped; `file:/…` and "
+                    "`file://localhost/…`",
+                    "NULL (refused); the last two: an instance",
+                    "the message names the cause; the accepted spellings run"),
+    "logging-off": ("refusals with `loggingOn = false`: an unknown reference, `fmi2GetString`, a second "
+                    "`fmi2ExitInitializationMode`, `ag` = NaN, a pickle gadget",
+                    "fmi2Error",
+                    "the same statuses and state as with logging on; the errors reach the logger"),
+}
+
+_PAGE_HEAD = """\
+# Robustness of the FMUs: classes of misuse and what the FMUs do
+
+<!-- generated by `python tests/fault_harness.py --write-doc docs/robustness.md` from the case list of
+tests/fault_harness.py; tests/test_fault_suite.py checks that this page is what the list generates -->
+
+The four FMUs (RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource, LinearBuildingStorey) run
+inside the importer's process. `tests/test_fault_suite.py` drives every FMI 2.0 co-simulation function
+through fmpy's low-level `fmpy.fmi2.FMU2Slave` with {n_cases} cases in {n_classes} classes, each case in a process
+of its own with a timeout (a crash or a hang is a failed case, never a dead test run). Every case asserts:
+
+1. the process survives (exit code 0, no signal) and finishes within its timeout;
+2. the status is exactly the one FMI 2.0 gives the call (the column "statuses" below);
+3. the logged message names the variable or the call (messages are read through fmpy's native logger
+   proxy, which formats them with `vsnprintf` like any C importer);
+4. every variable is bit-identical after a refused call (read back as exact floats); after an fmi2Error,
+   `fmi2SetFMUstate` of a state saved before the call leaves the error state and the instance is
+   bit-identical to before (the bytes of `fmi2SerializeFMUstate`); further identical steps give the outputs
+   of a control instance that never saw the refused call.
+
+Run it: `bash run.sh test tests/test_fault_suite.py`; one case by hand: `python tests/fault_harness.py
+--list`, then `--case <id> --config <fmus.json>`. The session prints the classes tried and passing, the
+longest case and the longest single `fmi2DoStep`.
+
+## Statuses (FMI 2.0 §2.1.3, the project's binary `fmi_binary/fmi2_cs.c`)
+
+* **fmi2Error** for an invalid argument, value or call sequence, or a rejected FMU state: nothing of the call
+  is applied; the instance is in the error state, where the getters, the status queries, `fmi2SetFMUstate`,
+  `fmi2Reset`, `fmi2Terminate` and `fmi2FreeInstance` remain;
+* **fmi2Discard** for a step the simulator refuses with its state unchanged (the work budget `max_steps`, an
+  input ramp leaving its range, a failed step): `fmi2Terminated` is true and `fmi2LastSuccessfulTime` the
+  time the step started, until a retried step succeeds;
+* **fmi2Warning** for a step done with something to report (an overturning, an inexact contact solve);
+* `fmi2Instantiate` returns NULL with a message when it refuses;
+* errors and warnings reach the importer's logger with logging on or off; every message is passed as data
+  (`"%s"`), so `%` in a file name prints literally.
+
+## Classes
+
+Case ids are `<class>/<fmu>/<what>` in `tests/fault_harness.py`.
+
+| class | cases | FMUs | what is tried | statuses | what holds |
+| --- | --- | --- | --- | --- | --- |
+"""
+
+_PAGE_TAIL = """
+## History
+
+Issue 12 wrote the suite against pythonfmu 0.7's wrapper (SIGSEGV for `é # [ %` in the resource path, GUID not
+checked, no input derivatives, fmi2Fatal for a string that is not UTF-8, aborts at process exit); issue 13
+replaced the wrapper by the project's binary, which passes every class. Issue 20 added the classes `declared`,
+`inputderiv`, `corrupt` and `range`, with the faults they found fixed: a minimum of `mu` (1e-3), input
+derivatives set before initialization measured from the start time, a CRC-32 over the whole serialized state,
+and the declared range of `max_steps` checked.
+"""
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def _fmu_of(case: Case) -> Optional[str]:
+    """The FMU a case drives (its ``fmu`` argument, or the FMU named in its id) or the importer's helpers;
+    None when the id names neither ("all": the case's FMUs are those of the other cases of its class)."""
+    if case.kwargs.get("fmu") in FMUS:
+        return case.kwargs["fmu"]
+    part = case.cid.split("/")[1]
+    named = {v: k for k, v in SHORT.items()}
+    return named.get(part) or {"helpers": "importer helpers"}.get(part)
+
+
+def robustness_page() -> str:
+    """docs/robustness.md, from the case list (`CASES`) and the class descriptions (`FAMILIES`): one row per
+    class with its number of cases and the FMUs they drive. A class without a description is an error."""
+    order = list(dict.fromkeys(case.family for case in CASES.values()))
+    missing = [f for f in order if f not in FAMILIES]
+    if missing:
+        raise ValueError(f"classes without a description in FAMILIES: {missing}")
+    rows = []
+    for family in order:
+        cases = [c for c in CASES.values() if c.family == family]
+        fmus = list(dict.fromkeys(f for c in cases for f in [_fmu_of(c)] if f))
+        shown = ", ".join(fmus)
+        tried, statuses, holds = FAMILIES[family]
+        rows.append(f"| `{family}` | {len(cases)} | {_cell(shown)} | {_cell(tried)} | {_cell(statuses)} | "
+                    f"{_cell(holds)} |")
+    return (_PAGE_HEAD.format(n_cases=len(CASES), n_classes=len(order)) + "\n".join(rows) + "\n" + _PAGE_TAIL)
+
+
 # ============================================================================================== running
 def run_case(cid: str, config: dict, workdir: Path) -> dict:
     case = CASES[cid]
@@ -2025,7 +2489,11 @@ def main(argv=None) -> int:
     parser.add_argument("--case", help="run one case in this process")
     parser.add_argument("--config", help="JSON file: {'fmus': {name: {'path': ..., 'unzip': ...}}}")
     parser.add_argument("--out", help="record file (JSON)")
+    parser.add_argument("--write-doc", metavar="PATH", help="write the page of the classes (docs/robustness.md)")
     args = parser.parse_args(argv)
+    if args.write_doc:
+        Path(args.write_doc).write_text(robustness_page(), encoding="utf-8")
+        return 0
     if args.list:
         for case in CASES.values():
             print(f"{case.cid:60s} {case.what}")

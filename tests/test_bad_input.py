@@ -92,6 +92,10 @@ BAD_PARAMETERS = [
     (FLEX, {"impact_rule": 3}, "impact_rule", "allowed values: 0, 1, 'lcp', 'classical'"),
     (FLEX, {"scheme": 7}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
     (FLEX, {"dt_max": NAN}, "dt_max", "[0, inf)"),
+    # mu's stated minimum (issue 20: 1/mu = inf at 5e-324 hung the event-driven step in LAPACK)
+    (RIGID, {"mu": 5e-324}, "mu", "[0.001, inf]"),
+    (FLEX, {"scheme": 1, "mu": 5e-324}, "mu", "[0.001, inf]"),
+    (FLEX, {"mu": 0.0}, "mu", "[0.001, inf]"),
 ]
 IDS = [f"{k[:5]}-{'-'.join(f'{n}={v}' for n, v in p.items())}" for k, p, _, _ in BAD_PARAMETERS]
 

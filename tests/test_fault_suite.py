@@ -255,6 +255,16 @@ def test_at_least_100_classes():
     assert covered == set(fh.FMUS)  # both rocking FMUs and the two system FMUs
 
 
+def test_robustness_page_is_what_the_case_list_generates():
+    """docs/robustness.md is generated from the case list (one row per class: its cases, FMUs, statuses and
+    what holds), so that it cannot drift from the suite; every class has its description and no description
+    is left without a class."""
+    assert set(fh.FAMILIES) == {case.family for case in fh.CASES.values()}
+    page = (ROOT / "docs" / "robustness.md").read_text(encoding="utf-8")
+    assert page == fh.robustness_page(), ("docs/robustness.md is not what the case list generates: run "
+                                          "python tests/fault_harness.py --write-doc docs/robustness.md")
+
+
 @pytest.mark.parametrize("cid", _params())
 def test_fault_case(fault_records, cid):
     problems = _verdict(cid, fault_records[cid])

@@ -339,3 +339,30 @@ def test_readme_quickstart_shows_what_it_says(fmu):
     assert abs(abs(res["phi"][k]) - peak) < 0.0005 and abs(res["time"][k] - t_peak) < 0.015
     assert int(res["impacts"][-1]) == impacts
     assert not res["overturned"].any() and set(np.unique(res["contact"])) >= {1, 2}
+
+
+def test_generation_tool_names_the_project_and_its_version(built_fmus):
+    """generationTool of every built FMU: this project and the package's version (rocking_model.__version__,
+    its one source), not the pythonfmu library the slave classes derive from (issue 20)."""
+    import rocking_model
+
+    for name, path in built_fmus.items():
+        tool = model_description(path).get("generationTool")
+        assert tool == f"rocking_model {rocking_model.__version__}", (name, tool)
+
+
+def test_run_fmu_record_returns_the_initial_row(fmu):
+    """run_fmu_record starts with the row at t = 0 (the state after initialization), as simulate() does: same
+    time grid and, on a block released from phi_0 = 0.05 under a short record, the same first row."""
+    from rocking_model import simulate
+    from rocking_model.fmi import run_fmu_record
+    from rocking_model.ground_motion import SampledMotion
+
+    t = np.linspace(0.0, 0.5, 51)
+    a = 0.5 * np.sin(2 * np.pi * t)            # far below the uplift level g tan(alpha) = 1.96 m/s2
+    out = run_fmu_record(fmu, t, a, step=0.01, stop_time=0.3, start_values={"phi_0": 0.05},
+                         output=("phi", "phi_dot"))
+    ref = simulate(RigidBlock(), SampledMotion(t, a), t_end=0.3, output_interval=0.01, phi_0=0.05)
+    assert out["time"][0] == 0.0 and ref.t[0] == 0.0
+    assert (out["phi"][0], out["phi_dot"][0]) == (0.05, 0.0) == (ref.phi[0], ref.phi_dot[0])
+    np.testing.assert_allclose(out["time"], ref.t, rtol=0, atol=1e-12)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import struct
+import zlib
 from pathlib import Path
 
 import pytest
@@ -150,6 +152,17 @@ def test_state_taken_before_initialization_and_after_an_error(fmus):
     inst.free()
 
 
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c)
+CRC_OFFSET = 42
+
+
+def signed(data: bytes) -> bytes:
+    """A serialized state with the binary's CRC-32 recomputed over it: the checks behind it (the binary's
+    fields, the slave's header, digest and fields) are reached."""
+    c = CRC_OFFSET
+    return data[:c] + struct.pack("<I", zlib.crc32(data[c + 4:], zlib.crc32(data[:c]))) + data[c + 4:]
+
+
 def test_foreign_or_corrupted_state_is_rejected(fmus):
     rigid = Instance(fmus[RIGID], "rigid")
     flex = Instance(fmus[FLEX], "flex")
@@ -161,11 +174,15 @@ def test_foreign_or_corrupted_state_is_rejected(fmus):
     good = rigid.fmu.getFMUstate()
     blob = flex.fmu.serializeFMUstate(flex.fmu.getFMUstate())
     n = len(blob)
+
     for bad, reason in ((blob, "belongs to FMU 'FlexibleRockingOscillator'"),
-                        (blob[:-7], "truncated"),
-                        (blob[:n - 40] + bytes([blob[n - 40] ^ 1]) + blob[n - 39:], "corrupted"),
+                        (blob[:-7], "corrupted (CRC-32 mismatch)"),
+                        (signed(blob[:-7]), "truncated"),
+                        (blob[:n - 40] + bytes([blob[n - 40] ^ 1]) + blob[n - 39:], "corrupted (CRC-32 mismatch)"),
+                        (signed(blob[:n - 40] + bytes([blob[n - 40] ^ 1]) + blob[n - 39:]), "corrupted (SHA-256"),
                         (b"not a state at all", "not a serialized state of this FMU"),
-                        (blob[:30] + b"\xff" * 8 + blob[38:], "header of the serialized state is corrupt")):
+                        (blob[:30] + b"\xff" * 8 + blob[38:], "corrupted (CRC-32 mismatch)"),
+                        (signed(blob[:30] + b"\xff" * 8 + blob[38:]), "header of the serialized state is corrupt")):
         try:
             state = rigid.fmu.deSerializeFMUstate(bad)
         except FMICallException as exc:  # the binary's own header
@@ -220,7 +237,7 @@ def test_state_bytes_never_execute_code(fmus, tmp_path, monkeypatch):
     serialized = inst.fmu.serializeFMUstate(good)
     prefix = serialized[:serialized.index(MAGIC)]  # the binary's header: FMI state and time
     for bad, reason in ((old_layout, "bad header"), (new_header, "not valid JSON")):
-        state = inst.fmu.deSerializeFMUstate(prefix + bad)
+        state = inst.fmu.deSerializeFMUstate(signed(prefix + bad))
         with pytest.raises(FMICallException):
             inst.fmu.setFMUstate(state)
         inst.fmu.freeFMUstate(state)

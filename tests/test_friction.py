@@ -162,7 +162,7 @@ def test_growing_mu_converges_to_the_sticking_law_without_its_hole(scheme):
 
 
 def test_mu_is_checked_by_name():
-    with pytest.raises(ValueError, match=r"mu = 0 is out of range; allowed range \(0, inf\]"):
+    with pytest.raises(ValueError, match=r"mu = 0 is out of range; allowed range \[0.001, inf\]"):
         RigidBlock(mu=0.0)
 
 

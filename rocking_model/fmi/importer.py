@@ -165,7 +165,8 @@ def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: flo
                    start_values: Optional[Dict[str, Any]] = None, output: Sequence[str] = ("phi",)):
     """Drive an FMU with input ``ag`` through a sampled record (times ``t_record`` [s], values ``ag_record``
     [m/s2], linear between samples) with communication step ``step`` [s]; return a structured array with
-    "time" and the ``output`` variables after every step.
+    "time" and the ``output`` variables at t = 0 (after initialization) and after every step, the rows of
+    `rocking_model.simulate`.
 
     ``hold="linear"``: at every communication point the master sets ag and its slope over the coming step
     (fmi2SetRealInputDerivatives, order 1), so the FMU integrates the record's straight line over the step;
@@ -203,6 +204,7 @@ def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: flo
                           "String": fmu.setString}[types[name]]
                 setter([vr[name]], [value])
             fmu.exitInitializationMode()
+            rows.append(tuple([0.0] + [fmu.getReal([vr[o]])[0] for o in output]))  # the initial row
             for k in range(n):
                 t = k * step
                 a0 = float(np.interp(t, t_record, ag_record))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import sys
 from typing import Any, ClassVar, Dict, List, Optional, Sequence
 from xml.etree.ElementTree import Element, SubElement
 
@@ -25,6 +26,10 @@ def _package_version() -> Optional[str]:
         return str(__version__)
     except Exception:  # pragma: no cover - only outside the package
         return None
+
+
+#: the project's name in the modelDescription's generationTool ("rocking_model <version>")
+GENERATION_TOOL = "rocking_model"
 
 
 class RockingSlave(Fmi2Slave):
@@ -145,6 +150,9 @@ class RockingSlave(Fmi2Slave):
         # the complete internal state can be captured, restored and serialized (see _get_fmu_state)
         model_options = {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True, **dict(model_options)}
         root = super().to_xml(model_options)
+        # the tool that generated the FMU is this project (pythonfmu writes its own name): the package's
+        # version, the one source of it
+        root.set("generationTool", f"{GENERATION_TOOL} {_package_version() or 'unknown'}")
         cosim = root.find("CoSimulation")
         if cosim is not None:
             # fmi2SetRealInputDerivatives of order 1 (set_real_input_derivatives); no output derivatives
@@ -236,6 +244,9 @@ class RockingSlave(Fmi2Slave):
         self._sim = sim
         self._initialized = True
         self._t = self._t0
+        # a rate set before initialization refers to the start of the first communication step (FMI 2.0
+        # section 4.2.1): the start time, whatever the time known when it was set
+        self._rates = {name: (rate, self._t0) for name, (rate, _) in self._rates.items()}
         self._update_outputs()
 
     def terminate(self):
@@ -470,6 +481,8 @@ class RockingSlave(Fmi2Slave):
         """fmi2SetRealInputDerivatives: order 1 gives the rate [unit/s] of a Real input at the current
         communication point; from then on the input is u(t) = u_now + rate (t - t_now), a first-order hold
         over the following steps, until the input or its rate is set again (fmi2SetReal resets the rate to 0).
+        Set before initialization (allowed by FMI 2.0), t_now is the start time (fmi2SetupExperiment's
+        startTime, the first fmi2DoStep's currentCommunicationPoint).
         A step whose input would leave the declared [min, max] is refused (fmi2Discard). Orders other than 1,
         references that are not Real inputs and rates that are not finite or exceed `INPUT_RATE_MAX` raise
         (fmi2Error); nothing of the call is set then."""
@@ -496,11 +509,13 @@ class RockingSlave(Fmi2Slave):
             checked.append((var.name, rate))
         if problems:
             raise ValueError("fmi2SetRealInputDerivatives: " + "; ".join(problems) + " (nothing was set)")
+        # the current communication point; before initialization no time has passed: the start time
+        now = self._t if self._initialized else self._t0
         for name, rate in checked:
             old = self._rates.get(name)
-            if old is not None:  # continue the line: the value at this communication point
-                self._values[name] = self._values[name] + old[0] * (self._t - old[1])
-            self._rates[name] = (rate, self._t)
+            if old is not None and self._initialized:  # continue the line: the value at this point
+                self._values[name] = self._values[name] + old[0] * (now - old[1])
+            self._rates[name] = (rate, now)
 
     def get_real(self, vrs):
         return self._get(vrs, "Real")
@@ -553,6 +568,22 @@ INPUT_RATE_MAX = AG_MAX / 1e-3
 _MAX_TEXT = 4096
 #: FMI 2.0 fmi2Integer is a 32-bit int
 _INT32 = (-2**31, 2**31 - 1)
+
+
+#: magnitude (in the parameter's own unit) below which a nonzero parameter is named as the likely cause of an
+#: overflow: the smallest normal double (a smaller one is subnormal, and its reciprocal is inf)
+_TINY = sys.float_info.min
+
+
+def _overflow_message(exc: ArithmeticError, values: Dict[str, Any], params) -> str:
+    """The message of a model whose construction overflowed: the exception and the parameters whose values
+    are subnormal or huge, with their allowed ranges."""
+    suspects = [q for q in params if not q.items and isinstance(values.get(q.name), float)
+                and (0.0 < abs(values[q.name]) < _TINY or 1e300 < abs(values[q.name]) < math.inf)]
+    named = "; ".join(f"{q.name} = {values[q.name]:g} (allowed range {q.range_text()}, but its reciprocal or "
+                      f"square overflows)" for q in suspects)
+    return (f"the parameters give a non-finite quantity in the model ({type(exc).__name__}: {exc})"
+            + (f": {named}; use a value of normal magnitude (at least {_TINY:.3g})" if named else ""))
 
 
 def _check_value(name: str, type_: str, value):
@@ -613,10 +644,22 @@ class ModelSlave(RockingSlave):
 
     def create_simulator(self, p, t0):
         from ..simulation import SOLVER_PARAMETERS
+        from .variables import MAX_STEPS_PARAMETER
 
+        # the work budget checked against its declaration (the modelDescription's min and max), so that the
+        # declaration, this check and its message agree (the Python API accepts up to 2^53)
+        max_steps, lo, hi = p["max_steps"], MAX_STEPS_PARAMETER.min, MAX_STEPS_PARAMETER.max
+        if not lo <= max_steps <= hi:  # integers written in full, as in the modelDescription
+            raise ValueError(f"max_steps = {max_steps} is out of range; allowed range [{lo}, {hi}]")
         cls = self.model_class
-        model = cls(**{q.name: p[q.name] for q in cls.parameters() if q.fmu})
         options = {q.name: p[q.name] for q in SOLVER_PARAMETERS}
         initial = {q.name: p[q.name] for q in cls.INITIAL if q.fmu}
-        # impact_log_size = 0: the FMU keeps no impact log (memory flat over any run; the count is kept)
-        return Simulator(model, t0=t0, impact_log_size=0, max_steps=p["max_steps"], **options, **initial)
+        try:
+            model = cls(**{q.name: p[q.name] for q in cls.parameters() if q.fmu})
+            # impact_log_size = 0: the FMU keeps no impact log (memory flat over any run; the count is kept)
+            return Simulator(model, t0=t0, impact_log_size=0, max_steps=max_steps, **options, **initial)
+        except ArithmeticError as exc:
+            # guard: a value inside its declared range whose derived quantities overflow (a subnormal number
+            # has an infinite reciprocal): refused here with the values at the edge of the floating-point range
+            raise ValueError(_overflow_message(exc, p, [*cls.parameters(), *cls.INITIAL, *SOLVER_PARAMETERS])) \
+                from None

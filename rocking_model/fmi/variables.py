@@ -121,7 +121,12 @@ AG_INPUT = Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
                description="Horizontal ground acceleration (held constant over each communication step), "
                            f"|ag| <= {AG_MAX:g} m/s2 (about 100 g)")
 #: the work budget of one communication step, a parameter of every FMU that runs a `Simulator`
-MAX_STEPS_PARAMETER = Var("max_steps", "parameter", MAX_STEPS, type="Integer", min=1, max=1000000000,
+#: [internal steps] largest work budget of one communication step an FMU accepts: at the costliest internal
+#: step (a Moreau-Jean step, about 0.3 ms) 1e9 steps take days, far beyond any use, and the bound fits the
+#: 32-bit fmi2Integer. The FMUs check max_steps against this declaration (ModelSlave.create_simulator), so
+#: the modelDescription's min/max, the check and its message agree.
+MAX_STEPS_LIMIT = 1_000_000_000
+MAX_STEPS_PARAMETER = Var("max_steps", "parameter", MAX_STEPS, type="Integer", min=1, max=MAX_STEPS_LIMIT,
                           description="Work budget of one communication step: internal steps (Moreau-Jean "
                                       "steps, or Runge-Kutta steps with each event counting 30); a step that "
                                       "needs more is refused (fmi2Discard, state unchanged, message naming "

@@ -99,11 +99,18 @@ IMPACT_LAW_ITEMS = (
 )
 
 
+#: [1] smallest friction coefficient: below those of real surfaces (lubricated or superlubric contacts reach
+#: 1e-3), while 1/mu enters the sliding equations and the frictional LCPs (the force direction W_N/mu - sigma
+#: W_T): at mu = 5e-324 it is inf and the solvers fail or hang in LAPACK; mu >= 1e-3 keeps their entries
+#: within 1e3 of the frictionless ones.
+MU_MIN = 1e-3
+
+
 def friction_param():
     """The declared field ``mu``: Coulomb's friction coefficient at the contacts, inf (the default) being the
-    paper's sticking law, its mu -> inf limit."""
+    paper's sticking law, its mu -> inf limit; at least `MU_MIN`."""
     return param(math.inf, "1", "Coulomb friction coefficient at the corners (inf: the paper's sticking law, "
-                 "no sliding)", lo=0.0, lo_open=True, inf_ok=True)
+                 f"no sliding; at least {MU_MIN:g})", lo=MU_MIN, inf_ok=True)
 
 
 def impact_law_param():
