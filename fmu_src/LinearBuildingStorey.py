@@ -5,6 +5,7 @@ Thin wrapper: the equations are in `rocking_model.models.linear_building`, the F
 equipment (a rocking block) standing on the floor.
 """
 from rocking_model.fmi import AG_INPUT, DefaultExperiment, RockingSlave, Var
+from rocking_model.models.linear_building import T_MAX, T_MIN, U_DOT_MAX, U_MAX, ZETA_MAX
 
 
 class LinearBuildingStorey(RockingSlave):
@@ -19,11 +20,14 @@ class LinearBuildingStorey(RockingSlave):
     freeze_output = None
 
     variables = (
-        Var("T", "parameter", 0.5, unit="s", min=0.0,
-            description="Fixed-base natural period of the storey (>= 0; 0 = rigid)"),
-        Var("zeta", "parameter", 0.05, unit="1", min=0.0, description="Damping ratio (>= 0)"),
-        Var("u_0", "parameter", 0.0, unit="m", description="Initial floor displacement relative to the ground"),
-        Var("u_dot_0", "parameter", 0.0, unit="m/s", description="Initial floor velocity relative to the ground"),
+        Var("T", "parameter", 0.5, unit="s", min=0.0, max=T_MAX,
+            description=f"Fixed-base natural period of the storey: 0 = rigid, else [{T_MIN:g}, {T_MAX:g}] s"),
+        Var("zeta", "parameter", 0.05, unit="1", min=0.0, max=ZETA_MAX,
+            description=f"Damping ratio, [0, {ZETA_MAX:g}]"),
+        Var("u_0", "parameter", 0.0, unit="m", min=-U_MAX, max=U_MAX,
+            description="Initial floor displacement relative to the ground"),
+        Var("u_dot_0", "parameter", 0.0, unit="m/s", min=-U_DOT_MAX, max=U_DOT_MAX,
+            description="Initial floor velocity relative to the ground"),
         AG_INPUT,
         Var("u", "output", unit="m", description="Floor displacement relative to the ground"),
         Var("u_dot", "output", unit="m/s", description="Floor velocity relative to the ground"),

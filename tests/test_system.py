@@ -71,6 +71,34 @@ def test_storey_step_response_is_exact():
         LinearStorey(T=-1.0)
 
 
+def test_storey_declared_ranges_are_the_checks(fmus):
+    """The storey FMU declares the ranges its model checks: each declared bound is accepted by the model,
+    a value just beyond it refused with a message naming the variable (T's gap (0, T_MIN) is named in
+    its description)."""
+    from fmpy import read_model_description
+
+    from rocking_model.models.linear_building import T_MIN
+
+    declared = {v.name: v for v in read_model_description(str(fmus["LinearBuildingStorey"])).modelVariables
+                if v.causality == "parameter"}
+    assert set(declared) == {"T", "zeta", "u_0", "u_dot_0"}
+
+    def build(name, value):
+        p = {"T": 0.5, "zeta": 0.05, "u_0": 0.0, "u_dot_0": 0.0, name: value}
+        StoreySimulator(LinearStorey(T=p["T"], zeta=p["zeta"]), u_0=p["u_0"], u_dot_0=p["u_dot_0"])
+
+    for name, var in declared.items():
+        lo, hi = float(var.min), float(var.max)
+        for bound in (lo, hi):
+            build(name, bound)
+        for beyond in (lo - max(1.0, abs(lo)) * 1e-6, hi + max(1.0, abs(hi)) * 1e-6):
+            with pytest.raises(ValueError, match=rf"\b{name} = .* allowed"):
+                build(name, beyond)
+    assert f"{T_MIN:g}" in declared["T"].description
+    with pytest.raises(ValueError, match=r"T = 1e-05 is out of range"):
+        build("T", 1e-5)
+
+
 # ------------------------------------------------------------------------------ FMUs
 def test_new_fmus_validate_and_bundle_the_package(fmus):
     for name in ("GroundMotionSource", "LinearBuildingStorey"):

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..validation import check_ag, check_real, check_state_header, state_float, state_floats
 
-__all__ = ["LinearStorey", "StoreySimulator"]
+__all__ = ["LinearStorey", "StoreySimulator", "T_MIN", "T_MAX", "ZETA_MAX", "U_MAX", "U_DOT_MAX"]
 
 
 #: [s] shortest period of an elastic storey (T = 0 is the rigid one). Building storeys have periods of
@@ -43,6 +43,11 @@ T_MIN = 1e-3
 T_MAX = 1e4
 #: [1] largest damping ratio (as the flexible oscillator's zeta): far past critical damping (1)
 ZETA_MAX = 10.0
+#: [m] largest initial floor displacement |u_0|: a kilometre is far beyond any storey drift, and it keeps
+#: omega^2 u and the outputs finite for every period in range
+U_MAX = 1e3
+#: [m/s] largest initial floor velocity |u_dot_0| (the same reason)
+U_DOT_MAX = 1e3
 
 
 class LinearStorey:
@@ -95,8 +100,8 @@ class StoreySimulator:
     def __init__(self, storey: LinearStorey, t0: float = 0.0, u_0: float = 0.0, u_dot_0: float = 0.0):
         self.storey = storey
         self.t = check_real("t0", t0)
-        u_0 = check_real("u_0", u_0)
-        u_dot_0 = check_real("u_dot_0", u_dot_0)
+        u_0 = check_real("u_0", u_0, lo=-U_MAX, hi=U_MAX)
+        u_dot_0 = check_real("u_dot_0", u_dot_0, lo=-U_DOT_MAX, hi=U_DOT_MAX)
         if storey.rigid and (u_0 != 0.0 or u_dot_0 != 0.0):
             raise ValueError("u_0 and u_dot_0 must be 0 for a rigid storey (T = 0); allowed range [0, 0]")
         self.x = np.array([u_0, u_dot_0])
