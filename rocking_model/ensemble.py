@@ -417,7 +417,7 @@ def _header_problem(path: Path, head: str, has_newline: bool) -> str | None:
         return None
     if cols and _HEADER.startswith(cols):
         n = len(cols.split(","))
-        return (f"{path}: its header is truncated (cut after {n} of the {len(FIELDS)} columns, at {cols[-20:]!r}): "
+        return (f"{path}: its header is truncated (it stops in column {n} of {len(FIELDS)}, at {cols[-20:]!r}): "
                 "the file was cut short while it was being created" + (", and rows follow it, which cannot be "
                 "matched to columns" if has_newline else "") + f"; move it aside (or delete it) and rerun, or "
                 "give another --out")
