@@ -695,7 +695,7 @@ def _progress(total: int, initial: int, enabled: bool):
 #: zero workers may need longer: run_ensemble(no_workers_timeout=...), CLI --no-workers-timeout.
 NO_WORKERS_TIMEOUT = 60.0
 #: [s] sleep between two looks at the finished tasks while none is ready
-_POLL = 0.1
+_POLL = 0.05
 #: [s] interval between two questions to the scheduler about its workers
 _WORKER_CHECK = 1.0
 
@@ -714,10 +714,10 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
             try:
                 rows = fut.result()
             except KilledWorker as exc:
-                raise WorkersLost(f"the workers running a batch of cases died while running it, "
-                                  f"{len(exc.args) and 'again and again' or ''} (killed, e.g. by the "
-                                  f"out-of-memory killer?; Dask: {' '.join(str(exc).split())[:160]}); the finished "
-                                  f"cases are in {out}; run the same command to resume") from None
+                raise WorkersLost(f"every worker that ran a batch of cases died while running it (killed, e.g. "
+                                  f"by the out-of-memory killer; Dask: {' '.join(str(exc).split())[:160]}); the "
+                                  f"finished cases are in {out}; run the same command to resume (fewer --workers, "
+                                  "or --batch-size 1, need less memory)") from None
             take(rows)
             fut.release()
         if ready:

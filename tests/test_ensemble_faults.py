@@ -67,7 +67,8 @@ def _wait_for_rows(out, n, proc, deadline):
 # ------------------------------------------------------------------------------------------ two runs
 def test_second_run_on_one_output_is_refused_naming_the_first(tmp_path):
     """A double launch: the second run is refused at once (exit 1) with the first run's pid, host and start
-    time; the first run's rows are neither truncated nor duplicated, each case appears once."""
+    time; the first run's rows are neither truncated nor duplicated (then it is interrupted with Ctrl-C, to
+    keep the test short), and each case appears once."""
     short, _ = _records(tmp_path)
     out = tmp_path / "runs.csv"
     argv = _cli("--record", short, "--scales", "0.2:1.2:12", "--scheme", "moreau_jean", "--dt-max", "2e-4",
@@ -75,8 +76,10 @@ def test_second_run_on_one_output_is_refused_naming_the_first(tmp_path):
     first = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         _wait_for_rows(out, 1, first, time.monotonic() + RUN_TIMEOUT)
+        before = out.read_bytes()
         second = subprocess.run(argv, capture_output=True, text=True, timeout=RUN_TIMEOUT)
         still_running = first.poll() is None
+        first.send_signal(signal.SIGINT)
         stdout, stderr = first.communicate(timeout=RUN_TIMEOUT)
     finally:
         if first.poll() is None:
@@ -85,11 +88,13 @@ def test_second_run_on_one_output_is_refused_naming_the_first(tmp_path):
     assert still_running, "the first run ended before the second started: lengthen its cases"
     assert f"{out} is in use by another run (pid {first.pid} on host " in second.stderr and "started" in \
         second.stderr
-    assert first.returncode == 0, stderr
+    assert first.returncode == 130 and "run the same command to resume" in stderr, stderr
+    after = out.read_bytes()
+    assert after.startswith(before)                            # not truncated: only appended to
     lines = _rows_per_line(out)
-    assert lines[0] == list(FIELDS) and len(lines) == 13
+    assert lines[0] == list(FIELDS) and 2 <= len(lines) <= 13
     assert all(len(r) == len(FIELDS) for r in lines)
-    assert len({r[0] for r in lines[1:]}) == 12
+    assert len({r[0] for r in lines[1:]}) == len(lines) - 1   # no case twice
     assert not (tmp_path / "runs.csv.lock").exists()          # released at the end
 
 
