@@ -25,7 +25,6 @@ import math
 import os
 import secrets
 import socket
-import sys
 import time
 import warnings
 from pathlib import Path
@@ -399,8 +398,8 @@ def _scan_csv(body: str, cols: Sequence[str]) -> tuple[list, list]:
             j += 1
             raw += "\n" + lines[j]
         row = _csv_record(raw, cols)
-        if row is None and j > i:             # not a multi-line record after all: only this line is broken
-            j, raw = i, lines[i]
+        if j > i and (row is None or any(_csv_record(lines[k], cols) for k in range(i + 1, j + 1))):
+            row, j, raw = None, i, lines[i]    # not one multi-line record: only this line is broken
         if row is None:
             broken.append((i + 2, raw))
         else:
@@ -419,7 +418,7 @@ def _header_problem(path: Path, head: str, has_newline: bool) -> str | None:
         n = len(cols.split(","))
         return (f"{path}: its header is truncated (it stops in column {n} of {len(FIELDS)}, at {cols[-20:]!r}): "
                 "the file was cut short while it was being created" + (", and rows follow it, which cannot be "
-                "matched to columns" if has_newline else "") + f"; move it aside (or delete it) and rerun, or "
+                "matched to columns" if has_newline else "") + "; move it aside (or delete it) and rerun, or "
                 "give another --out")
     return f"{path}: its columns are not those of an ensemble output; use another --out"
 
@@ -552,6 +551,8 @@ class OutputLock:
             except OSError:
                 try:
                     owner = os.read(fd, 1000).decode(errors="replace").strip()
+                except OSError:                  # a platform whose locks also block reads
+                    owner = ""
                 finally:
                     os.close(fd)
                 raise OutputInUse(f"{self.out} is in use by another run ({owner or 'starting'}; lock file "
