@@ -199,3 +199,25 @@ def test_version_is_the_package_version(capsys):
     assert e.value.code == 0
     assert capsys.readouterr().out == f"rocking {version('rocking-model')}\n"
     assert rocking_model.__version__ == version("rocking-model")
+
+
+def test_ensemble_reports_repairs_and_a_truncated_header_in_one_line(tmp_path, capsys):
+    """Issue 20: what a resume set aside is printed as one warning line; a header cut short is named as
+    truncated (exit 2), not as a foreign file."""
+    from rocking_model.ensemble import FIELDS
+
+    out = tmp_path / "ens.csv"
+    argv = ["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "4", "--frequency-ratios", "3",
+            "--workers", "0", "--no-progress", "--no-plot", "--out", str(out)]
+    assert main(argv) == 0
+    with open(out, "a") as f:
+        f.write("a cut row,rigid,0.2")
+    capsys.readouterr()
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert err == f"rocking ensemble: warning: {out}: 1 broken row(s) (line 4) set aside in {out}.rejected; " \
+                  "their cases run again\n"
+    out.write_text(",".join(FIELDS)[:50] + "\n" + "x," * (len(FIELDS) - 1) + "x\n")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "its header is truncated" in err and "move it aside" in err and "Traceback" not in err
