@@ -17,10 +17,12 @@ import math
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+from . import __version__
 from .ground_motion import PULSES
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -45,6 +47,30 @@ def _values(text: str) -> list[float]:
         return [float(text)]
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number or start:stop:num") from None
+
+
+def _count(lo: int):
+    """argparse type: an integer >= lo, refused at parse time (before any cluster starts)."""
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+        if n < lo:
+            raise argparse.ArgumentTypeError(f"{n} is out of range; allowed range [{lo}, inf)")
+        return n
+    return parse
+
+
+def _positive(text: str) -> float:
+    """argparse type: a real number > 0."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not x > 0:
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed range (0, inf]")
+    return x
 
 
 def _flat(lists) -> list[float] | None:
@@ -293,12 +319,20 @@ def cmd_ensemble(args) -> int:
         ("serially (no Dask)" if args.workers == 0 else f"on a local Dask cluster of {args.workers} worker(s)")
     print(f"{len(cases)} cases -> {args.out}, {where}")
     try:
-        s = E.run_ensemble(cases, args.out, workers=args.workers, address=args.address,
-                           resume=not args.no_resume, progress=not args.no_progress, batch_size=args.batch_size)
+        with warnings.catch_warnings():
+            # what a resume repaired, as one line each (not Python's file:line warning format)
+            warnings.simplefilter("always", E.RepairWarning)
+            warnings.showwarning = lambda msg, *a, **k: print(f"rocking ensemble: warning: {msg}", file=sys.stderr)
+            s = E.run_ensemble(cases, args.out, workers=args.workers, address=args.address,
+                               resume=not args.no_resume, progress=not args.no_progress, batch_size=args.batch_size,
+                               no_workers_timeout=args.no_workers_timeout)
     except KeyboardInterrupt:
         print(f"interrupted: the finished cases are in {args.out}; run the same command to resume",
               file=sys.stderr)
         return 130
+    except E.EnsembleError as exc:
+        print(f"rocking ensemble: error: {exc}", file=sys.stderr)
+        return 1
     print(f"ran {s['n_run']} cases ({s['n_skipped']} already in {args.out}): {s['n_overturned']} overturned, "
           f"{s['n_errors']} errors")
     if s["n_run"]:
@@ -366,6 +400,7 @@ def _solver_options(p: argparse.ArgumentParser, many: bool = False) -> None:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="rocking", description="Nonsmooth rocking dynamics: simulations, FMUs, "
                                 "benchmarks and ensembles (Giouvanidis & Dimitrakopoulos 2017).")
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     s = sub.add_parser("simulate", help="one simulation: CSV, PNG and a summary",
@@ -403,6 +438,8 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--quick", action="store_true", help="smoke run")
     k.add_argument("--ensemble", action="store_true", help="ensemble throughput on 1 and 2 Dask workers")
 
+    from .ensemble import NO_WORKERS_TIMEOUT
+
     e = sub.add_parser("ensemble", help="a grid of cases on Dask, written incrementally, resumable",
                        description="Run records x scales (or pulse amplitudes x frequencies) x geometries x "
                                    "schemes; one row per case in --out (.csv, or a .parquet directory); a rerun "
@@ -420,9 +457,12 @@ def build_parser() -> argparse.ArgumentParser:
     _solver_options(e, many=True)
     g = e.add_argument_group("execution and output")
     g.add_argument("--out", default="results/ensemble.csv", help="results file .csv or directory .parquet")
-    g.add_argument("--workers", type=int, default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
+    g.add_argument("--workers", type=_count(0), default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
     g.add_argument("--address", help="scheduler address of an existing Dask cluster, e.g. tcp://10.0.0.5:8786")
-    g.add_argument("--batch-size", type=int, help="cases per Dask task (default: ~20 tasks per worker, <= 20 cases)")
+    g.add_argument("--batch-size", type=_count(1), help="cases per Dask task (default: ~20 tasks per worker, <= 20 cases)")
+    g.add_argument("--no-workers-timeout", dest="no_workers_timeout", type=_positive, metavar="SECONDS",
+                   default=NO_WORKERS_TIMEOUT, help="end the run when the Dask cluster has had no worker for this "
+                   "long [s] (default %(default)g); the finished cases stay in --out and a rerun resumes")
     g.add_argument("--no-resume", action="store_true", help="fail if --out exists instead of resuming")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.add_argument("--plot", help="overturning spectrum PNG (default: <out stem>_spectrum.png)")

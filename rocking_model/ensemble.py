@@ -5,7 +5,9 @@ content-based ``case_id``; `run_case` turns it into a result row (the case plus 
 of overturning, impacts, wall time). `run_ensemble` runs a list of cases on a Dask cluster (a LocalCluster
 on this machine by default, or an existing scheduler by address) or serially (workers=0, no Dask needed),
 writes each row as soon as it arrives (CSV appended and flushed, or Parquet parts) and, on restart, skips
-the case ids already in the output, so an interrupted run loses nothing and resumes.
+the case ids already in the output, so an interrupted run loses nothing and resumes. A run holds a lock on
+its output (`OutputLock`) from start to end, so two runs never write to one output; outputs are only
+appended to, and a resume sets aside what an interruption broke (rows, parts) without losing good rows.
 
 Dimensionless pulse grids follow Makris' overturning spectra: amplitude ratio A / (g tan(alpha)) and
 frequency ratio omega_p / p of the rigid block (alpha = atan(b/h), p = sqrt(3g/(4R))).
@@ -15,12 +17,16 @@ from __future__ import annotations
 import csv
 import functools
 import hashlib
+import io
 import itertools
 import json
 import logging
 import math
 import os
+import secrets
+import socket
 import time
+import warnings
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
@@ -69,6 +75,34 @@ def _finish(case: dict) -> dict:
     return case
 
 
+def _check_case_fields(model: str, geometries, e_N, mu, t_end, output_interval, tolerance, dt_max) -> None:
+    """Refuse a bad case field before anything runs (ValueError naming the field and its allowed range):
+    b, h, e_N and mu through the model's declared checks (`rocking_model.params`), tolerance and dt_max
+    through the solver's (`simulation.SOLVER_PARAMETERS`)."""
+    from .simulation import SOLVER_PARAMETERS
+    from .validation import check_real
+
+    declared = {p.name: p for p in model_class(model).parameters()}
+    solver = {p.name: p for p in SOLVER_PARAMETERS}
+    try:
+        geometries = [(b, h) for b, h in geometries]
+    except (TypeError, ValueError):
+        raise ValueError(f"geometries = {geometries!r}: give a list of (b, h) pairs [m]") from None
+    if not geometries:
+        raise ValueError("geometries: give at least one (b, h) pair [m]")
+    for b, h in geometries:
+        declared["b"].check(b)
+        declared["h"].check(h)
+    declared["e_N"].check(e_N)
+    declared["mu"].check(mu)
+    if t_end is not None:
+        check_real("t_end", t_end, lo=0.0, lo_open=True)
+    check_real("output_interval", output_interval, lo=0.0, lo_open=True)
+    solver["tolerance"].check(tolerance)
+    if dt_max is not None:
+        solver["dt_max"].check(dt_max)
+
+
 def _check_list(name: str, values, lo=0.0) -> list[float]:
     from .validation import check_real
     out = [check_real(name, v, lo=lo, lo_open=True) for v in values]
@@ -92,6 +126,7 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
     if kind not in PULSES:
         raise ValueError(f"pulse = {kind!r} is not supported; allowed values: {', '.join(PULSES)}")
     model_class(model)                    # ValueError naming the registered models
+    _check_case_fields(model, geometries, e_N, mu, t_end, output_interval, tolerance, dt_max)
     if (amplitude_ratios is None) == (amplitudes is None):
         raise ValueError("give either amplitude ratios A/(g tan alpha) or amplitudes [m/s2]")
     if (frequency_ratios is None) == (frequencies is None):
@@ -132,6 +167,8 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
     file fails before anything runs) and again, once per worker, by `run_case`."""
     from .records import load_motion
 
+    model_class(model)
+    _check_case_fields(model, geometries, e_N, mu, t_end, output_interval, tolerance, dt_max)
     scales = _check_list("scale", scales)
     for s in schemes:
         if s not in SCHEMES:
@@ -180,39 +217,54 @@ def case_model(case: dict):
 
 
 def run_case(case: dict) -> dict:
-    """Simulate one case; return its row (the case plus results). Never raises: a failure is recorded in
-    ``error`` (so one bad case does not stop an ensemble). t_overturn [s] is the first output time at which
-    the block has overturned (resolution: output_interval); NaN if it did not."""
-    import numpy as np
-
-    from .simulation import simulate
-
-    row = dict(case)
-    alpha, p = _rigid_scales(case["b"], case["h"]) if case["model"] == "rigid" else (math.nan, math.nan)
-    row.update(alpha=alpha, p=p, max_abs_phi=math.nan, max_phi_over_alpha=math.nan, overturned=False,
-               t_overturn=math.nan, impacts=-1, max_abs_slip=math.nan, friction_demand=math.nan, error="")
+    """Simulate one case; return its row (the case plus results). Never raises: any failure of the case (a
+    field missing, of the wrong type or out of range, a model or solver error) is recorded in ``error``, so
+    one bad case does not stop an ensemble, its batch keeps its good cases, and a resume skips the case (its
+    row is in the output). t_overturn [s] is the first output time at which the block has overturned
+    (resolution: output_interval); NaN if it did not."""
     t0 = time.perf_counter()
     try:
-        kw = {}
-        if case["scheme"] == "event_driven":
-            kw["tolerance"] = case["tolerance"]
-        if case.get("dt_max") is not None and not math.isnan(case["dt_max"]):
-            kw["dt_max"] = case["dt_max"]
-        res = simulate(case_model(case), case_motion(case), case["t_end"], scheme=case["scheme"],
-                       output_interval=case["output_interval"], **kw)
-        phi = np.abs(res.phi)
-        over = np.asarray(res.overturned, dtype=bool)
-        row["max_abs_phi"] = float(phi.max())
-        row["max_phi_over_alpha"] = float(phi.max() / alpha) if case["model"] == "rigid" else math.nan
-        row["overturned"] = bool(over[-1])
-        row["t_overturn"] = float(res.t[np.argmax(over)]) if over[-1] else math.nan
-        row["impacts"] = int(res.impacts[-1])
-        row["max_abs_slip"] = float(np.max(np.abs(res.slip)))
-        row["friction_demand"] = float(res.friction_demand[-1])
+        row = dict(case)
+    except (TypeError, ValueError):
+        row = {"error_case": repr(case)[:200]}
+    row.update(alpha=math.nan, p=math.nan, max_abs_phi=math.nan, max_phi_over_alpha=math.nan, overturned=False,
+               t_overturn=math.nan, impacts=-1, max_abs_slip=math.nan, friction_demand=math.nan, error="")
+    try:
+        row["case_id"] = _key(case)
+        if "error_case" in row:
+            raise TypeError(f"a case is a dict of case fields, got {row.pop('error_case')}")
+        row.update(_simulate_case(case))
+    except KeyError as exc:
+        row["error"] = f"case field {exc.args[0]!r} is missing"
     except Exception as exc:          # recorded, not raised: see the docstring
         row["error"] = f"{type(exc).__name__}: {exc}"
     row["wall_time"] = time.perf_counter() - t0
     return row
+
+
+def _simulate_case(case: dict) -> dict:
+    """The result fields of one case (raises on a bad case; `run_case` records it)."""
+    import numpy as np
+
+    from .simulation import simulate
+
+    model = case_model(case)             # b, h, e_N, mu checked against the model's declarations
+    rigid = case["model"] == "rigid"
+    alpha, p = _rigid_scales(model.b, model.h) if rigid else (math.nan, math.nan)
+    kw = {}
+    if case["scheme"] == "event_driven":
+        kw["tolerance"] = case["tolerance"]
+    if case.get("dt_max") is not None and not math.isnan(float(case["dt_max"])):
+        kw["dt_max"] = case["dt_max"]
+    res = simulate(model, case_motion(case), case["t_end"], scheme=case["scheme"],
+                   output_interval=case["output_interval"], **kw)
+    phi = np.abs(res.phi)
+    over = np.asarray(res.overturned, dtype=bool)
+    return dict(alpha=alpha, p=p, max_abs_phi=float(phi.max()),
+                max_phi_over_alpha=float(phi.max() / alpha) if rigid else math.nan,
+                overturned=bool(over[-1]), t_overturn=float(res.t[np.argmax(over)]) if over[-1] else math.nan,
+                impacts=int(res.impacts[-1]), max_abs_slip=float(np.max(np.abs(res.slip))),
+                friction_demand=float(res.friction_demand[-1]))
 
 
 def _warm_up() -> None:
@@ -225,7 +277,32 @@ def run_batch(cases: list[dict]) -> list[dict]:
 
 
 # --------------------------------------------------------------------------------------------- output
+class EnsembleError(RuntimeError):
+    """A run that cannot go on (its output is in use by another run, its cluster has lost its workers); the
+    rows already written stay in the output and a rerun resumes."""
+
+
+class OutputInUse(EnsembleError):
+    """Another run holds the output's lock."""
+
+
+class WorkersLost(EnsembleError):
+    """The Dask cluster has no worker left (or a batch killed every worker that ran it)."""
+
+
+class RepairWarning(UserWarning):
+    """A resume set aside something an interruption broke (a row, a Parquet part); the message says where."""
+
+
+def _key(case) -> str:
+    """The case id of ``case`` (its own, or computed; a case that is not a dict: a hash of its repr)."""
+    if isinstance(case, dict):
+        return case.get("case_id") or case_id(case)
+    return "bad-" + hashlib.sha1(repr(case).encode()).hexdigest()[:12]
+
+
 def _parse(row: dict) -> dict:
+    """A row read back, typed (ValueError if a numeric field holds something else)."""
     out = {}
     for k, v in row.items():
         if k in _FLOATS:
@@ -239,62 +316,300 @@ def _parse(row: dict) -> dict:
     return out
 
 
+def _typed(row: dict) -> dict:
+    """The row to write: every field of FIELDS with its type, whatever the case held (a value that is not a
+    number becomes NaN, or -1 for a count: the error column says what was wrong), strings on one line (one
+    row per line is what the resume's repair reads)."""
+    out = {}
+    for k in FIELDS:
+        v = row.get(k)
+        if k in _FLOATS:
+            try:
+                out[k] = float(v)
+            except (TypeError, ValueError, OverflowError):
+                out[k] = math.nan
+        elif k in _INTS:
+            try:
+                out[k] = int(v)
+            except (TypeError, ValueError, OverflowError):
+                out[k] = -1
+        elif k in _BOOLS:
+            out[k] = v if isinstance(v, bool) else str(v).strip().lower() in ("true", "1")
+        else:
+            out[k] = "" if v is None else " | ".join(str(v).splitlines())
+    return out
+
+
 def _is_parquet(out: Path) -> bool:
     return out.suffix == ".parquet" or (out.is_dir() and any(out.glob("part-*.parquet")))
 
 
-def read_results(out) -> list[dict]:
-    """All rows written so far to ``out`` (a .csv file or a .parquet directory of parts), typed. A row
-    cut short by an interruption is ignored; if a case appears twice the last row wins."""
-    out = Path(out)
+def _fsync_dir(path: Path) -> None:
+    """Make a rename or a new file in ``path`` durable (POSIX; a no-op where directories cannot be opened)."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+#: the header line of a CSV output
+_HEADER = ",".join(FIELDS)
+#: [lines] longest record joined when a quoted field spans lines (rows of earlier versions could hold a
+#: multi-line error message; rows are now written on one line)
+_MAX_JOIN = 20
+
+
+def _csv_record(raw: str, cols: Sequence[str]) -> dict | None:
+    """The typed row of one CSV record, or None if it is broken (wrong number of columns, no case id, a
+    number that is not one)."""
+    try:
+        fields = list(csv.reader(io.StringIO(raw)))
+    except csv.Error:
+        return None
+    if len(fields) != 1 or len(fields[0]) != len(cols):
+        return None
+    row = dict(zip(cols, fields[0]))
+    if not row.get("case_id"):
+        return None
+    try:
+        return _parse(row)
+    except (ValueError, OverflowError):
+        return None
+
+
+def _scan_csv(body: str, cols: Sequence[str]) -> tuple[list, list]:
+    """Split the records after the header into good ones [(raw, row)] and broken ones [(line, raw)] (line:
+    1-based line number in the file). The text after the last newline is the unfinished row of a killed run
+    (broken); a broken row anywhere else (two writers, a torn write) is found too, and the good rows around
+    it are kept."""
+    lines = body.split("\n")
+    tail = lines.pop()
+    good, broken = [], []
+    i = 0
+    while i < len(lines):
+        j, raw = i, lines[i]
+        while raw.count('"') % 2 and j + 1 < len(lines) and j - i < _MAX_JOIN:
+            j += 1
+            raw += "\n" + lines[j]
+        row = _csv_record(raw, cols)
+        if j > i and (row is None or any(_csv_record(lines[k], cols) for k in range(i + 1, j + 1))):
+            row, j, raw = None, i, lines[i]    # not one multi-line record: only this line is broken
+        if row is None:
+            broken.append((i + 2, raw))
+        else:
+            good.append((raw, row))
+        i = j + 1
+    if tail:
+        broken.append((len(lines) + 2, tail))
+    return good, broken
+
+
+def _header_problem(path: Path, head: str, has_newline: bool) -> str | None:
+    cols = head.rstrip("\r")
+    if cols == _HEADER:
+        return None
+    if cols and _HEADER.startswith(cols):
+        n = len(cols.split(","))
+        return (f"{path}: its header is truncated (it stops in column {n} of {len(FIELDS)}, at {cols[-20:]!r}): "
+                "the file was cut short while it was being created" + (", and rows follow it, which cannot be "
+                "matched to columns" if has_newline else "") + "; move it aside (or delete it) and rerun, or "
+                "give another --out")
+    return f"{path}: its columns are not those of an ensemble output; use another --out"
+
+
+def _repair_csv(path: Path) -> list[str]:
+    """Make ``path`` a clean ensemble CSV before appending to it (the caller holds its lock): an unfinished
+    last row is cut off, a broken row anywhere is removed, and both are set aside in ``<path>.rejected``
+    (nothing is lost silently; their cases run again); a header cut short with no row after it is completed.
+    The good rows are kept byte for byte (a rewrite goes through a temporary file, fsync and rename).
+    Returns what was done (one message each)."""
+    if not path.exists() or path.stat().st_size == 0:
+        return []
+    data = path.read_bytes()
+    text = data.decode("utf-8", "surrogateescape")
+    head, sep, body = text.partition("\n")
+    problem = _header_problem(path, head, bool(sep))
+    if problem:
+        if _HEADER.startswith(head.rstrip("\r")) and not body.strip():
+            _rewrite(path, (_HEADER + "\r\n").encode())
+            return [f"{path}: its header was cut short and no row followed it: header completed"]
+        raise ValueError(problem)
+    good, broken = _scan_csv(body, FIELDS)
+    if not broken:
+        return []
+    rejected = path.with_name(path.name + ".rejected")
+    with open(rejected, "a", encoding="utf-8", errors="surrogateescape", newline="") as f:
+        for _, raw in broken:
+            f.write(raw.rstrip("\r") + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+    if len(broken) == 1 and not text.endswith("\n") and broken[0][1] == text[text.rfind("\n") + 1:]:
+        with open(path, "rb+") as f:                 # only the unfinished last row: cut it off in place
+            f.truncate(data.rfind(b"\n") + 1)
+            os.fsync(f.fileno())
+    else:
+        _rewrite(path, (head + "\n" + "".join(raw + "\n" for raw, _ in good)).encode("utf-8", "surrogateescape"))
+    lines = ", ".join(str(n) for n, _ in broken[:10]) + (", ..." if len(broken) > 10 else "")
+    return [f"{path}: {len(broken)} broken row(s) (line {lines}) set aside in {rejected}; their cases run again"]
+
+
+def _rewrite(path: Path, data: bytes) -> None:
+    """Replace ``path`` by ``data`` atomically and durably (temporary file, fsync, rename, fsync of the
+    directory)."""
+    tmp = path.with_name(f".{path.name}.repair-{os.getpid()}")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    _fsync_dir(path.parent)
+
+
+def _read_parts(out: Path, set_aside: bool = False) -> tuple[dict, list[str]]:
+    """{case_id: row} of the Parquet parts of ``out`` and messages about unreadable parts (cut short by a
+    power loss before parts were fsynced): skipped, or with ``set_aside`` renamed ``*.corrupt``."""
+    import pyarrow.parquet as pq
+
     rows: dict[str, dict] = {}
+    notes = []
+    for part in sorted(out.glob("part-*.parquet")):
+        try:
+            table = pq.read_table(part)
+        except Exception as exc:             # pyarrow's errors (ArrowInvalid, OSError) of a cut file
+            reason = " ".join(str(exc).splitlines())[:200]
+            if set_aside:
+                aside = part.with_name(part.name + ".corrupt")
+                os.replace(part, aside)
+                notes.append(f"{part}: unreadable ({reason}); set aside as {aside.name}, its cases run again")
+            else:
+                notes.append(f"{part}: unreadable ({reason}); skipped")
+            continue
+        for r in table.to_pylist():
+            rows[r["case_id"]] = _parse(r)
+    return rows, notes
+
+
+def read_results(out) -> list[dict]:
+    """All rows written so far to ``out`` (a .csv file or a .parquet directory of parts), typed. A broken row
+    (cut short by an interruption, anywhere in the file) or an unreadable part is skipped (with a
+    `RepairWarning` for a part); if a case appears twice the last row wins."""
+    out = Path(out)
     if _is_parquet(out):
         if not out.is_dir():
             return []
-        import pyarrow.parquet as pq
-        for part in sorted(out.glob("part-*.parquet")):
-            for r in pq.read_table(part).to_pylist():
-                rows[r["case_id"]] = _parse(r)
+        rows, notes = _read_parts(out)
+        for note in notes:
+            warnings.warn(note, RepairWarning, stacklevel=2)
         return list(rows.values())
     if not out.exists():
         return []
-    with open(out, newline="") as f:
-        text = f.read()
-    if text and not text.endswith("\n"):
-        text = text[:text.rfind("\n") + 1]           # the unfinished last line of a killed run
-    reader = csv.DictReader(text.splitlines())
-    for r in reader:
-        if r.get("case_id") and None not in r and all(v is not None for v in r.values()):
-            rows[r["case_id"]] = _parse(r)
+    text = out.read_bytes().decode("utf-8", "surrogateescape")
+    head, _, body = text.partition("\n")
+    rows: dict[str, dict] = {}
+    for _, r in _scan_csv(body, next(csv.reader([head.rstrip("\r")]), []))[0]:
+        rows[r["case_id"]] = r
     return list(rows.values())
 
 
+# ------------------------------------------------------------------------------------------ output lock
+try:
+    import fcntl
+
+    def _try_lock(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)       # OSError if another process holds it
+except ImportError:                                            # Windows
+    import msvcrt
+
+    def _try_lock(fd: int) -> None:
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+
+
+class OutputLock:
+    """Exclusive lock of one output for a whole run: ``<out>.lock`` next to it, locked with flock (released by
+    the kernel when the process ends, even by kill -9; works on local and NFS file systems) and holding the
+    owner's pid, host and start time, which a refused run names. Two runs on one output (a double launch, an
+    array job sharing --out) would truncate, duplicate or interleave each other's rows: the second is refused
+    with `OutputInUse`. The lock file is removed when the run ends."""
+
+    def __init__(self, out):
+        self.out = Path(out)
+        self.path = self.out.with_name(self.out.name + ".lock")
+        self.fd: int | None = None
+
+    def acquire(self) -> "OutputLock":
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                _try_lock(fd)
+            except OSError:
+                try:
+                    owner = os.read(fd, 1000).decode(errors="replace").strip()
+                except OSError:                  # a platform whose locks also block reads
+                    owner = ""
+                finally:
+                    os.close(fd)
+                raise OutputInUse(f"{self.out} is in use by another run ({owner or 'starting'}; lock file "
+                                  f"{self.path}): two runs on one output would write the same cases twice; "
+                                  "wait for it to end, or give another --out") from None
+            try:         # the previous owner may have removed the file between our open and our lock
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
+        os.ftruncate(fd, 0)
+        os.write(fd, f"pid {os.getpid()} on host {socket.gethostname()}, started {started}\n".encode())
+        self.fd = fd
+        return self
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        try:
+            os.unlink(self.path)             # while locked: a waiting opener sees another file and retries
+        except OSError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+# ---------------------------------------------------------------------------------------------- writers
 class CsvWriter:
-    """Appends rows to a CSV file; every row is flushed to the OS at once (a killed run keeps it)."""
+    """Appends rows to a CSV file (opened for appending only, never truncated); every row is flushed to the
+    OS at once (a killed run keeps it). An existing file is repaired first (`_repair_csv`, reported in
+    ``repairs``); the caller should hold the output's `OutputLock`."""
 
     def __init__(self, path: Path):
-        self.path = path
+        self.path = path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        if path.exists() and path.stat().st_size > 0:
-            with open(path, "rb+") as f:
-                data = f.read()
-                header = data.split(b"\n", 1)[0].decode().strip().split(",")
-                if header != list(FIELDS):
-                    raise ValueError(f"{path}: its columns are not those of an ensemble output; use another "
-                                     "--out")
-                if not data.endswith(b"\n"):                    # drop the unfinished row
-                    f.truncate(data.rfind(b"\n") + 1)
-            self.f = open(path, "a", newline="")
-            self.w = csv.DictWriter(self.f, FIELDS)
-        else:
-            self.f = open(path, "w", newline="")
-            self.w = csv.DictWriter(self.f, FIELDS)
+        self.repairs = _repair_csv(path)
+        fresh = not path.exists() or path.stat().st_size == 0
+        self.f = open(path, "a", newline="")
+        self.w = csv.DictWriter(self.f, FIELDS)
+        if fresh:
             self.w.writeheader()
-        self.f.flush()
+            self.f.flush()
+            os.fsync(self.f.fileno())
+            _fsync_dir(path.parent)
 
     def write(self, rows: Iterable[dict]) -> None:
         for r in rows:
-            self.w.writerow({k: r.get(k, "") for k in FIELDS})
+            self.w.writerow(_typed(r))
         self.f.flush()
 
     def close(self) -> None:
@@ -303,16 +618,27 @@ class CsvWriter:
         self.f.close()
 
 
+def _part_index(part: Path) -> int:
+    try:
+        return int(part.name[len("part-"):].split(".")[0].split("-")[0])
+    except ValueError:
+        return -1
+
+
 class ParquetWriter:
-    """Writes rows as Parquet parts (part-<n>.parquet) in a directory, each part written to a temporary
-    name and renamed (atomic); rows are buffered up to ``rows_per_part`` or ``seconds`` and flushed on
-    close, also after Ctrl-C. A hard kill loses at most the buffer."""
+    """Writes rows as Parquet parts in a directory: ``part-<n>-<run>.parquet``, ``run`` unique to this writer
+    (two writers never share a name, temporary or final). Each part is written to a temporary name, fsynced,
+    renamed, and the directory fsynced, so a power loss leaves whole parts only; rows are buffered up to
+    ``rows_per_part`` or ``seconds`` and flushed on close, also after Ctrl-C. A hard kill loses at most the
+    buffer. Unreadable parts found at start are set aside (``*.corrupt``, reported in ``repairs``)."""
 
     def __init__(self, path: Path, rows_per_part: int = 200, seconds: float = 10.0):
         import pyarrow  # noqa: F401  (fail early with a clear ImportError)
-        self.path, self.rows_per_part, self.seconds = path, rows_per_part, seconds
-        path.mkdir(parents=True, exist_ok=True)
-        self.n = len(list(path.glob("part-*.parquet")))
+        self.path, self.rows_per_part, self.seconds = Path(path), rows_per_part, seconds
+        self.path.mkdir(parents=True, exist_ok=True)
+        self.repairs = _read_parts(self.path, set_aside=True)[1]
+        self.n = 1 + max((_part_index(p) for p in self.path.glob("part-*.parquet")), default=-1)
+        self.run = f"{os.getpid():x}{secrets.token_hex(4)}"
         self.buf: list[dict] = []
         self.t_last = time.monotonic()
 
@@ -326,19 +652,27 @@ class ParquetWriter:
             return
         import pyarrow as pa
         import pyarrow.parquet as pq
-        table = pa.Table.from_pylist([{k: r.get(k) for k in FIELDS} for r in self.buf])
-        while (self.path / f"part-{self.n:05d}.parquet").exists():
-            self.n += 1
-        final = self.path / f"part-{self.n:05d}.parquet"
-        tmp = self.path / f".tmp-{self.n:05d}.parquet"
-        pq.write_table(table, tmp)
+        table = pa.Table.from_pylist([_typed(r) for r in self.buf], schema=_schema())
+        final = self.path / f"part-{self.n:05d}-{self.run}.parquet"
+        tmp = self.path / f".tmp-{self.n:05d}-{self.run}.parquet"
+        with open(tmp, "wb") as f:
+            pq.write_table(table, f)
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, final)
+        _fsync_dir(self.path)
         self.n += 1
         self.buf = []
         self.t_last = time.monotonic()
 
     def close(self) -> None:
         self.flush()
+
+
+def _schema():
+    import pyarrow as pa
+    return pa.schema([(k, pa.float64() if k in _FLOATS else pa.int64() if k in _INTS else
+                       pa.bool_() if k in _BOOLS else pa.string()) for k in FIELDS])
 
 
 def _writer(out: Path):
@@ -356,9 +690,59 @@ def _progress(total: int, initial: int, enabled: bool):
     return tqdm(total=total, initial=initial, unit="case", dynamic_ncols=True)
 
 
+#: [s] how long a run waits while its Dask cluster has no worker at all before it ends with `WorkersLost`.
+#: A nanny restarts a killed worker within seconds, but after repeated kills (as the out-of-memory killer
+#: does) it can give up, and the wait for results would never end. An adaptive cluster that scales up from
+#: zero workers may need longer: run_ensemble(no_workers_timeout=...), CLI --no-workers-timeout.
+NO_WORKERS_TIMEOUT = 60.0
+#: [s] sleep between two looks at the finished tasks while none is ready
+_POLL = 0.05
+#: [s] interval between two questions to the scheduler about its workers
+_WORKER_CHECK = 1.0
+
+
+def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> None:
+    """Hand each batch's rows to ``take`` as it finishes; raise `WorkersLost` when the cluster has had no
+    worker for ``no_workers_timeout`` seconds, or when a batch killed every worker that ran it."""
+    from dask.distributed import KilledWorker, as_completed
+
+    ac = as_completed(futures)
+    no_worker_since = None
+    t_check = time.monotonic()
+    while not ac.is_empty():
+        ready = ac.next_batch(block=False)
+        for fut in ready:
+            try:
+                rows = fut.result()
+            except KilledWorker as exc:
+                raise WorkersLost(f"every worker that ran a batch of cases died while running it (killed, e.g. "
+                                  f"by the out-of-memory killer; Dask: {' '.join(str(exc).split())[:160]}); the "
+                                  f"finished cases are in {out}; run the same command to resume (fewer --workers, "
+                                  "or --batch-size 1, need less memory)") from None
+            take(rows)
+            fut.release()
+        if ready:
+            no_worker_since = None
+            continue
+        time.sleep(_POLL)
+        if time.monotonic() - t_check < _WORKER_CHECK:
+            continue
+        t_check = time.monotonic()
+        if client.nthreads():
+            no_worker_since = None
+        elif no_worker_since is None:
+            no_worker_since = t_check
+        elif t_check - no_worker_since > no_workers_timeout:
+            raise WorkersLost(f"the Dask cluster has had no worker for {no_workers_timeout:g} s (all died or "
+                              f"were killed, e.g. by the out-of-memory killer); {ac.count()} task(s) of cases "
+                              f"were left; the finished cases are in {out}; run the same command to resume "
+                              "(fewer --workers, or --batch-size 1, need less memory)")
+
+
 def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str | None = None,
                  resume: bool = True, progress: bool = True, batch_size: int | None = None, processes: bool = True,
-                 on_row: Callable[[dict], None] | None = None) -> dict:
+                 on_row: Callable[[dict], None] | None = None,
+                 no_workers_timeout: float = NO_WORKERS_TIMEOUT) -> dict:
     """Run ``cases`` and write one row per case to ``out`` (.csv, or a .parquet directory).
 
     workers: number of local Dask workers (one thread each; ``processes=False`` runs them as threads of
@@ -368,47 +752,69 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
     resume: skip the case ids already in ``out``; otherwise ``out`` must not exist yet.
     batch_size: cases per Dask task; larger batches amortize the few ms of scheduling and round trip per
         task; default: about 20 tasks per worker, at most 20 cases each (rows are still written per task).
+    no_workers_timeout: [s] a cluster without any worker for this long ends the run (`WorkersLost`;
+        default `NO_WORKERS_TIMEOUT`).
+
+    The run holds ``out``'s `OutputLock` from start to end (a second run on it raises `OutputInUse` naming
+    this one), only appends to ``out``, and first repairs what an interruption broke (`RepairWarning`, also
+    listed in the summary's ``repairs``). A case that fails becomes a row with its ``error`` (see `run_case`).
+    Rows are written as they arrive, so when the run ends early (`WorkersLost`, Ctrl-C) the finished cases
+    stay in ``out`` and a rerun resumes.
     Returns a summary: n_cases, n_skipped, n_run, n_errors, n_overturned, wall_time [s] (from the first
-    submission to the last row), throughput [cases/s], setup_time [s] (cluster start), workers.
+    submission to the last row), throughput [cases/s], setup_time [s] (cluster start), workers, repairs.
     """
+    from .validation import check_real
+
     out = Path(out)
-    if not resume and out.exists():
-        raise ValueError(f"{out} exists; remove it or resume (the default)")
-    done = {r["case_id"] for r in read_results(out)} if resume else set()
-    todo, seen = [], set()
-    for c in cases:
-        if c["case_id"] not in done and c["case_id"] not in seen:
-            seen.add(c["case_id"])
-            todo.append(c)
-    n_total = len(done | {c["case_id"] for c in cases})
-    summary = dict(n_cases=len(cases), n_skipped=len(cases) - len(todo), n_run=0, n_errors=0, n_overturned=0,
-                   wall_time=0.0, throughput=math.nan, setup_time=0.0, workers=workers, address=address or "")
-    if not todo:
-        return summary
-    writer = _writer(out)
-    bar = _progress(len(cases), len(cases) - len(todo), progress)
-
-    def take(rows):
-        writer.write(rows)
-        for r in rows:
-            summary["n_run"] += 1
-            summary["n_errors"] += bool(r["error"])
-            summary["n_overturned"] += bool(r["overturned"])
-            if on_row is not None:
-                on_row(r)
-        if bar is not None:
-            bar.update(len(rows))
-
-    t_setup = time.perf_counter()
-    client = cluster = None
+    if address is None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise ValueError(f"workers = {workers!r} is out of range; allowed: an integer in [0, inf)")
+    if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
+                                   or batch_size < 1):
+        raise ValueError(f"batch_size = {batch_size!r} is out of range; allowed: an integer in [1, inf)")
+    check_real("no_workers_timeout", no_workers_timeout, lo=0.0, lo_open=True)
+    cases = list(cases)
+    lock = OutputLock(out).acquire()
+    writer = bar = client = cluster = None
     try:
+        if not resume and out.exists():
+            raise ValueError(f"{out} exists; remove it or resume (the default)")
+        writer = _writer(out)
+        for note in writer.repairs:
+            warnings.warn(note, RepairWarning, stacklevel=2)
+        done = {r["case_id"] for r in read_results(out)} if resume else set()
+        todo, seen = [], set()
+        for c in cases:
+            k = _key(c)
+            if k not in done and k not in seen:
+                seen.add(k)
+                todo.append(c)
+        n_total = len(done | {_key(c) for c in cases})
+        summary = dict(n_cases=len(cases), n_skipped=len(cases) - len(todo), n_run=0, n_errors=0,
+                       n_overturned=0, wall_time=0.0, throughput=math.nan, setup_time=0.0, workers=workers,
+                       address=address or "", repairs=list(writer.repairs), n_total_in_output=len(done))
+        if not todo:
+            return summary
+        bar = _progress(len(cases), len(cases) - len(todo), progress)
+
+        def take(rows):
+            writer.write(rows)
+            for r in rows:
+                summary["n_run"] += 1
+                summary["n_errors"] += bool(r["error"])
+                summary["n_overturned"] += bool(r["overturned"])
+                if on_row is not None:
+                    on_row(r)
+            if bar is not None:
+                bar.update(len(rows))
+
+        t_setup = time.perf_counter()
         if workers == 0 and address is None:
             t0 = time.perf_counter()
             for c in todo:
                 take([run_case(c)])
         else:
             try:
-                from dask.distributed import Client, LocalCluster, as_completed
+                from dask.distributed import Client, LocalCluster
             except ImportError:
                 raise ImportError("ensembles on Dask need dask.distributed: pip install "
                                   "'rocking-model[ensemble]' (or run serially with workers=0)") from None
@@ -416,9 +822,8 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
                 client = Client(address, timeout="10s")
                 summary["workers"] = len(client.scheduler_info().get("workers", {}))
             else:
-                if workers < 1:
-                    raise ValueError(f"workers = {workers} is out of range; allowed range [0, inf)")
-                # silence_logs: shutdown chatter (a worker's last heartbeat to a closed scheduler) is noise
+                # silence_logs: shutdown chatter (a worker's last heartbeat to a closed scheduler) is noise;
+                # a cluster that loses all its workers is reported by `_collect` instead
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
                                        dashboard_address=":0", silence_logs=logging.CRITICAL)
                 client = Client(cluster)
@@ -431,19 +836,20 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
             if batch_size is None:
                 batch_size = max(1, min(20, len(todo) // (20 * n_w)))
             summary["batch_size"] = batch_size
-            batches = [todo[i:i + batch_size] for i in range(0, len(todo), max(1, batch_size))]
-            futures = client.map(run_batch, batches, pure=False)
-            for fut in as_completed(futures):
-                take(fut.result())
-                fut.release()
+            batches = [todo[i:i + batch_size] for i in range(0, len(todo), batch_size)]
+            _collect(client, client.map(run_batch, batches, pure=False), take, no_workers_timeout, out)
     finally:
-        writer.close()
-        if bar is not None:
-            bar.close()
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()
+        try:
+            if writer is not None:
+                writer.close()
+            if bar is not None:
+                bar.close()
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+        finally:
+            lock.release()
     summary["wall_time"] = time.perf_counter() - t0
     summary["throughput"] = summary["n_run"] / summary["wall_time"] if summary["wall_time"] > 0 else math.nan
     summary["n_total_in_output"] = n_total

@@ -153,3 +153,71 @@ def test_build_fmu_command_writes_the_cross_check_folders(tmp_path, capsys):
     assert (folder / "RigidRockingBlock_ref.csv").is_file() and (folder / "RigidRockingBlock.fmu").is_file()
     assert main(["build-fmu", "--dest", str(tmp_path / "plain"), "--no-cross-check", "RigidRockingBlock"]) == 0
     assert not (tmp_path / "plain" / build_fmu.CROSS_CHECK_DIR).exists()
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--b", "0"], "b = 0 is out of range; allowed range [1e-06, 1000]"),
+    (["--b", "-1"], "b = -1 is out of range; allowed range [1e-06, 1000]"),
+    (["--h", "2000"], "h = 2000 is out of range; allowed range [1e-06, 1000]"),
+    (["--e-N", "1.5"], "e_N = 1.5 is out of range; allowed range [0, 1]"),
+    (["--mu", "0"], "mu = 0 is out of range; allowed range (0, inf]"),
+    (["--tolerance", "1"], "tolerance = 1 is out of range; allowed range [1e-14, 0.01]"),
+])
+def test_ensemble_refuses_bad_case_fields_before_the_cluster_starts(argv, msg, tmp_path, capsys):
+    """Issue 20: a bad case field is refused with one line naming it and its range (the models' and the
+    solver's declared checks), exit status 2, before the cluster starts (no banner, no output file)."""
+    out = tmp_path / "o.csv"
+    rc = main(["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3",
+               "--workers", "2", "--no-progress", "--out", str(out)] + argv)
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.err == f"rocking ensemble: error: {msg}\n"
+    assert "cases ->" not in cap.out and not out.exists()
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--workers", "-1"], "argument --workers: -1 is out of range; allowed range [0, inf)"),
+    (["--batch-size", "0"], "argument --batch-size: 0 is out of range; allowed range [1, inf)"),
+    (["--workers", "1.5"], "argument --workers: '1.5' is not an integer"),
+    (["--no-workers-timeout", "0"], "argument --no-workers-timeout: 0 is out of range; allowed range (0, inf]"),
+])
+def test_ensemble_execution_options_are_refused_at_parse_time(argv, msg, capsys):
+    """Issue 20: --workers -1 used to be refused only after the cluster banner."""
+    with pytest.raises(SystemExit) as e:
+        main(["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3"] + argv)
+    cap = capsys.readouterr()
+    assert e.value.code == 2 and msg in cap.err and "cases ->" not in cap.out
+
+
+def test_version_is_the_package_version(capsys):
+    """`rocking --version` prints the installed package's version (one source: its metadata)."""
+    from importlib.metadata import version
+
+    import rocking_model
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out == f"rocking {version('rocking-model')}\n"
+    assert rocking_model.__version__ == version("rocking-model")
+
+
+def test_ensemble_reports_repairs_and_a_truncated_header_in_one_line(tmp_path, capsys):
+    """Issue 20: what a resume set aside is printed as one warning line; a header cut short is named as
+    truncated (exit 2), not as a foreign file."""
+    from rocking_model.ensemble import FIELDS
+
+    out = tmp_path / "ens.csv"
+    argv = ["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "4", "--frequency-ratios", "3",
+            "--workers", "0", "--no-progress", "--no-plot", "--out", str(out)]
+    assert main(argv) == 0
+    with open(out, "a") as f:
+        f.write("a cut row,rigid,0.2")
+    capsys.readouterr()
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert err == f"rocking ensemble: warning: {out}: 1 broken row(s) (line 4) set aside in {out}.rejected; " \
+                  "their cases run again\n"
+    out.write_text(",".join(FIELDS)[:50] + "\n" + "x," * (len(FIELDS) - 1) + "x\n")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "its header is truncated" in err and "move it aside" in err and "Traceback" not in err

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from rocking_model import RigidBlock, SinePulse, simulate
-from rocking_model.ensemble import (FIELDS, CsvWriter, pulse_cases, read_results, record_cases, run_case,
-                                    run_ensemble)
+from rocking_model.ensemble import (FIELDS, CsvWriter, RepairWarning, pulse_cases, read_results, record_cases,
+                                    run_case, run_ensemble)
 
 
 def _grid(**kw):
@@ -82,7 +82,8 @@ def test_resume_skips_done_cases_and_union_equals_straight_run(tmp_path):
     run_ensemble(cases[:2], part, workers=0, progress=False, on_row=seen.append)
     with open(part, "a") as f:
         f.write(cases[2]["case_id"] + ",rigid,0.2,1.0,0.0,sin")
-    s = run_ensemble(cases, part, workers=0, progress=False, on_row=seen.append)
+    with pytest.warns(RepairWarning, match=r"1 broken row\(s\) \(line 4\) set aside"):
+        s = run_ensemble(cases, part, workers=0, progress=False, on_row=seen.append)
     assert s["n_skipped"] == 2 and s["n_run"] == 4
     assert [r["case_id"] for r in seen].count(cases[0]["case_id"]) == 1
     again = run_ensemble(cases, part, workers=0, progress=False)
