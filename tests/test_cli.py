@@ -160,7 +160,7 @@ def test_build_fmu_command_writes_the_cross_check_folders(tmp_path, capsys):
     (["--b", "-1"], "b = -1 is out of range; allowed range [1e-06, 1000]"),
     (["--h", "2000"], "h = 2000 is out of range; allowed range [1e-06, 1000]"),
     (["--e-N", "1.5"], "e_N = 1.5 is out of range; allowed range [0, 1]"),
-    (["--mu", "0"], "mu = 0 is out of range; allowed range (0, inf]"),
+    (["--mu", "0"], "mu = 0 is out of range; allowed range [0.001, inf]"),
     (["--tolerance", "1"], "tolerance = 1 is out of range; allowed range [1e-14, 0.01]"),
 ])
 def test_ensemble_refuses_bad_case_fields_before_the_cluster_starts(argv, msg, tmp_path, capsys):
