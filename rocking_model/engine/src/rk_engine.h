@@ -1,0 +1,146 @@
+/* rk_engine.h -- the public C API of the engine: what the CPython extension (rocking_model._engine) and the
+ * FMI binary (issue 22) link against. Nothing else is public.
+ *
+ * Contract
+ * - One rk_engine per simulation: a fixed-size struct plus (with a bounded impact log) one block for the log,
+ *   both allocated by rk_engine_create and freed by rk_engine_free; nothing is allocated per step.
+ * - No global mutable state: engines are independent; one engine must not be used by two threads at once.
+ * - Every fallible call returns an rk_status; on failure rk_engine_message(e) says what (the Python's
+ *   wording) and the engine is left EXACTLY as before the call (advance / sample / set_state restore their
+ *   own checkpoint). The engine never aborts or exits.
+ * - Units SI. Outputs are in the order of the model's declared outputs (rk_engine_output_name).
+ * Owner: part E (rk_engine.c), dispatching to the schemes (rk_ed.c: part D, rk_mj.c: part E). */
+#ifndef RK_ENGINE_H
+#define RK_ENGINE_H
+
+#include "rk_common.h"
+#include "rk_motion.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The engine's version (the package version it was built with, e.g. "0.9.0") and the API version of this
+ *  header (bumped on every incompatible change). */
+const char *rk_engine_version(void);
+#define RK_ENGINE_API_VERSION 1
+int rk_engine_api_version(void);
+/** The plain-data state format (simulation.STATE_VERSION). */
+#define RK_STATE_VERSION 2
+
+typedef struct rk_engine rk_engine;
+
+/** Create an engine for model ``kind`` ("rigid", "flexible", or the class name "RigidBlock", ...), with
+ *  params[0..n_params-1] in the model's declared order (n_params must equal it), the initial values
+ *  initial[0..n_initial-1] in declared order (NULL / 0: the defaults; fewer: the rest default) and options
+ *  (NULL: rk_options_default). Checks everything with the Python's messages. Returns NULL on failure with
+ *  err filled (err may not be NULL). */
+rk_engine *rk_engine_create(const char *kind, const double *params, int n_params, const double *initial,
+                            int n_initial, const rk_options *options, rk_error *err);
+/** Free (NULL is a no-op). */
+void rk_engine_free(rk_engine *e);
+
+/** The status and message of the last failed call on e. */
+const char *rk_engine_message(const rk_engine *e);
+rk_status rk_engine_status(const rk_engine *e);
+
+/* ------------------------------------------------------------------------------------------ advance */
+/** flags of rk_engine_advance */
+#define RK_ADVANCE_CONTINUOUS 1u   /**< ag is continuous at the current time with the previous advance's input
+                                        (a kink of a record, not a jump): the mode is not re-decided at the
+                                        start (the Python's ``kink`` rule inside one SampledMotion advance) */
+
+/** Integrate to exactly t_end [s] (>= the current time) under the first-order hold
+ *  ag(t) = ag0 + slope (t - t0), t0 the current time (slope 0: the constant path, ConstantMotion);
+ *  max_steps: work budget of this call (< 0: none): RK_ERR_WORK_LIMIT beyond it, state restored. */
+rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, long long max_steps,
+                            unsigned flags);
+/** The same under any ground motion (Simulator.advance with a GroundMotion). */
+rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, long long max_steps);
+
+/** Integrator.sample: advance through the increasing times[0..n_times-1] (> current time) and write the
+ *  outputs at the current time and at each of them (n_times + 1 rows): modes[row], values[row * stride + j]
+ *  with stride = n_outputs + 2 (the model's outputs, then friction_demand, painleve), impacts[row],
+ *  overturned[row]. The work budget applies between consecutive times. Arrays are caller-owned. */
+rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, long long n_times,
+                           long long max_steps, int *modes, double *values, long long *impacts, int *overturned);
+
+/* ------------------------------------------------------------------------------------------ read */
+int rk_engine_n_outputs(const rk_engine *e);
+const char *rk_engine_output_name(const rk_engine *e, int i);
+const char *rk_engine_output_unit(const rk_engine *e, int i);
+/** The model's outputs now (computed on demand from the state, cached until the state changes). */
+void rk_engine_outputs(rk_engine *e, double *out);
+/** Integrator attributes now. */
+double rk_engine_time(const rk_engine *e);
+int rk_engine_mode(const rk_engine *e);
+long long rk_engine_impacts(const rk_engine *e);
+int rk_engine_overturned(const rk_engine *e);
+long long rk_engine_n_steps(const rk_engine *e);
+double rk_engine_friction_demand(const rk_engine *e);
+long long rk_engine_painleve(const rk_engine *e);
+/** Integrator.contacts: rk_contact_state per contact; returns n_contacts. */
+int rk_engine_contacts(const rk_engine *e, int *states);
+/** Integrator.state(): full (q, v); returns n_dof. */
+int rk_engine_full_state(rk_engine *e, double *q, double *v);
+/** Model description: class name ("RigidBlock"), n_dof, n_contacts, n_modes, scheme. */
+const char *rk_engine_model_class(const rk_engine *e);
+int rk_engine_n_dof(const rk_engine *e);
+int rk_engine_n_contacts(const rk_engine *e);
+int rk_engine_n_modes(const rk_engine *e);
+rk_scheme rk_engine_scheme(const rk_engine *e);
+/** The reports of the last advance / sample (Simulator.last_reports). */
+const rk_reports *rk_engine_reports(const rk_engine *e);
+
+/* ------------------------------------------------------------------------------------------ plain-data state */
+/** The fields of Simulator.get_state without the header (version, scheme, model, n_dof: the caller writes
+ *  them from rk_engine_model_class / rk_engine_scheme / rk_engine_n_dof) and without the two variable-length
+ *  logs (rk_engine_impact_times / rk_engine_impact_log). Event-driven fields: t, mode, y (n_y = 2k), impacts,
+ *  overturned, n_steps, h (NAN: None), shift, friction_demand, painleve. Moreau-Jean fields: t, q, v (n_dof),
+ *  mode, closed, impacts, overturned, n_steps, friction_demand, painleve. */
+typedef struct rk_plain_state {
+    double t;
+    int mode;
+    int n_y;
+    double y[RK_MAX_Y];
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
+    rk_set closed;
+    long long impacts;
+    int overturned;
+    long long n_steps;
+    double h;
+    double shift;
+    double friction_demand;
+    long long painleve;
+} rk_plain_state;
+
+/** Fill s with the current state. */
+void rk_engine_get_state(const rk_engine *e, rk_plain_state *s);
+/** impact_times: the last maxlen times (BoundedLog.tail). With buf NULL returns the count only; else writes
+ *  min(count, cap) and returns count. */
+long long rk_engine_impact_times(const rk_engine *e, double *buf, long long cap);
+/** impact_log (event-driven only), flattened rows (t, v_minus[n_dof], v_plus[n_dof]) as in get_state; returns
+ *  the number of ROWS, writes min(rows, cap_rows). */
+long long rk_engine_impact_log(const rk_engine *e, double *buf, long long cap_rows);
+/** Load a state (set_state): every field checked as the Python does (RK_ERR_VALUE naming the field,
+ *  e.g. "state field 'y' ..."); nothing changes on error. n_log_rows: rows of impact_log (event-driven). */
+rk_status rk_engine_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times,
+                              long long n_times, const double *impact_log, long long n_log_rows);
+
+/* ------------------------------------------------------------------------------------------ checkpoint */
+/** One checkpoint slot inside the engine (Checkpointed): checkpoint before, then rollback (exact restore) or
+ *  commit. A struct copy of the scheme's state plus the log cursors (DESIGN.md "Memory"). advance / sample
+ *  use their own internal slot; these are for callers that group several calls (the FMU's doStep). */
+void rk_engine_checkpoint(rk_engine *e);
+rk_status rk_engine_rollback(rk_engine *e);
+void rk_engine_commit(rk_engine *e);
+/** Whole-engine snapshots for fmi2GetFMUstate / SetFMUstate / serialization: size in bytes, copy out, copy
+ *  in (a snapshot of another engine of the same model, options and log size only: RK_ERR_VALUE otherwise). */
+size_t rk_engine_snapshot_size(const rk_engine *e);
+rk_status rk_engine_snapshot(const rk_engine *e, void *buf, size_t size);
+rk_status rk_engine_restore(rk_engine *e, const void *buf, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RK_ENGINE_H */

@@ -1,0 +1,134 @@
+/* rk_internal.h -- the engine struct and the scheme interfaces (parts D and E; not public).
+ *
+ * The engine is one struct of plain data: the model instance, the options, the scheme's state (a union of
+ * the event-driven and Moreau-Jean states), the checkpoint slot, the reports and the message buffer. The
+ * only pointers: the constant model ops and tableaux, the impact-log storage (one block allocated at create),
+ * and during a call the borrowed ground motion. No pointer points into the struct itself, so a checkpoint is
+ * a struct copy of ``core`` (DESIGN.md "Memory"). */
+#ifndef RK_INTERNAL_H
+#define RK_INTERNAL_H
+
+#include "rk_common.h"
+#include "rk_model.h"
+#include "rk_contact.h"
+#include "rk_rk.h"
+#include "rk_motion.h"
+#include "rk_engine.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** An append-only log of fixed-size rows (impact_times: 1 double; impact_log: 1 + 2 n_dof), BoundedLog with
+ *  maxlen: kept in a ring of capacity 2 maxlen rows (the Python trims to maxlen when it exceeds 2 maxlen and
+ *  returns the last maxlen in tail()); maxlen < 0: unbounded, the storage doubles on an append that needs it
+ *  (impacts only, never per step). Rows are addressed by absolute index: rows [first, end) are present. */
+typedef struct rk_log {
+    double *data;               /**< heap storage, cap * row_len doubles (owned by the engine) */
+    int row_len;
+    long long cap;              /**< rows of storage */
+    long long maxlen;           /**< -1: unbounded */
+    long long first, end;       /**< absolute indices of the present rows */
+} rk_log;
+
+/** Append a row (no allocation when bounded); RK_ERR_MEMORY if an unbounded log cannot grow. */
+rk_status rk_log_append(rk_log *log, const double *row);
+/** Rows of tail() (the last maxlen, all if unbounded). */
+long long rk_log_tail_count(const rk_log *log);
+/** Copy tail() rows out (up to cap_rows); returns the count copied. */
+long long rk_log_tail(const rk_log *log, double *buf, long long cap_rows);
+
+/** The event-driven scheme's state (EventDriven's attributes). */
+typedef struct rk_ed_state {
+    /* what get_state returns */
+    double t;
+    int mode;
+    int k;                              /**< reduced dofs of mode; y has 2k entries */
+    double y[RK_MAX_Y];
+    double shift;                       /**< [m] base offset of a sticking mode on the ground */
+    long long impacts;
+    int overturned;
+    long long n_steps;
+    double h;                           /**< [s] last step size (NAN: None) */
+    double friction_demand;
+    long long painleve;
+    /* the live stepper (EventDriven._live): carried between advances, bit-identical restart otherwise */
+    int live;                           /**< 1: ``stepper`` may go on */
+    rk_stepper stepper;
+    /* settings (from the options and the model; constant after create) */
+    double tolerance, dt_max;
+    const rk_tableau *tab;
+    double gap_tol, v_tol, v_zeno, event_tol, stateless_step, force_floor;
+    int max_events;
+    /* per-advance work budget (_max_work, _work_end, _span, _impacts0) */
+    long long max_work;                 /**< -1: none */
+    double work_end;
+    double span0, span1;
+    long long impacts0;
+} rk_ed_state;
+
+/** The Moreau-Jean scheme's state (MoreauJean's attributes). */
+typedef struct rk_mj_state {
+    double t;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
+    int mode;
+    rk_set closed;                      /**< contacts that carried impulse in the last step */
+    long long impacts;
+    int overturned;
+    long long n_steps;
+    double friction_demand;
+    long long painleve;
+    double dt_max, theta;
+    double gap_margin, v_rest, force_floor;
+} rk_mj_state;
+
+/** What a checkpoint copies. */
+typedef struct rk_core {
+    union {
+        rk_ed_state ed;
+        rk_mj_state mj;
+    } s;
+    long long times_first, times_end;   /**< log cursors */
+    long long log_first, log_end;
+    unsigned long long token;           /**< changes whenever the state changes (output cache key) */
+} rk_core;
+
+struct rk_engine {
+    rk_model model;
+    rk_options options;
+    rk_model_tolerances scaled;         /**< options.tolerances for this model */
+    rk_core core;
+    rk_core saved;                      /**< the checkpoint slot of rk_engine_checkpoint */
+    int has_saved;
+    rk_log impact_times;
+    rk_log impact_log;                  /**< event-driven only (maxlen min(1000, impact_log_size)) */
+    rk_reports reports;
+    unsigned long long out_token;       /**< token of the cached outputs */
+    double out_cache[RK_MAX_OUTPUTS];
+    rk_error error;                     /**< status and message of the last failed call */
+};
+
+/* ------------------------------------------------------------------------------------------ event-driven (D) */
+/** EventDriven.from_options + __init__ (options checked with the Python messages). */
+rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, rk_error *err);
+/** EventDriven._run: advance (samples NULL) or sample. Errors leave the state partly advanced: the caller
+ *  (rk_engine.c) restores its checkpoint. */
+rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *samples, long long n_samples,
+                    long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
+                    unsigned flags, rk_error *err);
+void rk_ed_full_state(rk_engine *e, double *q, double *v);
+void rk_ed_outputs(rk_engine *e, double *out);
+rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
+                          const double *impact_log, long long n_log_rows, rk_error *err);
+
+/* ------------------------------------------------------------------------------------------ Moreau-Jean (E) */
+rk_status rk_mj_init(rk_engine *e, int mode, const double *q, const double *v, rk_error *err);
+rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, long long max_steps, rk_error *err);
+void rk_mj_outputs(rk_engine *e, double *out);
+rk_status rk_mj_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
+                          rk_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RK_INTERNAL_H */

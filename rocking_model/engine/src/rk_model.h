@@ -1,0 +1,227 @@
+/* rk_model.h -- the model kernel interface: what a model provides to the engine (part A).
+ *
+ * C counterpart of rocking_model.models.base.RockingModel. A model kind is one constant rk_model_ops (a
+ * struct of function pointers plus its static description) defined in one kernel file (rk_rigid.c,
+ * rk_flexible.c); an instance is an rk_model (its parameters and derived constants, plain data, copyable by
+ * assignment). Adding a third model = writing one kernel file with its rk_model_ops and adding it to
+ * rk_model_kinds() in rk_model.c; nothing else in the engine names a model.
+ *
+ * Owner: part A (rk_model.c: the generic functions below; rk_sliding.c: the sliding modes; rk_rigid.c,
+ * rk_flexible.c: the kernels). Every kernel function is pinned to the Python on random states to round-off
+ * (tests/test_engine_model.py).
+ *
+ * Conventions
+ * - q, v: full coordinates in the order of dof_names (rigid: x, y, phi; flexible: u, x, y, phi), SI units.
+ * - Matrices are row-major arrays: M[i * n_dof + j]; W_N, W_T have one COLUMN per contact:
+ *   W[i * n_contacts + c] (i the coordinate, c the contact), as the Python's (n, n_contacts) arrays;
+ *   a mode Jacobian J is n_dof x k: J[i * k + j].
+ * - y = [r_0..r_{k-1}, r_dot_0..r_dot_{k-1}] is the reduced state of a mode (k = its number of dofs).
+ * - ag [m/s2] is always a VALUE (the caller evaluates the ground motion at t); no callbacks into Python.
+ * - The kernel functions of the "sticking modes" section are called only with modes m where
+ *   stick_of(m) == m; the generic rk_* functions of this header reach every mode (sliding ones through
+ *   rk_sliding.c), as RockingModel.dofs_of / embed_any / reduce_any / functions_of do.
+ * - Kernel functions never fail on finite input: they return non-finite values where the Python would
+ *   (the driver checks). Functions that can fail return rk_status. */
+#ifndef RK_MODEL_H
+#define RK_MODEL_H
+
+#include "rk_common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct rk_model rk_model;
+
+/** A declared parameter, initial value or output (rocking_model.params.Param): name, unit, range. */
+typedef struct rk_param_decl {
+    const char *name;
+    const char *unit;           /**< "" for none */
+    double default_value;
+    double lo, hi;              /**< allowed range (+-INFINITY: unbounded) */
+    int lo_open, hi_open;       /**< 1: the bound itself is excluded */
+    int inf_ok;                 /**< 1: +inf is allowed (mu) */
+    int integer;                /**< 1: an integer choice (impact_law, impact_rule) */
+} rk_param_decl;
+
+/** The kernel of one model kind. All function pointers are required unless marked "optional (NULL: ...)". */
+typedef struct rk_model_ops {
+    /* ---------------------------------------------------------------- static description */
+    const char *kind;                /**< registry name: "rigid", "flexible" (rocking_model.models.MODELS) */
+    const char *class_name;          /**< the Python class name: "RigidBlock" (the state header's "model") */
+    int n_dof;                       /**< len(dof_names) */
+    int n_contacts;                  /**< contacts (columns of W_N, W_T) */
+    int n_modes;                     /**< contact modes, codes 0 .. n_modes-1 */
+    int phi_index, slide_index, lift_index;   /**< as RockingModel */
+    int n_params;                    /**< declared parameters, in constructor order (Model.parameters()) */
+    const rk_param_decl *param_decls;
+    int n_initial;                   /**< declared initial values (Model.INITIAL) */
+    const rk_param_decl *initial_decls;
+    int n_outputs;                   /**< declared outputs (Model.OUTPUTS), the order of every output array */
+    const rk_param_decl *output_decls;
+    int n_shifted;                   /**< SHIFTED_OUTPUTS, as indices into output_decls */
+    const int *shifted;
+
+    /* ---------------------------------------------------------------- construction */
+    /** Check params[0..n_params-1] (declared order) with the Python's ranges and messages (check_parameters
+     *  and __post_init__: e.g. the flexible oscillator's singular mass matrix, OMEGA_MAX), then fill m->p,
+     *  m->d (kernel-private derived constants, same formulas and operation order as __post_init__) and the
+     *  common fields of rk_model (e_N, e_T, mu, g, impact_law, length_scale, time_scale, force_scale,
+     *  step_limit, dof_scales). RK_ERR_VALUE with the Python message on a bad value. */
+    rk_status (*init)(rk_model *m, const double *params, rk_error *err);
+
+    /* ---------------------------------------------------------------- modes (sticking and sliding) */
+    /** The mode of a closed set, sliding with sigma (+1, -1; 0 stuck): RockingModel.mode_of. */
+    int (*mode_of)(const rk_model *m, rk_set closed, int sigma);
+    /** The closed contacts of any mode: RockingModel.closed_of. */
+    rk_set (*closed_of)(const rk_model *m, int mode);
+    /** The stick mode of a sliding mode (the mode itself if not sliding), and its sigma (0 if not sliding):
+     *  rocking_model.modes.SLIDING / stick_mode / slide_sign. */
+    int (*stick_of)(const rk_model *m, int mode, int *sigma);
+
+    /* ---------------------------------------------------------------- dynamical system */
+    void (*mass_matrix)(const rk_model *m, const double *q, double *M);
+    /** optional (NULL: the generic inverse of rk_model_inverse_mass) */
+    void (*inverse_mass_matrix)(const rk_model *m, const double *q, double *Minv);
+    /** f(q, v, ag) [N, N m]: non-contact generalized forces. */
+    void (*forces)(const rk_model *m, const double *q, const double *v, double ag, double *f);
+    /** optional (NULL: no stiff part, returns 0): K = -df/dq, C = -df/dv of the stiff linear part; returns 1
+     *  when filled (RockingModel.stiff_jacobians not None). */
+    int (*stiff_jacobians)(const rk_model *m, const double *q, const double *v, double *K, double *C);
+
+    /* ---------------------------------------------------------------- contact relation */
+    void (*gaps)(const rk_model *m, const double *q, double *g);                          /**< [m] */
+    void (*contact_jacobians)(const rk_model *m, const double *q, double *W_N, double *W_T);
+    void (*contact_drift)(const rk_model *m, const double *q, const double *v, double *a_N, double *a_T);
+    void (*contact_abscissae)(const rk_model *m, const double *q, double *x);            /**< [m] */
+
+    /* ---------------------------------------------------------------- sticking modes */
+    /** Indices in q of the reduced coordinates of a sticking mode (idx has room for RK_MAX_DOF); returns k. */
+    int (*mode_dofs)(const rk_model *m, int mode, int *idx);
+    /** Full (q, v) of the reduced state (r, r_dot) of a sticking mode: RockingModel.embed. */
+    void (*embed)(const rk_model *m, int mode, const double *r, const double *r_dot, double *q, double *v);
+    /** (J, J_dot r_dot) of a sticking mode: RockingModel.mode_jacobian (J is n_dof x k). */
+    void (*mode_jacobian)(const rk_model *m, int mode, const double *r, const double *r_dot, double *J,
+                          double *jd);
+    /** dy = [r_dot, r_ddot] of a sticking mode at y under ag: the rhs of mode_closures, SAME operation order
+     *  as the Python closed form (DESIGN.md "Numerics"). optional (NULL: rk_model_generic_rhs, Lagrange on the
+     *  constrained system as RockingModel.reduced_acceleration). */
+    void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double *dy);
+    /** The event functions of a sticking mode at (y, ag), in the order of mode_closures' monitors (one per
+     *  contact, then the overturning margin HALF_PI - |phi|): writes n_contacts + 1 values into g; when totals
+     *  is not NULL and the mode has closed contacts, also (sum lambda_N, sum lambda_T) [N] into totals[0..1]
+     *  computed from the same intermediates (mode_closures' totals). optional (NULL: rk_model_generic_monitors,
+     *  RockingModel.mode_functions' generic monitors and sliding.force_totals). */
+    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals);
+    /** Outputs of the reduced state of a sticking mode (mode_outputs, out in the order of outputs).
+     *  optional (NULL: outputs(embed(y))). */
+    void (*mode_outputs)(const rk_model *m, int mode, const double *y, double *out);
+    /** Normal contact forces [N] of the closed contacts of a sticking mode held closed (contact_forces).
+     *  optional (NULL: rk_mode_forces of rk_contact.h). */
+    void (*contact_forces)(const rk_model *m, int mode, const double *q, const double *v, double ag,
+                           double *lam);
+
+    /* ---------------------------------------------------------------- quantities */
+    void (*rest_position)(const rk_model *m, double *q);
+    double (*energy)(const rk_model *m, const double *q, const double *v);                 /**< [J] */
+    /** outputs(q, v), in the order of ops->output_decls. */
+    void (*outputs)(const rk_model *m, const double *q, const double *v, double *out);
+    /** (mode, q, v) of the initial values initial[0..n_initial-1] (declared order), checked with the Python's
+     *  ranges and messages (initial_state). */
+    rk_status (*initial_state)(const rk_model *m, const double *initial, int *mode, double *q, double *v,
+                               rk_error *err);
+    /** optional (NULL: none): the classical impact rule (FlexibleOscillator.classical_impact_velocity with
+     *  impact_rule = 1): writes v_plus and returns 1 when the rule replaces the impact LCP at an impact of
+     *  the open contact of the rocking ``mode``; returns 0 when the LCP decides. */
+    int (*classical_impact_velocity)(const rk_model *m, const double *q, const double *v_minus, int mode,
+                                     double *v_plus);
+} rk_model_ops;
+
+/** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
+ *  pointer is to the constant ops. */
+struct rk_model {
+    const rk_model_ops *ops;
+    double p[RK_MAX_PARAMS];        /**< declared parameters, in declared order */
+    double d[RK_MAX_DERIVED];       /**< derived constants, kernel-private layout (e.g. R, alpha, I_c, p) */
+    /* common fields, filled by ops->init */
+    double e_N;                     /**< [1] */
+    double e_T;                     /**< [1] e_N if impact_law == 1 else 0 (RockingModel.e_T) */
+    double mu;                      /**< [1] INFINITY: the sticking law */
+    double g;                       /**< [m/s2] */
+    int impact_law;                 /**< 0 newton, 1 energy_consistent */
+    double length_scale;            /**< [m] */
+    double time_scale;              /**< [s] */
+    double force_scale;             /**< [N] */
+    double step_limit;              /**< [s] largest Moreau-Jean step (INFINITY: none) */
+    double dof_scales[RK_MAX_DOF];  /**< RockingModel.dof_scales */
+    double rest_abscissae[RK_MAX_CONTACTS];   /**< contact_abscissae(rest_position()) (slip) */
+};
+
+/* ------------------------------------------------------------------------------------------ registry */
+/** The kernels, NULL-terminated (rk_model.c). */
+const rk_model_ops *const *rk_model_kinds(void);
+/** The kernel of a kind name ("rigid", "flexible") or Python class name; NULL if none. */
+const rk_model_ops *rk_model_find(const char *kind);
+/** Build an instance: ops->init plus rest_abscissae. */
+rk_status rk_model_init(rk_model *m, const rk_model_ops *ops, const double *params, int n_params,
+                        rk_error *err);
+/** ContactTolerances.for_model. */
+void rk_model_scale_tolerances(const rk_model *m, const rk_tolerances *tol, rk_model_tolerances *out);
+
+/* ------------------------------------------------------------------------------------------ any mode
+ * (rk_model.c, dispatching to the kernel for sticking modes and to rk_sliding.c for sliding ones:
+ *  RockingModel.dofs_of, embed_any, reduce_any, functions_of, outputs_of, force_totals_of). */
+
+/** M^-1(q): the kernel's closed form, else a generic Gauss-Jordan inverse with partial pivoting. */
+void rk_model_inverse_mass(const rk_model *m, const double *q, double *Minv);
+/** dofs_of: writes the indices, returns k. */
+int rk_dofs_of(const rk_model *m, int mode, int *idx);
+/** embed_any (without the shift of a sticking mode: the driver adds it at slide_index). */
+void rk_embed_any(const rk_model *m, int mode, const double *y, double *q, double *v);
+/** reduce_any: y = [r, r_dot] of a full state that satisfies the mode's constraints; returns k. */
+int rk_reduce_any(const rk_model *m, int mode, const double *q, const double *v, double *y);
+/** The rhs of any mode (functions_of()[0]). Returns RK_OK (a sliding mode's solve may fail: RK_ERR_SOLVER). */
+rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy);
+/** The event functions of any mode (functions_of()[1]: with a finite mu a closed sticking mode gets the cone
+ *  event (mu lam_N - |lam_T|) / force_scale before the overturning margin; a sliding mode's are
+ *  sliding.slide_functions' monitors). Writes them into g and returns their number (n_contacts + 1, or + 2 with
+ *  the friction event); totals (may be NULL) receives (sum lambda_N, sum lambda_T) [N] when the mode has
+ *  closed contacts (functions_of()[2]) and *has_totals is set to 1 (0 in flight). */
+int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals,
+                     int *has_totals);
+/** outputs_of(mode, y, shift): out in the order of ops->output_decls; shift [m] added to the SHIFTED outputs. */
+void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out);
+/** RockingModel.slip(q) [m]. */
+double rk_model_slip(const rk_model *m, const double *q);
+/** sliding.shift_of: horizontal offset of a full state on the closed contacts of a sticking mode [m]. */
+double rk_shift_of(const rk_model *m, int mode, const double *q);
+/** sliding.force_totals at a full state (sum lambda_N, sum lambda_T) [N] of a sticking mode. */
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double *totals);
+
+/** Generic fallbacks (used when the kernel leaves the optional pointer NULL; pinned on both models by
+ *  comparing with the Python generic code of RockingModel). */
+void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy);
+void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, double ag, double *g,
+                               double *totals);
+
+/* ------------------------------------------------------------------------------------------ sliding modes
+ * rk_sliding.c, the port of rocking_model/models/sliding.py (generic: any kernel). */
+int rk_slide_dofs(const rk_model *m, int mode, int *idx);
+void rk_slide_embed(const rk_model *m, int mode, const double *r, const double *r_dot, double *q, double *v);
+int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *v, double *y);
+/** slide_motion: the full acceleration a and tau = mu lambda_N of each closed contact (in increasing contact
+ *  order). RK_ERR_SOLVER only where numpy's lstsq fallback would also fail. */
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double *a,
+                          double *tau);
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+                                double *r_ddot);
+void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, double *J, double *jd);
+
+/* ------------------------------------------------------------------------------------------ kernels */
+extern const rk_model_ops RK_RIGID_BLOCK;          /* rk_rigid.c */
+extern const rk_model_ops RK_FLEXIBLE_OSCILLATOR;  /* rk_flexible.c */
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RK_MODEL_H */

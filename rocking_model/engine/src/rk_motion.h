@@ -1,0 +1,65 @@
+/* rk_motion.h -- the ground acceleration ag(t) as C data (part E).
+ *
+ * C counterpart of the rocking_model.ground_motion classes the integrators read: ag(t), ``constant``,
+ * next_breakpoint(t) and continuous_at(tb). Same formulas and operation order as the Python __call__ of
+ * each class, so that the driver sees the same values bit for bit. A motion is borrowed by the engine for
+ * the duration of one advance / sample call only (never stored past it).
+ * Pinned: tests/test_engine_api.py compares rk_motion_eval / next_breakpoint with the Python classes. */
+#ifndef RK_MOTION_H
+#define RK_MOTION_H
+
+#include "rk_common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum rk_motion_kind {
+    RK_MOTION_CONSTANT = 0,     /**< ConstantMotion: ag = value (constant: the Python's ag.constant path) */
+    RK_MOTION_LINEAR = 1,       /**< LinearMotion: ag = value + rate (t - t_ref), no breakpoints */
+    RK_MOTION_SAMPLED = 2,      /**< SampledMotion: linear between samples t[i], ag[i]; 0 outside; breakpoints
+                                     at the samples, continuous at the inner ones */
+    RK_MOTION_SINE = 3,         /**< SinePulse: A sin(omega_p (t - t0)) on [t0, t0 + 2 pi / omega_p] */
+    RK_MOTION_CALLBACK = 4,     /**< any other GroundMotion through C callbacks (the extension wraps a Python
+                                     callable: slow, exact; a failing call sets *failed and the advance
+                                     returns RK_ERR_VALUE with the callback's message) */
+    RK_MOTION_SCALED = 5        /**< ScaledMotion: factor * inner */
+} rk_motion_kind;
+
+typedef struct rk_motion rk_motion;
+struct rk_motion {
+    rk_motion_kind kind;
+    double value, rate, t_ref;          /**< CONSTANT (value), LINEAR */
+    const double *t, *ag;               /**< SAMPLED: borrowed arrays of n samples (t strictly increasing) */
+    long long n;
+    long long i_last;                   /**< SAMPLED: interval of the last evaluation (SampledMotion._i) */
+    double A, omega_p, t0, t1;          /**< SINE (t1 = t0 + 2 pi / omega_p, computed as the Python does) */
+    double factor;                      /**< SCALED */
+    const rk_motion *inner;             /**< SCALED */
+    /** CALLBACK: ag(t); set *failed = 1 and write msg (RK_MSG_LEN) on failure */
+    double (*fn)(void *ctx, double t, int *failed, char *msg);
+    /** CALLBACK: next breakpoint after t (INFINITY: none); NULL: none */
+    double (*fn_breakpoint)(void *ctx, double t, int *failed, char *msg);
+    /** CALLBACK: continuity at a breakpoint; NULL: continuous */
+    int (*fn_continuous)(void *ctx, double tb);
+    void *ctx;
+    int constant;                       /**< 1: the Python's ``ag.constant`` (CONSTANT, SCALED of constant) */
+};
+
+/** Constructors (fill every field; no allocation). */
+void rk_motion_constant(rk_motion *m, double value);
+void rk_motion_linear(rk_motion *m, double value, double rate, double t_ref);
+rk_status rk_motion_sampled(rk_motion *m, const double *t, const double *ag, long long n, rk_error *err);
+rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
+
+/** ag(t) [m/s2]; a CALLBACK failure sets *failed (may be NULL for the others) and msg. */
+double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
+/** GroundMotion.next_breakpoint: the first breakpoint strictly after t (INFINITY: none). */
+double rk_motion_next_breakpoint(rk_motion *m, double t);
+/** GroundMotion.continuous_at. */
+int rk_motion_continuous_at(const rk_motion *m, double tb);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RK_MOTION_H */
