@@ -1,6 +1,6 @@
 """Build of the compiled engine (issue 21): the extension module rocking_model._engine from the C99 sources
-in rocking_model/engine/src (every *.c there: the parts add their files without touching this one) and the
-module glue rocking_model/engine/_engine.c. Everything else is declared in pyproject.toml.
+in rocking_model/engine/src (every *.c there: the parts add their files without touching this one), the
+parts' test entry points rocking_model/engine/py/*.c and the module glue rocking_model/engine/_engine.c. Everything else is declared in pyproject.toml.
 
 Flags: portable (-std=c99 -O2, no -march=native) and -ffp-contract=off, so that the compiler does not fuse
 a*b + c into an FMA: the C engine must round like the Python reference (rocking_model/engine/DESIGN.md,
@@ -8,6 +8,7 @@ a*b + c into an FMA: the C engine must round like the Python reference (rocking_
 import glob
 import os
 import re
+import runpy
 import sys
 
 from setuptools import Extension, setup
@@ -22,7 +23,23 @@ def package_version() -> str:
     return match.group(1) if match else "unknown"
 
 
+# generated sources: rocking_model/engine/gen_rk.py (part C) writes src/rk_tableaux.h from the tableaux of
+# rocking_model/integrators/dop853.py and dopri5.py (read with ast: no numpy in the build environment), so that
+# the C Runge-Kutta pairs and the Python ones have one source of truth
+GENERATOR = os.path.join(HERE, "rocking_model", "engine", "gen_rk.py")
+if os.path.exists(GENERATOR):
+    runpy.run_path(GENERATOR, run_name="__main__")
+
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
+#: the test entry points of the parts (rocking_model/engine/py/py_*.c), linked into the same module
+TEST_# generated sources: rocking_model/engine/gen_rk.py (part C) writes src/rk_tableaux.h from the tableaux of
+# rocking_model/integrators/dop853.py and dopri5.py (read with ast: no numpy in the build environment), so that
+# the C Runge-Kutta pairs and the Python ones have one source of truth
+GENERATOR = os.path.join(HERE, "rocking_model", "engine", "gen_rk.py")
+if os.path.exists(GENERATOR):
+    runpy.run_path(GENERATOR, run_name="__main__")
+
+SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "py", "*.c")))
 if sys.platform == "win32":
     CFLAGS = ["/O2", "/fp:precise"]
     LIBS = []
@@ -34,9 +51,10 @@ setup(
     ext_modules=[
         Extension(
             "rocking_model._engine",
-            sources=SOURCES + [os.path.join("rocking_model", "engine", "_engine.c")],
+            sources=SOURCES + TEST_SOURCES + [os.path.join("rocking_model", "engine", "_engine.c")],
             include_dirs=[os.path.join("rocking_model", "engine")],
             define_macros=[("RK_ENGINE_VERSION_STRING", '"%s"' % package_version())],
+            depends=sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.h"))),
             extra_compile_args=CFLAGS,
             libraries=LIBS,
         )

@@ -9,6 +9,12 @@
 
 #include "src/rk_engine.h"
 
+/* the test entry points of parts A-D (rocking_model/engine/py/py_*.c) */
+extern PyMethodDef rk_py_model_methods[];
+extern PyMethodDef rk_py_contact_methods[];
+extern PyMethodDef rk_py_rk_methods[];
+extern PyMethodDef rk_py_ed_methods[];
+
 static PyObject *raise_status(rk_status status, const char *message)
 {
     PyObject *type;
@@ -107,5 +113,13 @@ static struct PyModuleDef module = {
 
 PyMODINIT_FUNC PyInit__engine(void)
 {
-    return PyModule_Create(&module);
+    PyObject *m = PyModule_Create(&module);
+    if (m == NULL)
+        return NULL;
+    if (PyModule_AddFunctions(m, rk_py_model_methods) < 0 || PyModule_AddFunctions(m, rk_py_contact_methods) < 0
+        || PyModule_AddFunctions(m, rk_py_rk_methods) < 0 || PyModule_AddFunctions(m, rk_py_ed_methods) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
 }

@@ -1,0 +1,13 @@
+/* py_rk.c -- test entry points of part C for the pinning tests (tests/test_engine_*.py): thin wrappers
+ * that call the C functions of rk_rk on Python floats/lists and return lists, registered into
+ * rocking_model._engine by _engine.c (PyModule_AddFunctions). Names start with "rk_" (e.g.
+ * _engine.rk_...) so that the parts never collide. Not used by the engine itself.
+ * Owner: part C. The table is empty until part C adds its wrappers. */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+#include "../src/rk_internal.h"
+
+PyMethodDef rk_py_rk_methods[] = {
+    {NULL, NULL, 0, NULL}
+};
