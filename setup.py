@@ -32,14 +32,7 @@ if os.path.exists(GENERATOR):
 
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
 #: the test entry points of the parts (rocking_model/engine/py/py_*.c), linked into the same module
-TEST_# generated sources: rocking_model/engine/gen_rk.py (part C) writes src/rk_tableaux.h from the tableaux of
-# rocking_model/integrators/dop853.py and dopri5.py (read with ast: no numpy in the build environment), so that
-# the C Runge-Kutta pairs and the Python ones have one source of truth
-GENERATOR = os.path.join(HERE, "rocking_model", "engine", "gen_rk.py")
-if os.path.exists(GENERATOR):
-    runpy.run_path(GENERATOR, run_name="__main__")
-
-SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "py", "*.c")))
+TEST_SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "py", "*.c")))
 if sys.platform == "win32":
     CFLAGS = ["/O2", "/fp:precise"]
     LIBS = []
