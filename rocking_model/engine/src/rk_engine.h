@@ -50,8 +50,16 @@ rk_status rk_engine_status(const rk_engine *e);
                                         (a kink of a record, not a jump): the mode is not re-decided at the
                                         start (the Python's ``kink`` rule inside one SampledMotion advance) */
 
+#define RK_ADVANCE_LINEAR 2u       /**< the input is a LinearMotion even when slope == 0 (the Python's
+                                        ``ag.constant`` is False: the event-driven scheme then samples a
+                                        stateless phase in steps of stateless_step, as it does under
+                                        fmi2SetRealInputDerivatives with a zero rate) */
+
 /** Integrate to exactly t_end [s] (>= the current time) under the first-order hold
- *  ag(t) = ag0 + slope (t - t0), t0 the current time (slope 0: the constant path, ConstantMotion);
+ *  ag(t) = ag0 + slope (t - t0), t0 the current time: slope 0 without RK_ADVANCE_LINEAR is the constant path
+ *  (ConstantMotion), otherwise LinearMotion(ag0, slope, t_ref = t0). A LinearMotion whose t_ref is not the
+ *  current time (the FMU's rate set at another time) goes through rk_engine_advance_motion with
+ *  rk_motion_linear, which evaluates value + rate (t - t_ref) exactly as the Python does.
  *  max_steps: work budget of this call (< 0: none): RK_ERR_WORK_LIMIT beyond it, state restored. */
 rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, long long max_steps,
                             unsigned flags);
