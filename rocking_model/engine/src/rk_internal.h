@@ -53,8 +53,19 @@ typedef struct rk_ed_state {
     double friction_demand;
     long long painleve;
     /* the live stepper (EventDriven._live): carried between advances, bit-identical restart otherwise */
-    int live;                           /**< 1: ``stepper`` may go on */
+    int live;                           /**< 1: ``stepper`` may go on (the Python's ``_live`` is not None and
+                                             ``st.y is self.y``: the last segment ended without an event at
+                                             the current state; cleared by every other state change) */
     rk_stepper stepper;
+    /* identity of the stepper's right-hand side (the Python's ``st.fun is rhs``: `_functions` caches the
+     * closures by (mode, ag.value) for a constant input and by (mode, id(ag)) otherwise, so a new constant
+     * input of the same value keeps the FSAL derivative, and any new non-constant motion restarts) */
+    int rhs_mode;
+    int rhs_constant;                   /**< 1: built for a constant input of value rhs_value */
+    double rhs_value;
+    unsigned long long rhs_motion;      /**< non-constant: the serial of the motion (motion_serial at its call) */
+    unsigned long long motion_serial;   /**< incremented by every advance / sample call with a non-constant
+                                             motion (a new GroundMotion object in the Python) */
     /* settings (from the options and the model; constant after create) */
     double tolerance, dt_max;
     const rk_tableau *tab;
