@@ -135,6 +135,9 @@ typedef struct rk_model_ops {
      *  the open contact of the rocking ``mode``; returns 0 when the LCP decides. */
     int (*classical_impact_velocity)(const rk_model *m, const double *q, const double *v_minus, int mode,
                                      double *v_plus);
+    /** optional (NULL: ""): RockingModel.work_note, what drives the cost of a step (the flexible column's
+     *  omega), written into buf (size n, NUL-terminated) for the work-limit messages. */
+    void (*work_note)(const rk_model *m, char *buf, size_t n);
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
