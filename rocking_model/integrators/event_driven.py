@@ -40,7 +40,7 @@ import numpy as np
 from ..contact import closed_candidates, impact, inverse_mass, next_mode, project_to_ground
 from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
 from ..models.sliding import shift_of
-from ..modes import SLIDING, BoundedLog, bounded_log
+from ..modes import OVERTURNED, SLIDING, BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
 from ..validation import WorkLimitError, check_choice, check_real, state_bool, state_float, state_floats, state_int
 from .base import Integrator, SolverOptions, register_scheme
@@ -276,6 +276,7 @@ class EventDriven(Integrator):
         samples = [self._sample_row(self.mode, list(self.y))]
         samples += self._run(float(times[-1]), ag, times, max_steps)
         modes = np.array([int(smp[0]) for smp in samples])
+        overturned = np.array([smp[3] for smp in samples], dtype=bool)
         values = {}
         for code in np.unique(modes):
             idx = np.nonzero(modes == code)[0]
@@ -286,8 +287,9 @@ class EventDriven(Integrator):
                 values.setdefault(name, np.empty(len(samples)))[idx] = arr
         values["friction_demand"] = np.array([smp[5] for smp in samples])
         values["painleve"] = np.array([smp[6] for smp in samples])
-        return (modes, values, np.array([smp[2] for smp in samples]),
-                np.array([smp[3] for smp in samples], dtype=bool))
+        # (the outputs above are evaluated in the last contact mode; the output contact reads OVERTURNED)
+        return (np.where(overturned, OVERTURNED, modes), values, np.array([smp[2] for smp in samples]),
+                overturned)
 
     def _sample_row(self, mode, y, overturned=None):
         """A sample of `sample`: (mode, y, impacts, overturned, shift, friction_demand, painleve)."""
@@ -545,7 +547,11 @@ class EventDriven(Integrator):
     def _handle(self, kind, t, ag):
         q, v = self.state()
         if kind == _KIND_OVERTURN:
+            # the motion ends: the pose at |phi| = pi/2 (located to round-off), at rest (the outputs after
+            # overturning describe no motion the scheme no longer computes)
             self.overturned = True
+            self.y = self.y[:self.k] + [0.0] * self.k
+            self._full = None
             return
         if kind == _KIND_IMPACT:
             self._impact(q, v, t, ag(t))
