@@ -140,9 +140,13 @@ class Integrator(Checkpointed):
         """Raise ``friction_demand`` to |lam_T| / lam_N if larger (forces with lam_N above ``floor`` [N],
         `ContactTolerances.demand_floor`)."""
         if lam_N > floor:
-            d = abs(lam_T) / lam_N
-            if d > self.friction_demand:
-                self.friction_demand = d
+            self.note_ratio(abs(lam_T) / lam_N)
+
+    def note_ratio(self, d) -> None:
+        """Raise ``friction_demand`` to the ratio ``d`` [1] if larger (None: no ratio). At most mu: sliding
+        caps it (a stick-slip transition is located where the ratio reaches mu, to round-off)."""
+        if d is not None and d > self.friction_demand:
+            self.friction_demand = min(d, self.model.mu)
 
     def report(self, kind: str, t: float, message: str) -> None:
         """Record a `Report` of the current advance."""

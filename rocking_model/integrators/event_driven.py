@@ -46,7 +46,7 @@ from ..validation import WorkLimitError, check_choice, check_real, state_bool, s
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .events import bounce_search, dip_search, earliest_root, first_negative
+from .events import bounce_search, brent_max, dip_search, earliest_root, first_negative, parabola_peak
 from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
@@ -60,6 +60,11 @@ _KIND_SLIP, _KIND_CONE = "slip", "cone"
 #: against 20 and 55 us per step), so that the budget bounds the time of an event storm as of a long stretch
 #: of smooth steps
 EVENT_WORK = 30
+#: [1] the friction demand's peak inside a step is searched for (`EventDriven._demand_peak`) when the parabola
+#: through the demand at the step's ends and middle peaks inside the step above (1 - DEMAND_PEAK_MARGIN) times
+#: the largest demand so far: the steps resolve the motion to the tolerance, so the parabola's error on a
+#: step's peak is far below 10 %, and a peak it puts lower cannot raise the maximum (the search is skipped)
+DEMAND_PEAK_MARGIN = 0.1
 #: the Runge-Kutta pairs of the smooth phases, by name
 METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 #: accepted spellings of ``method``
@@ -390,7 +395,14 @@ class EventDriven(Integrator):
             return False
         rhs, G, totals = self._functions(mode, ag)
         kinds = self._kinds(mode)
-        floor = self.force_floor
+        # the friction demand |sum lambda_T| / sum lambda_N, continuous along the segment: noted at its start
+        # (the right limit after an event), at the end of each step, at its maximum inside a step
+        # (`_demand_peak`) and at the event that ends the segment (its left limit: the peak before an impact).
+        # A sliding mode's is mu wherever the normal force carries load: its ends suffice
+        ratio = self._demand_ratio
+        peaks = totals is not None and mode not in SLIDING
+        d_prev = ratio(totals(self.t, self.y)) if totals is not None else None
+        self.note_ratio(d_prev)
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
@@ -410,7 +422,7 @@ class EventDriven(Integrator):
                 raise WorkLimitError(self._work_message(stepper))
             g_new = G(stepper.t, stepper.y)
             # the friction demand at the step's end (right after G: models share their work between the two)
-            lam = totals(stepper.t, stepper.y) if totals is not None else None
+            d_new = ratio(totals(stepper.t, stepper.y)) if totals is not None else None
             rose = {}
             if first:
                 first = False
@@ -424,13 +436,23 @@ class EventDriven(Integrator):
                 self.t = te
                 self.y = dense(te)
                 self._full = None
+                if totals is not None:
+                    # the demand up to the event, its left limit included (the mode's forces at the event)
+                    d_e = ratio(totals(te, self.y))
+                    if peaks:
+                        self._demand_peak(totals, lambda: dense, stepper.t_old, d_prev, te, d_e, None)
+                    self.note_ratio(d_e)
                 self._handle(kinds[i], te, ag)
                 return True
             if pending and pending[0] <= stepper.t:
                 self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
-            if lam is not None:
-                # (noted at the ends of the steps without an event: the mode's forces hold there)
-                self.note_demand(lam[0], lam[1], floor)
+            if totals is not None:
+                # (the ends of the steps without an event: the mode's forces hold there)
+                if peaks:
+                    self._demand_peak(totals, stepper.dense_output, stepper.t_old, d_prev, stepper.t, d_new,
+                                      stepper.hermite_mid())
+                self.note_ratio(d_new)
+                d_prev = d_new
             for i, g in enumerate(g_new):
                 if g > 0.0:
                     armed[i] = True
@@ -443,6 +465,42 @@ class EventDriven(Integrator):
         self._full = None
         self._live = stepper
         return False
+
+    def _demand_ratio(self, lam):
+        """|lam_T| / lam_N of the force totals ``lam`` = (sum lambda_N, sum lambda_T) [N], or None when the normal
+        force is below ``force_floor`` (it carries no load: the ratio would be round-off over round-off)."""
+        lam_N, lam_T = lam
+        return abs(lam_T) / lam_N if lam_N > self.force_floor else None
+
+    def _demand_peak(self, totals, dense_of, t0, d0, t1, d1, y_mid) -> None:
+        """Raise ``friction_demand`` to the peak of the continuous demand inside the step [t0, t1] (ends d0, d1
+        already noted), to the tolerance: when the parabola through the demand at the ends and at the middle
+        (state ``y_mid``, or the dense output's when None) peaks inside the step near or above the largest
+        demand so far (DEMAND_PEAK_MARGIN), Brent's method on the dense output (``dense_of()``) locates the
+        peak to sqrt(tolerance) of the step, its value to about the tolerance. Near a lift-off (a normal force
+        below ``force_floor`` at an end) the demand grows without bound: the ends are what is reported."""
+        if d0 is None or d1 is None or not t1 > t0:
+            return
+        tm = 0.5 * (t0 + t1)
+        dense = None
+        if y_mid is None:
+            dense = dense_of()
+            y_mid = dense(tm)
+        dm = self._demand_ratio(totals(tm, y_mid))
+        if dm is None:
+            return
+        vertex = parabola_peak(d0, dm, d1)
+        if vertex is None or vertex[1] < (1.0 - DEMAND_PEAK_MARGIN) * self.friction_demand:
+            return
+        if dense is None:
+            dense = dense_of()
+        ratio = self._demand_ratio
+
+        def demand(t):
+            return ratio(totals(t, dense(t)))
+        tv = t0 + vertex[0] * (t1 - t0)
+        xtol = max(math.sqrt(self.tolerance) * (t1 - t0), 4.0 * math.ulp(max(abs(t1), 1.0)))
+        self.note_ratio(brent_max(demand, t0, t1, tv, demand(tv), xtol)[1])
 
     def _kinds(self, mode) -> list:
         """What each event function of ``mode`` means: per contact release (closed) or impact (open), then the
