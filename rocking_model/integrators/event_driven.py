@@ -65,6 +65,10 @@ EVENT_WORK = 30
 #: the largest demand so far: the steps resolve the motion to the tolerance, so the parabola's error on a
 #: step's peak is far below 10 %, and a peak it puts lower cannot raise the maximum (the search is skipped)
 DEMAND_PEAK_MARGIN = 0.1
+#: [1] a step whose ends both need less than this fraction of the largest demand so far is not searched: its
+#: peak would have to double within one step, which the steps' resolution of the motion excludes (away from a
+#: lift-off, where the ends themselves grow); it keeps the search off most steps of a long record
+DEMAND_STEP_GATE = 0.5
 #: the Runge-Kutta pairs of the smooth phases, by name
 METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 #: accepted spellings of ``method``
@@ -88,6 +92,7 @@ class EventDriven(Integrator):
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
     _work_end = math.inf    #: value of n_steps at which the budget runs out
+    _demand_end = None      #: (t, y, mode, demand) at the end of the last segment without an event
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
@@ -401,8 +406,14 @@ class EventDriven(Integrator):
         # A sliding mode's is mu wherever the normal force carries load: its ends suffice
         ratio = self._demand_ratio
         peaks = totals is not None and mode not in SLIDING
-        d_prev = ratio(totals(self.t, self.y)) if totals is not None else None
-        self.note_ratio(d_prev)
+        d_prev = None
+        if totals is not None:
+            last = self._demand_end
+            if last is not None and last[0] == self.t and last[1] is self.y and last[2] is mode:
+                d_prev = last[3]              # the last step's end (a segment carried on across a kink of ag)
+            else:
+                d_prev = ratio(totals(self.t, self.y))
+                self.note_ratio(d_prev)
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
@@ -450,7 +461,7 @@ class EventDriven(Integrator):
                 # (the ends of the steps without an event: the mode's forces hold there)
                 if peaks:
                     self._demand_peak(totals, stepper.dense_output, stepper.t_old, d_prev, stepper.t, d_new,
-                                      stepper.hermite_mid())
+                                      stepper.hermite_mid)
                 self.note_ratio(d_new)
                 d_prev = d_new
             for i, g in enumerate(g_new):
@@ -464,6 +475,8 @@ class EventDriven(Integrator):
             self._h = stepper.h_abs
         self._full = None
         self._live = stepper
+        if totals is not None:
+            self._demand_end = (self.t, self.y, mode, d_prev)
         return False
 
     def _demand_ratio(self, lam):
@@ -472,20 +485,22 @@ class EventDriven(Integrator):
         lam_N, lam_T = lam
         return abs(lam_T) / lam_N if lam_N > self.force_floor else None
 
-    def _demand_peak(self, totals, dense_of, t0, d0, t1, d1, y_mid) -> None:
+    def _demand_peak(self, totals, dense_of, t0, d0, t1, d1, mid_of) -> None:
         """Raise ``friction_demand`` to the peak of the continuous demand inside the step [t0, t1] (ends d0, d1
         already noted), to the tolerance: when the parabola through the demand at the ends and at the middle
-        (state ``y_mid``, or the dense output's when None) peaks inside the step near or above the largest
+        (state ``mid_of()``, or the dense output's when None) peaks inside the step near or above the largest
         demand so far (DEMAND_PEAK_MARGIN), Brent's method on the dense output (``dense_of()``) locates the
         peak to sqrt(tolerance) of the step, its value to about the tolerance. Near a lift-off (a normal force
         below ``force_floor`` at an end) the demand grows without bound: the ends are what is reported."""
-        if d0 is None or d1 is None or not t1 > t0:
+        if d0 is None or d1 is None or not t1 > t0 or max(d0, d1) < DEMAND_STEP_GATE * self.friction_demand:
             return
         tm = 0.5 * (t0 + t1)
         dense = None
-        if y_mid is None:
+        if mid_of is None:
             dense = dense_of()
             y_mid = dense(tm)
+        else:
+            y_mid = mid_of()
         dm = self._demand_ratio(totals(tm, y_mid))
         if dm is None:
             return
