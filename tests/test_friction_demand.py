@@ -1,7 +1,8 @@
 """The friction demand is the maximum of the continuous demand (issue 20): the event-driven scheme reports
 the largest |sum lambda_T| / sum lambda_N along the motion to its tolerance (the left and right limits at
 events, the peak inside a step), not its values at the step ends, which missed the peak before an impact
-(0.115 for 0.147 on the free rocking below) and peaks inside steps (2-5 % under a sine).
+(0.115 for 0.147 on the free rocking below) and peaks inside steps (2-5 % under a sine); and the ratio of
+the percussions of every impact, which sticking needs too.
 
 Closed form (rigid block rocking on its left corner, phi > 0, under a constant ground acceleration a; theta =
 alpha - phi is the angle of the centroid from the vertical through the pivot, at distance R):
@@ -53,10 +54,18 @@ def free_rocking_amplitudes(block, phi_0, n):
     return [a - math.acos(math.cos(a) + r ** (2 * k) * e0) for k in range(n + 1)]
 
 
+def impact_ratio(block):
+    """|Lambda_T| / Lambda_N of the impact of a block rocking on one corner onto the other (sticking, any e_N
+    with the impulse at the impacting corner only): h b / (R^2/3 + h^2) = 3 sin(a) cos(a) / (1 + 3 cos^2(a)),
+    the small-amplitude limit of the forces' demand at an impact."""
+    return block.h * block.b / (block.R ** 2 / 3.0 + block.h ** 2)
+
+
 def test_free_rocking_demand_is_the_closed_form_maximum():
     """b = 0.2, h = 1, mu = 0.16 (above every demand: the corners stick), released at phi_0 = 0.1: each
-    half-cycle's demand grows to d(alpha) at its impact; after k impacts the largest so far is the right limit
-    of the last one, at amplitude phi_k (a smaller amplitude needs more). To the tolerance (1e-8)."""
+    half-cycle's demand grows to d(alpha) at its impact; after k impacts the forces' largest so far is the right
+    limit of the last one, at amplitude phi_k (a smaller amplitude needs more), and the impacts' percussions
+    need h b / (R^2/3 + h^2) = 0.14851, more. To the tolerance (1e-8)."""
     block = RigidBlock(mu=0.16, **BLOCK)
     sim = Simulator(block, "event_driven", phi_0=0.1, on_report="raise")
     for t_end in (0.3, 0.49, 0.6, 1.0, 1.5, 2.0, 3.0):
@@ -69,10 +78,11 @@ def test_free_rocking_demand_is_the_closed_form_maximum():
             expected = demand(block, q[2], v[2], 0.0)
         else:
             phi_n = free_rocking_amplitudes(block, 0.1, n)
-            expected = max(demand(block, 0.0, block.p * math.sqrt(2 * (math.cos(block.alpha - p) - math.cos(block.alpha))), 0.0)
-                           for p in phi_n)
+            forces = max(demand(block, 0.0, impact_speed(block, p), 0.0) for p in phi_n)
+            assert forces < impact_ratio(block)
+            expected = impact_ratio(block)
         assert got == pytest.approx(expected, rel=1e-7), (t_end, n, got, expected)
-    assert sim.integrator.impacts == 4 and sim.outputs()["friction_demand"] == pytest.approx(0.147793, abs=1e-6)
+    assert sim.integrator.impacts == 4 and sim.outputs()["friction_demand"] == pytest.approx(0.148515, abs=1e-6)
     # the closed form in theta (module docstring) at the first impact: 0.1473, the issue's figure
     th, th0 = block.alpha, block.alpha - 0.1
     d0 = 3 * math.sin(th) * (3 * math.cos(th) - 2 * math.cos(th0)) / (1 + 9 * math.cos(th) ** 2
@@ -100,7 +110,7 @@ def test_the_peak_before_an_impact_is_its_left_limit():
     V = block.p ** 2 * (np.cos(th) + a / G * np.sin(th))
     before = [demand(block, block.alpha - x, -math.sqrt(max(2 * (V[0] - v), 0.0)), a) for x, v in zip(th, V)]
     assert max(before) == before[-1] == pytest.approx(left, rel=1e-12)
-    assert left == pytest.approx(0.1641, abs=1e-4) and right < left - 0.01
+    assert left == pytest.approx(0.1641, abs=1e-4) and right < left - 0.01 and impact_ratio(block) < left - 0.01
     q, v = sim.state()
     E2 = 0.5 * v[2] ** 2 + block.p ** 2 * (np.cos(block.alpha + q[2]) - a / G * np.sin(block.alpha + q[2]))
     after = [demand(block, -x, -math.sqrt(max(2 * (E2 - block.p ** 2 * (math.cos(block.alpha - x)
@@ -141,3 +151,19 @@ def test_the_peak_inside_a_step_is_found_to_the_tolerance(tolerance, rel):
     sim.advance(t_end, ag)
     assert sim.integrator.impacts == 0
     assert sim.outputs()["friction_demand"] == pytest.approx(d_peak, rel=rel)
+
+
+@pytest.mark.parametrize("e_N", [0.0, 0.5])
+def test_impact_percussions_count(e_N):
+    """A block released at phi_0 = 0.05 (b = 0.3, h = 1): the impact about the other corner needs
+    |Lambda_T| / Lambda_N = h b / (R^2/3 + h^2), whatever e_N (the impulse acts at the impacting corner only);
+    more than its forces need, so the demand after the first impact is that ratio. Moreau-Jean's per-step
+    percussion ratio includes the impact and agrees to O(dt)."""
+    block = RigidBlock(b=0.3, h=1.0, e_N=e_N)
+    sim = Simulator(block, "event_driven", phi_0=0.05, on_report="raise")
+    sim.advance(0.5, 0.0)
+    assert sim.integrator.impacts >= 1
+    assert sim.outputs()["friction_demand"] == pytest.approx(impact_ratio(block), rel=1e-12)
+    mj = Simulator(block, "moreau_jean", phi_0=0.05, dt_max=1e-4, on_report="raise")
+    mj.advance(0.5, 0.0)
+    assert mj.outputs()["friction_demand"] == pytest.approx(impact_ratio(block), rel=0.02)

@@ -604,7 +604,9 @@ class ModelSlave(RockingSlave):
                             "pose, contact 10)"),
             Var("friction_demand", "output", 0.0, unit="1",
                 description="The largest friction coefficient the corners needed so far, |sum lambda_T| / "
-                            "sum lambda_N (the paper's sticking law holds where it stays below the surface's "
+                            "sum lambda_N of the forces (event-driven: their continuous maximum; Moreau-Jean: "
+                            "per-step percussions) and of the impact percussions (the paper's sticking law "
+                            "holds where it stays below the surface's "
                             "mu; values near 1e6 mean a lift-off where sticking needs unbounded friction)"),
             Var("painleve", "output", 0, type="Integer",
                 description="Painleve situations met so far (sliding with no or several consistent "

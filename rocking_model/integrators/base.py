@@ -101,7 +101,8 @@ class Integrator(Checkpointed):
     #: reports of the current advance (cleared by the Simulator before each one)
     reports: list
     #: [1] the largest friction coefficient the contacts needed so far: |sum lambda_T| / sum lambda_N of the
-    #: closed contacts (forces, or a time-step's percussions); at most mu, as sliding caps it
+    #: closed contacts (event-driven: the continuous maximum of the forces' ratio and each impact's
+    #: percussions; Moreau-Jean: each time-step's percussions); at most mu, as sliding caps it
     friction_demand: float = 0.0
     #: Painleve situations met so far (each resolved by an impact without collision)
     painleve: int = 0

@@ -628,6 +628,7 @@ class EventDriven(Integrator):
             return
         if kind == _KIND_IMPACT:
             self._impact(q, v, t, ag(t))
+            self._note_percussions(q, v)
         elif kind == _KIND_CONE:
             # the friction reached mu lambda_N: the corners slide against it (preferred where sticking is
             # still consistent to round-off, as at the far side of the root it is only marginally)
@@ -636,6 +637,18 @@ class EventDriven(Integrator):
             self._enter(q, v, ag(t), t, prefer=slide)
         else:
             self._enter(q, v, ag(t), t)
+
+    def _note_percussions(self, q, v_minus) -> None:
+        """Raise ``friction_demand`` to the ratio |sum Lambda_T| / sum Lambda_N of the percussions of the impact
+        that led from v_minus to the current velocity: sticking at an impact needs that much friction too (a
+        rocking block's impact about its other corner: h b / (R^2/3 + h^2) = 0.1485 for b = 0.2, h = 1, more than
+        the forces of its free rocking need). The rows slide_index and lift_index of M (v+ - v-) carry the
+        totals; a normal percussion below force_floor * time_scale [N s] carries no load."""
+        model = self.model
+        P = model.mass_matrix(q) @ (self.state()[1] - v_minus)
+        lam_N = float(P[model.lift_index])
+        if lam_N > self.force_floor * model.time_scale:
+            self.note_ratio(abs(float(P[model.slide_index])) / lam_N)
 
     def _impact(self, q, v, t, ag_t):
         model = self.model
