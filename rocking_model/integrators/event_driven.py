@@ -92,7 +92,8 @@ class EventDriven(Integrator):
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
     _work_end = math.inf    #: value of n_steps at which the budget runs out
-    _demand_end = None      #: (t, y, mode, demand) at the end of the last segment without an event
+    _demand_end = None      #: (t, y, totals, demand) at the end of the last segment without an event (the same
+    #:                         totals: the same mode and input, so a segment that carries on keeps its value)
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
@@ -257,6 +258,7 @@ class EventDriven(Integrator):
         state = dict(self.__dict__)
         state.pop("_fn_cache", None)      # closures: rebuilt on demand
         state.pop("_live", None)          # the stepper holds them too; a restart is bit-identical
+        state.pop("_demand_end", None)    # holds a closure; the demand there is recomputed (the same value)
         return state
 
     def _atol(self, mode):
@@ -409,7 +411,7 @@ class EventDriven(Integrator):
         d_prev = None
         if totals is not None:
             last = self._demand_end
-            if last is not None and last[0] == self.t and last[1] is self.y and last[2] is mode:
+            if last is not None and last[0] == self.t and last[1] is self.y and last[2] is totals:
                 d_prev = last[3]              # the last step's end (a segment carried on across a kink of ag)
             else:
                 d_prev = ratio(totals(self.t, self.y))
@@ -476,7 +478,7 @@ class EventDriven(Integrator):
         self._full = None
         self._live = stepper
         if totals is not None:
-            self._demand_end = (self.t, self.y, mode, d_prev)
+            self._demand_end = (self.t, self.y, totals, d_prev)
         return False
 
     def _demand_ratio(self, lam):
