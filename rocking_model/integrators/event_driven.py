@@ -25,6 +25,10 @@
   plastically and the impact LCP is solved again with that corner held closed. The kinetic energy this
   removes is at most of the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not
   counted.
+- Friction demand (``friction_demand``): the maximum of |sum lambda_T| / sum lambda_N along the motion to the
+  tolerance (at both limits of every event, at step ends, inside a step where it peaks: `_demand_peak`) and
+  of each impact's percussions (`_note_percussions`).
+- Overturning (|phi| = pi/2, located as an event) ends the motion: the pose reached is kept at rest.
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
 - Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus EVENT_WORK = 30 per event and
@@ -623,7 +627,7 @@ class EventDriven(Integrator):
         q, v = self.state()
         if kind == _KIND_OVERTURN:
             # the motion ends: the pose at |phi| = pi/2 (located to round-off), at rest (the outputs after
-            # overturning describe no motion the scheme no longer computes)
+            # overturning must not describe a motion that is no longer computed)
             self.overturned = True
             self.y = self.y[:self.k] + [0.0] * self.k
             self._full = None

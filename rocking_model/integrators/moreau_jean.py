@@ -199,7 +199,7 @@ class MoreauJean(Integrator):
         self.n_steps += 1
         if abs(self.q[model.phi_index]) >= 0.5 * math.pi:
             # the motion ends: the pose at the end of this step (|phi| past pi/2 by at most |phi_dot| dt), at
-            # rest (the outputs after overturning describe no motion the scheme no longer computes)
+            # rest (the outputs after overturning must not describe a motion that is no longer computed)
             self.overturned = True
             self.v = np.zeros_like(self.v)
 
