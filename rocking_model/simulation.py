@@ -286,7 +286,8 @@ class Simulator:
         works; floats may be nan only where a field means "unset").
 
         Header: version (int, STATE_VERSION), scheme ("moreau_jean" / "event_driven"), model (class name),
-        n_dof (full dimension). Event-driven: t [s], mode (0-9, `Mode`: the last contact mode once overturned), y (reduced state of the mode:
+        n_dof (full dimension). Event-driven: t [s], mode (0-9, `Mode`: the last contact mode once
+        overturned, the state then at rest), y (reduced state of the mode:
         coordinates then velocities), impacts, overturned, n_steps, h (last step size [s], nan before the
         first), impact_times [s], impact_log (rows t, v_minus, v_plus flattened, 1 + 2 n_dof floats each),
         shift (horizontal offset [m] of the base of a sticking mode on the ground), friction_demand,
