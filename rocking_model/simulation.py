@@ -14,7 +14,7 @@ from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
 from .models.base import RockingModel
 from .params import Param
-from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 
@@ -97,7 +97,7 @@ class Simulator:
     """
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
-                 tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = 1e-6, t0: float = 0.0,
+                 tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,
                  max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
                  on_report: str = "warn", **initial):

@@ -52,7 +52,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..modes import OVERTURNED, contact_states, slide_sign
-from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from ..tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .state import Checkpointed
 
 
@@ -82,7 +82,7 @@ class SolverOptions:
     dt_max: float = 0.0
     tolerance: float = 1e-8
     theta: float = 0.5
-    zeno_tol: float = 1e-6
+    zeno_tol: float = ZENO_TOL
     method: str = "DOP853"
     impact_log_size: int | None = None
     tolerances: ContactTolerances = field(default=DEFAULT_TOLERANCES)
