@@ -157,7 +157,10 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     header = lines[:first]
     assumed = False
     if units is None:
-        units = next((u for u in map(_at2_units, header) if u), None)
+        # the line that states the units ("... IN UNITS OF G", PEER's line 3) first: a title or event line may
+        # mention another unit ("PGA 0.4 g (g = 9.81 m/s2)")
+        stating = sorted(header, key=lambda line: "UNIT" not in line.upper())
+        units = next((u for u in map(_at2_units, stating) if u), None)
         if units is None:
             units, assumed = "g", True          # the PEER convention
     factor = unit_factor(units)

@@ -374,3 +374,12 @@ def test_writers_take_the_record_the_readers_return(tmp_path):
         write_at2(tmp_path / "x.AT2", rec, rec.ag)
     with pytest.raises(ValueError, match="ag is missing"):
         write_at2(tmp_path / "x.AT2", rec.t)
+
+
+def test_at2_units_come_from_the_line_that_states_them(tmp_path):
+    """A title or event line that mentions another unit does not override PEER's "IN UNITS OF G" line."""
+    t, a = synthetic_record(duration=1.0, seed=3)
+    p = write_at2(tmp_path / "r.AT2", t, a, title="shake table run, PGA 0.4 g (g = 9.81 m/s2)",
+                  event="peak 392 cm/s2")
+    r = read_at2(p)
+    assert r.units == "g" and np.allclose(r.ag, a, rtol=1e-15, atol=0.0)
