@@ -277,3 +277,35 @@ def test_shipped_record_is_the_synthetic_record_it_says():
     # 7 significant digits in g; other CPUs' round-off changes the record by far less than that
     assert np.allclose(rec.ag, ag, rtol=0, atol=1e-6 * np.max(np.abs(ag)))
     assert "synthetic" in " ".join(rec.header).lower()
+
+
+# ------------------------------------------------------------------------------------------------ benchmark pages
+def test_benchmark_cold_start_runs_for_a_source_fmu(built_fmus):
+    """The cold-start benchmark steps every FMU, a source without inputs included: it used to set the output
+    ag of GroundMotionSource (fmi2SetReal: fmi2Error) and printed the traceback into docs/performance.md.
+    Nothing here asserts a time."""
+    from benchmarks import fmu_bench
+    for name in ("GroundMotionSource", "RigidRockingBlock"):
+        r = fmu_bench.cold_start(built_fmus[name], repeats=1)
+        assert "error" not in r, r.get("error", "")[-1000:]
+        assert set(r) >= {"import_fmpy", "read_and_extract", "instantiate_to_first_step"}
+
+
+def test_generated_pages_name_no_directory_of_the_machine():
+    """The report writer replaces the machine's directories by placeholders, a failure becomes one line, and the
+    committed pages hold no traceback and no absolute path of a user's or build machine's folders."""
+    import tempfile
+
+    from benchmarks import report
+    text = f"{report.REPO_ROOT}/docs and {sys.prefix}/lib and {tempfile.gettempdir()}/x"
+    scrubbed = report.scrub_paths(text)
+    assert scrubbed == "<repo>/docs and <python>/lib and <tmp>/x"
+    tb = (f'Traceback (most recent call last):\n  File "{sys.prefix}/lib/fmpy/fmi2.py", line 441, in setReal\n'
+          "fmpy.fmi2.FMICallException: fmi2SetReal failed with status 3 (error)")
+    line = report.failure_line(tb)
+    assert line == "fmpy.fmi2.FMICallException: fmi2SetReal failed with status 3 (error)"
+    machine_dir = re.compile(r"(?<![\w.<])/(?:work|home|root|tmp|Users|opt|mnt|srv)/")
+    for page in [ROOT / "docs" / "performance.md", *sorted((ROOT / "docs" / "performance").glob("*.md"))]:
+        body = page.read_text()
+        assert "Traceback" not in body and "failed:" not in body, rel(page)
+        assert not machine_dir.search(body), (rel(page), machine_dir.search(body).group(0))
