@@ -32,7 +32,7 @@ def tracked_files() -> set[str]:
 
 TOP = sorted({p.name for p in ROOT.iterdir() if not p.name.startswith(".") or p.name == ".ci"} - {".venv"})
 #: a repository path in running text: starts with a top-level folder of the repository, optional ::name
-_PATH = re.compile(r"(?<![\w./-])((?:%s)/[\w./*é#\[\] -]*?[\w*/])(?:::(\w+))?(?=[`)\s,;:]|$)"
+_PATH = re.compile(r"(?<![\w./-])((?:%s)/[\w./*-]*)(?![\w./*<-])(?:::(\w+))?"
                    % "|".join(re.escape(t) for t in TOP if (ROOT / t).is_dir()))
 _LINK = re.compile(r"\]\(([^)\s]+)\)")
 
@@ -49,7 +49,8 @@ def referenced_paths(doc: Path, text: str | None = None):
             target = target.split("#")[0]
             yield (doc.parent / target).resolve().relative_to(ROOT).as_posix(), None, n
         for path, name in _PATH.findall(line):
-            if "<" in path or any(path.startswith(g) for g in GENERATED):
+            path = path.rstrip(".")                  # the end of a sentence
+            if any(path.startswith(g) for g in GENERATED):
                 continue
             yield path.rstrip("/"), name or None, n
 
@@ -79,11 +80,11 @@ def test_docs_name_only_files_of_the_repository():
 def test_referenced_path_pattern_finds_paths():
     """The check above sees the paths it must see (so that it cannot pass by finding nothing)."""
     line = ("see `rocking_model/fmi/` and [limitations](docs/limitations.md), tests/test_x.py::test_y, "
-            "`tests/test_hard_*.py` and `dist/RigidRockingBlock.fmu`")
+            "`tests/test_hard_*.py` and `dist/RigidRockingBlock.fmu`; `examples/<name>/` and benchmarks/run.py.")
     doc = ROOT / "README.md"
     found = {(p, name) for p, name, _ in referenced_paths(doc, line)}
     assert found == {("docs/limitations.md", None), ("rocking_model/fmi", None), ("tests/test_x.py", "test_y"),
-                     ("tests/test_hard_*.py", None)}
+                     ("tests/test_hard_*.py", None), ("benchmarks/run.py", None)}
 
 
 _TRACKER = re.compile(r"\b(?:issues?|bugs?)\s+#?\d+", re.I)
@@ -250,8 +251,7 @@ def test_readme_simulate_examples_run(cmd, tmp_path):
     """Each README `rocking simulate` example runs as written from the repository root, shortened to 1 s of
     motion and without the plot (bounded in time)."""
     args = shlex.split(cmd)[2:]
-    args = [a for a in args if not a.startswith("--out")] if "--out" not in args else args
-    if "--out" in args:
+    if "--out" in args:                       # the example's output folder -> the test's
         args[args.index("--out") + 1] = str(tmp_path)
     else:
         args += ["--out", str(tmp_path)]
