@@ -24,7 +24,9 @@ def rel(path: Path) -> str:
 
 
 def tracked_files() -> set[str]:
-    out = subprocess.run(["git", "ls-files", "--cached", "--others", "--exclude-standard"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    """The repository's files (tracked, and new ones not ignored), relative to its root."""
+    out = subprocess.run(["git", "ls-files", "--cached", "--others", "--exclude-standard"], cwd=ROOT,
+                         capture_output=True, text=True, timeout=60)
     if out.returncode != 0:       # not a git checkout (an sdist): every file on disk is the repository
         return {rel(p) for p in ROOT.rglob("*") if p.is_file()}
     return set(out.stdout.splitlines())
@@ -60,8 +62,7 @@ def test_docs_name_only_files_of_the_repository():
     ``file.py::test_name`` names a function of that file. `rocking_model/fmi.py`, named after it became the
     package rocking_model/fmi/, failed here."""
     files = tracked_files()
-    folders = {str(Path(f).parent.as_posix()) for f in files} | {
-        p.as_posix() for f in files for p in Path(f).parents}
+    folders = {p.as_posix() for f in files for p in Path(f).parents}
     bad = []
     for doc in DOCS:
         for path, name, n in referenced_paths(doc):
