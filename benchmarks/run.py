@@ -1,6 +1,6 @@
 """Run the whole benchmark suite and regenerate docs/performance.md and its plots.
 
-    python -m benchmarks            # full run (266 s measured on 2 cores, benchmarks/README.md)
+    python -m benchmarks            # full run (316 s measured on 2 cores, benchmarks/README.md)
     python -m benchmarks --quick    # smoke run (24-49 s measured), report in benchmarks/results/quick/
     python benchmarks/run.py [--quick] [--skip-siconos] [--skip-fmu] [--skip-memory] [--skip-friction] [--repeats N]
 
