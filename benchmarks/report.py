@@ -188,6 +188,37 @@ def plot_memory(mem, path: Path):
 
 
 # ------------------------------------------------------------------------------------------------ report
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+def machine_paths() -> list[tuple[str, str]]:
+    """(path, placeholder) pairs of the directories of the machine that runs the suite, longest first: a
+    generated page names files relative to the repository and never a directory of that machine."""
+    import os
+    import sys
+    import tempfile
+    pairs = [(str(REPO_ROOT), "<repo>"), (sys.prefix, "<python>"), (sys.base_prefix, "<python>"),
+             (sys.exec_prefix, "<python>"), (tempfile.gettempdir(), "<tmp>"), (os.path.expanduser("~"), "<home>")]
+    pairs = [(path, name) for path, name in pairs if len(path) > 1]   # never "/" itself
+    return sorted(set(pairs), key=lambda pair: -len(pair[0]))
+
+
+def scrub_paths(text: str) -> str:
+    """The text with every directory of this machine (repository, Python prefix, temp dir, home) replaced by a
+    placeholder (<repo>, <python>, <tmp>, <home>)."""
+    for path, name in machine_paths():
+        text = text.replace(path, name)
+    return text
+
+
+def failure_line(error: str) -> str:
+    """One line for a table cell from a captured traceback: its last line (the exception and its message),
+    without machine paths and without characters that break a Markdown table."""
+    lines = [ln.strip() for ln in str(error).strip().splitlines() if ln.strip()]
+    last = lines[-1] if lines else "unknown error"
+    return scrub_paths(last).replace("|", "/")[:200]
+
+
 #: everything after this line of docs/performance.md comes from other benchmark scripts and is kept
 KEEP_MARKER = "<!-- sections below: written by benchmarks/cosim_interpolation.py and binary_overhead.py; kept by the report -->"
 
@@ -227,7 +258,7 @@ def write_report(res, docs: Path) -> Path:
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
     w("")
     w("How to run: `python -m benchmarks` (full, regenerates this page and `docs/performance/*.png`) "
-      "or `python -m benchmarks --quick` (smoke run < 1 min, written to `benchmarks/results/quick/`). Options: "
+      "or `python -m benchmarks --quick` (smoke run, written to `benchmarks/results/quick/`). Options: "
       "`--skip-siconos --skip-fmu --skip-memory --repeats N --scenes free record ...`.")
     w("")
     verdicts = _targets(res)
@@ -252,7 +283,7 @@ def write_report(res, docs: Path) -> Path:
         old = path.read_text()
         if KEEP_MARKER in old:
             kept = "\n" + KEEP_MARKER + old.split(KEEP_MARKER, 1)[1]
-    path.write_text("\n".join(L) + "\n" + kept)
+    path.write_text(scrub_paths("\n".join(L) + "\n" + kept))
     return path
 
 
@@ -529,7 +560,7 @@ def _fmu_section(res, w):
         w("| --- | --- | --- | --- |")
         for name, c in cold.items():
             if "error" in c:
-                w(f"| {name} | failed: {c['error'][:120]} | | |")
+                w(f"| {name} | failed: {failure_line(c['error'])} | | |")
             else:
                 w(f"| {name} | {ft(c['instantiate_to_first_step'])} | {ft(c['import_fmpy'])} | "
                   f"{ft(c['read_and_extract'])} |")
@@ -633,7 +664,7 @@ def _method_section(w):
       "threshold; for the record also with max_step = the sampling step); Siconos' MoreauJeanOSI + "
       "FrictionContact(2) (Lemke, large μ: sticking) with C plugins for the corner relations "
       "(`benchmarks/siconos_runner.py`, run under /usr/bin/python3). The flexible oscillator has no baseline: "
-      "its impact outcome needs the impact LCP with the u-dependent coupling (physics notes §3), i.e. the "
+      "its impact outcome needs the impact LCP with the u-dependent coupling (the paper's appendix, Eqs. 48–55), i.e. the "
       "package's own machinery.")
     w("- Equal-error comparison: each contender's (median time, error) points are reduced to their Pareto "
       "front and interpolated linearly in log-log; the package's best time at a level is the faster of its two "

@@ -27,7 +27,7 @@ from .ground_motion import PULSES
 
 ROOT = Path(__file__).resolve().parent.parent
 #: CSV header units of the simulator's own outputs (the model's come from its declarations, `OUTPUTS`)
-UNITS_OF = {"friction_demand": "1", "contact": "mode code: 0 full/1 left/2 right/3 flight/4-9 sliding"}
+UNITS_OF = {"friction_demand": "1", "contact": "mode code: 0 full/1 left/2 right/3 flight/4-9 sliding/10 overturned"}
 
 
 class UsageError(ValueError):

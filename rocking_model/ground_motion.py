@@ -16,6 +16,12 @@ import numpy as np
 
 from .validation import AG_MAX, check_ag, check_real
 
+#: the public ground motions (every GroundMotion subclass defined here; all exported by `rocking_model`) and
+#: helpers; tests/test_records.py checks that the package exports every public subclass
+__all__ = ["GroundMotion", "ConstantMotion", "LinearMotion", "FunctionMotion", "CheckedMotion", "SampledMotion",
+           "ScaledMotion", "SinePulse", "CosinePulse", "RickerPulse", "RectangularPulse", "checked_value",
+           "checked_motion", "pulse_from_parameters", "as_ground_motion"]
+
 
 class GroundMotion:
     """Base class: a callable t [s] -> ag [m/s2]."""

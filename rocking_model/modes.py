@@ -1,5 +1,6 @@
 """Contact states: one per contact (`ContactState`), and the contact modes of the two-corner rocking models
-(`Mode`: the set of closed corners, whose integer codes are the FMU output ``contact``)."""
+(`Mode`: the set of closed corners, whose integer codes are the FMU output ``contact``, and `OVERTURNED`, the
+code of that output once the structure has overturned)."""
 from __future__ import annotations
 
 from enum import IntEnum
@@ -66,6 +67,12 @@ MODE_DESCRIPTIONS = {
     Mode.RIGHT_SLIDE_POS: "rocking on the right corner sliding towards +x",
     Mode.RIGHT_SLIDE_NEG: "rocking on the right corner sliding towards -x",
 }
+
+#: the code of the output ``contact`` once the structure has overturned (``overturned`` true): not a contact
+#: mode (nothing is integrated any more, the outputs are the pose reached at |phi| = pi/2, at rest), so the
+#: code after the modes' own; a kept last mode would describe a motion (sliding, rocking) that is not computed
+OVERTURNED = 10
+OVERTURNED_DESCRIPTION = "overturned (the motion has ended: the pose reached at |phi| = pi/2, at rest)"
 
 #: closed contacts (0 = left corner, 1 = right corner) of each mode
 CLOSED = {

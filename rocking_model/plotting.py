@@ -2,6 +2,9 @@
 
 - `plot_response`: rotation phi, top displacement (flexible oscillator), base slip (where the base slid),
   ground acceleration and contact state (sliding shaded) over time, for one simulation (`response_figure`: the same as a matplotlib figure).
+  An overturning is drawn as one: the curves of the motion stop at the overturning time (marked in every
+  panel), the time after it is hatched "overturned" and the contact panel shows the level "overturned"
+  (`contact_levels`), never a sliding or rocking state.
 - `plot_overturning_spectrum`: Makris' overturning spectrum of a pulse grid, A / (g tan(alpha)) against
   omega_p / p, overturned or not.
 """
@@ -13,9 +16,22 @@ from typing import Sequence
 
 import numpy as np
 
-from .modes import Mode, stick_mode
+from .modes import OVERTURNED, SLIDING, Mode, stick_mode
 
-CONTACT_LABELS = ["full", "left corner", "right corner", "flight"]
+CONTACT_LABELS = ["full", "left corner", "right corner", "flight", "overturned"]
+#: the level of the contact panel of an overturned structure (after the modes' closed-corner levels 0-3)
+OVERTURNED_LEVEL = 4
+
+
+def contact_levels(codes) -> tuple:
+    """The contact panel's data from the output ``contact`` (integer codes): (level of each sample: the closed
+    corners of its mode, 0-3, sliding modes on their sticking mode, `OVERTURNED_LEVEL` once overturned;
+    sliding mask; overturned mask)."""
+    codes = np.asarray(codes, dtype=int)
+    over = codes == OVERTURNED
+    levels = np.array([OVERTURNED_LEVEL if c == OVERTURNED else int(stick_mode(Mode(c))) for c in codes], dtype=int)
+    sliding = np.array([c != OVERTURNED and Mode(c) in SLIDING for c in codes], dtype=bool)
+    return levels, sliding, over
 
 
 def _pyplot():
@@ -46,8 +62,11 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
     imp = np.asarray(result.impact_times, dtype=float)
     over = np.asarray(result.overturned, dtype=bool)
     t_o = t[int(np.argmax(over))] if over.any() else None
+    # the motion's curves stop at the overturning (the first overturned sample, the pose reached): after it
+    # nothing is computed any more
+    n_m = int(np.argmax(over)) + 1 if over.any() else t.size
     ax = axes[0]
-    ax.plot(t, phi, color="C0", lw=1.2, label=r"$\varphi$")
+    ax.plot(t[:n_m], phi[:n_m], color="C0", lw=1.2, label=r"$\varphi$")
     if alpha is not None:
         for s in (1, -1):
             ax.axhline(s * alpha, color="grey", ls="--", lw=0.8, label=r"$\pm\alpha$" if s == 1 else None)
@@ -55,6 +74,11 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
         ax.plot(imp, np.interp(imp, t, phi), "x", color="C3", ms=5, label=f"impacts ({imp.size})")
     if t_o is not None:
         ax.axvline(t_o, color="C3", lw=1.0, label=f"overturned at {t_o:.3g} s")
+        for a in axes[1:]:
+            a.axvline(t_o, color="C3", lw=1.0)
+        for a in axes:
+            a.axvspan(t_o, t[-1], facecolor="none", edgecolor="0.6", hatch="//", lw=0,
+                      label="overturned (no motion computed)" if a is ax else None)
     ax.set_ylabel(r"rotation $\varphi$ [rad]")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     if title:
@@ -62,13 +86,13 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
     panel = 1
     if top is not None:
         ax = axes[panel]
-        ax.plot(t, np.asarray(top), color="C4", lw=1.1, label="top mass")
+        ax.plot(t[:n_m], np.asarray(top)[:n_m], color="C4", lw=1.1, label="top mass")
         ax.set_ylabel("top displacement\n(rel. ground) [m]")
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
         panel += 1
     if slip is not None:
         ax = axes[panel]
-        ax.plot(t, slip, color="C5", lw=1.1, label="base slip")
+        ax.plot(t[:n_m], slip[:n_m], color="C5", lw=1.1, label="base slip")
         ax.set_ylabel("slip [m]")
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
         panel += 1
@@ -81,16 +105,21 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
     ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     ax = axes[panel + 1]
-    codes = np.asarray(result.contact, dtype=int)
-    # the closed corners of each mode (sliding modes drawn on their sticking mode, shaded)
-    ax.step(t, [int(stick_mode(Mode(c))) for c in codes], where="post", color="C2")
-    sliding = codes >= Mode.FULL_SLIDE_POS
+    # the closed corners of each mode (sliding modes drawn on their sticking mode, shaded) up to the
+    # overturning, then the level "overturned" in its own colour
+    levels, sliding, over_c = contact_levels(result.contact)
+    ax.step(t[:n_m], levels[:n_m], where="post", color="C2")
+    if over_c.any():
+        k = int(np.argmax(over_c))
+        ax.step(t[k:], levels[k:], where="post", color="C3", lw=2.0, label="overturned")
     if sliding.any():
-        ax.fill_between(t, -0.5, 3.5, where=sliding, step="post", color="C3", alpha=0.2, lw=0,
-                        label="sliding")
+        ax.fill_between(t, -0.5, OVERTURNED_LEVEL + 0.5, where=sliding, step="post", color="C1", alpha=0.25,
+                        lw=0, label="sliding")
+    if sliding.any() or over_c.any():
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
-    ax.set_yticks(range(4), CONTACT_LABELS)
-    ax.set_ylim(-0.5, 3.5)
+    n_levels = OVERTURNED_LEVEL + 1 if over_c.any() else OVERTURNED_LEVEL
+    ax.set_yticks(range(n_levels), CONTACT_LABELS[:n_levels])
+    ax.set_ylim(-0.5, n_levels - 0.5)
     ax.set_ylabel("contact")
     ax.set_xlabel("time t [s]")
     for a in axes:

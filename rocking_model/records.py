@@ -157,7 +157,10 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     header = lines[:first]
     assumed = False
     if units is None:
-        units = next((u for u in map(_at2_units, header) if u), None)
+        # the line that states the units ("... IN UNITS OF G", PEER's line 3) first: a title or event line may
+        # mention another unit ("PGA 0.4 g (g = 9.81 m/s2)")
+        stating = sorted(header, key=lambda line: "UNIT" not in line.upper())
+        units = next((u for u in map(_at2_units, stating) if u), None)
         if units is None:
             units, assumed = "g", True          # the PEER convention
     factor = unit_factor(units)
@@ -176,13 +179,30 @@ def read_at2(path, units: str | None = None, name: str | None = None) -> Record:
     return Record(np.arange(npts) * dt, ag, name or path.stem, str(path), header, units, assumed)
 
 
-def write_at2(path, t, ag, units: str = "g", title: str = "rocking_model record",
+def _samples(writer: str, t, ag, units):
+    """(t, ag, units) from a writer's arguments: ``t`` and ``ag`` arrays [s], [m/s2], or ``t`` a `Record` /
+    `SampledMotion` (what the readers return) with ``ag`` omitted, or given as the units (positional)."""
+    if hasattr(t, "t") and hasattr(t, "ag"):
+        if isinstance(ag, str) and units is None:
+            ag, units = None, ag
+        if ag is not None:
+            raise ValueError(f"{writer}: give a record, or the arrays t and ag, not both")
+        return np.asarray(t.t, dtype=float), np.asarray(t.ag, dtype=float), units
+    if ag is None:
+        raise ValueError(f"{writer}: ag is missing (give a record, or the arrays t and ag)")
+    return np.asarray(t, dtype=float), np.asarray(ag, dtype=float), units
+
+
+def write_at2(path, t, ag=None, units: str | None = None, title: str | None = None,
               event: str = "synthetic", digits: int = 17) -> Path:
-    """Write samples ag [m/s2] at uniform times t [s] (t[0] = 0) as a PEER AT2 file in ``units`` (g):
+    """Write samples ag [m/s2] at uniform times t [s] (t[0] = 0) as a PEER AT2 file in ``units`` (default g):
     NGA-West2 header, 5 values a line in E format with ``digits`` significant digits (17 round-trips the
-    values; PEER files use 7)."""
-    t = np.asarray(t, dtype=float)
-    ag = np.asarray(ag, dtype=float)
+    values; PEER files use 7). ``write_at2(path, record)`` writes a `Record` (or any `SampledMotion`) as the
+    readers return it; its name is the title line unless ``title`` is given."""
+    name = getattr(t, "name", None)
+    t, ag, units = _samples("write_at2", t, ag, units)
+    units = "g" if units is None else units
+    title = title if title is not None else (name if name is not None else "rocking_model record")
     if t.ndim != 1 or t.shape != ag.shape or t.size < 2:
         raise ValueError("write_at2: t and ag must be 1-D arrays of equal length >= 2")
     dt = float(t[1] - t[0])
@@ -279,11 +299,12 @@ def _is_float(s: str) -> bool:
         return False
 
 
-def write_csv(path, t, ag, units: str = "m/s2") -> Path:
-    """Write t [s] and ag [m/s2] as ``time [s],ag [<units>]`` CSV, ag converted to ``units``
-    (repr precision: reading it back gives the same numbers)."""
-    t = np.asarray(t, dtype=float)
-    values = np.asarray(ag, dtype=float) / unit_factor(units)
+def write_csv(path, t, ag=None, units: str | None = None) -> Path:
+    """Write t [s] and ag [m/s2] as ``time [s],ag [<units>]`` CSV, ag converted to ``units`` (default m/s2;
+    repr precision: reading it back gives the same numbers). ``write_csv(path, record)`` writes a `Record`."""
+    t, ag, units = _samples("write_csv", t, ag, units)
+    units = "m/s2" if units is None else units
+    values = ag / unit_factor(units)
     path = Path(path)
     with open(path, "w") as f:
         f.write(f"time [s],ag [{units}]\n")

@@ -14,7 +14,7 @@ from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
 from .models.base import RockingModel
 from .params import Param
-from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 
@@ -97,7 +97,7 @@ class Simulator:
     """
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
-                 tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = 1e-6, t0: float = 0.0,
+                 tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,
                  max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
                  on_report: str = "warn", **initial):
@@ -261,16 +261,19 @@ class Simulator:
         return self.integrator.state()
 
     def outputs(self) -> dict:
-        """Model outputs plus contact (int), impacts (int), overturned (bool), friction_demand (float: the
-        largest |lambda_T| / lambda_N the contacts needed so far) and painleve (int: Painleve situations
-        resolved so far)."""
+        """Model outputs plus contact (int: the contact mode, `rocking_model.modes.OVERTURNED` = 10 once
+        overturned), impacts (int), overturned (bool), friction_demand (float: the largest |lambda_T| / lambda_N
+        the contacts needed so far) and painleve (int: Painleve situations resolved so far).
+
+        Once overturned the outputs are those of the pose reached at |phi| = pi/2 at rest: every velocity 0,
+        energy the potential (and strain) energy of that pose relative to rest; they no longer change."""
         integ = self.integrator
         cached = self._out
         if cached is not None and cached[0] is getattr(integ, self._token):
             out = dict(cached[1])         # computed (and checked finite) at the end of the last advance
         else:
             out = integ.outputs()
-        out["contact"] = int(integ.mode)
+        out["contact"] = integ.contact_code
         out["impacts"] = int(integ.impacts)
         out["overturned"] = bool(integ.overturned)
         out["friction_demand"] = float(integ.friction_demand)
@@ -283,7 +286,8 @@ class Simulator:
         works; floats may be nan only where a field means "unset").
 
         Header: version (int, STATE_VERSION), scheme ("moreau_jean" / "event_driven"), model (class name),
-        n_dof (full dimension). Event-driven: t [s], mode (0-9, `Mode`), y (reduced state of the mode:
+        n_dof (full dimension). Event-driven: t [s], mode (0-9, `Mode`: the last contact mode once
+        overturned, the state then at rest), y (reduced state of the mode:
         coordinates then velocities), impacts, overturned, n_steps, h (last step size [s], nan before the
         first), impact_times [s], impact_log (rows t, v_minus, v_plus flattened, 1 + 2 n_dof floats each),
         shift (horizontal offset [m] of the base of a sticking mode on the ground), friction_demand,

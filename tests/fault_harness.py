@@ -2322,12 +2322,12 @@ Case ids are `<class>/<fmu>/<what>` in `tests/fault_harness.py`.
 _PAGE_TAIL = """
 ## History
 
-Issue 12 wrote the suite against pythonfmu 0.7's wrapper (SIGSEGV for `é # [ %` in the resource path, GUID not
-checked, no input derivatives, fmi2Fatal for a string that is not UTF-8, aborts at process exit); issue 13
-replaced the wrapper by the project's binary, which passes every class. Issue 20 added the classes `declared`,
-`inputderiv`, `corrupt` and `range`, with the faults they found fixed: a minimum of `mu` (1e-3), input
-derivatives set before initialization measured from the start time, a CRC-32 over the whole serialized state,
-and the declared range of `max_steps` checked.
+The suite was first written against pythonfmu 0.7's prebuilt wrapper, which failed several classes (SIGSEGV for
+`é # [ %` in the resource path, GUID not checked, no input derivatives, fmi2Fatal for a string that is not
+UTF-8, aborts at process exit); the project's own binary (`fmi_binary/`) replaced it and passes every class.
+The classes `declared`, `inputderiv`, `corrupt` and `range` were added with the faults they found fixed: a
+minimum of `mu` (1e-3), input derivatives set before initialization measured from the start time, a CRC-32
+over the whole serialized state, and the declared range of `max_steps` checked.
 """
 
 

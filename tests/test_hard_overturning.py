@@ -10,7 +10,7 @@ import pytest
 
 from rocking_model import ConstantMotion, RigidBlock, Simulator, SinePulse
 from rocking_model.contact import inverse_mass
-from rocking_model.modes import Mode
+from rocking_model.modes import OVERTURNED, Mode
 
 import roundoff
 from hard_cases import SCHEMES, SLENDER, Trace, assert_sane, nominal, roundoff_tests
@@ -152,7 +152,13 @@ def test_overturning_lift_off_keeps_the_corners_on_the_ground(scheme):
     check_bounds(summary["figures"], BOUNDS[key], key)
     assert min(float(block.gaps(q).min()) for q in tr.q) > -1e-12 * block.length_scale
     assert not tr.sim.last_reports
-    assert 1e-5 < abs(tr.sim.outputs()["slip"]) < 0.01 and tr.sim.outputs()["friction_demand"] > 10.0
+    out = tr.sim.outputs()
+    assert 1e-5 < abs(out["slip"]) < 0.01 and out["friction_demand"] > 10.0
+    # the frozen state is the pose reached, at rest (issue 20): no velocity, the overturned contact code, the
+    # potential energy of the pose (its pivot slid: a little off m g (b - h))
+    q, v = tr.sim.state()
+    assert not np.any(v) and out["contact"] == OVERTURNED and out["phi_dot"] == 0.0
+    assert out["energy"] == block.energy(q, v) == pytest.approx(block.m * block.g * (block.b - block.h), rel=0.01)
 
 
 # ================================================================================================

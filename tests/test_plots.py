@@ -54,3 +54,43 @@ def test_flexible_response_plot_has_the_top_displacement():
     finally:
         import matplotlib.pyplot as plt
         plt.close(fig)
+
+
+def test_an_overturn_is_plotted_as_an_overturn():
+    """Issue 20: after overturning the plot drew the frozen last mode (a sliding one) for the rest of the run.
+    Now the contact data after the overturning time are the level "overturned", never sliding; the curves of
+    the motion stop at the overturning time, which every panel marks."""
+    import math
+
+    from rocking_model.modes import OVERTURNED
+    from rocking_model.plotting import CONTACT_LABELS, OVERTURNED_LEVEL, contact_levels
+
+    block = RigidBlock(b=0.2, h=1.0, mu=0.5)          # its pivot slides in the final fall
+    motion = SinePulse(4.5, 4.0 * math.pi)
+    res = simulate(block, motion, 8.0, on_report="ignore")
+    over = np.asarray(res.overturned, dtype=bool)
+    k = int(np.argmax(over))
+    t_o = res.t[k]
+    assert over[-1] and 2.5 < t_o < 3.5
+    levels, sliding, over_c = contact_levels(res.contact)
+    assert np.array_equal(over_c, over) and np.all(res.contact[k:] == OVERTURNED)
+    assert np.all(levels[k:] == OVERTURNED_LEVEL) and CONTACT_LABELS[OVERTURNED_LEVEL] == "overturned"
+    assert sliding[:k].any() and not sliding[k:].any()      # slid before, never after
+    fig = response_figure(res, motion, alpha=block.alpha, g=block.g)
+    try:
+        axes = fig.axes
+        phi_line = axes[0].get_lines()[0]
+        assert phi_line.get_xdata()[-1] == t_o                      # the motion's curve stops there
+        contact_ax = axes[-1]
+        lines = contact_ax.get_lines()
+        motion_line = next(ln for ln in lines if ln.get_color() == "C2")
+        over_line = next(ln for ln in lines if ln.get_label() == "overturned")
+        assert motion_line.get_xdata()[-1] == t_o
+        assert set(over_line.get_ydata()) == {OVERTURNED_LEVEL} and over_line.get_xdata()[0] == t_o
+        assert [t.get_text() for t in contact_ax.get_yticklabels()][-1] == "overturned"
+        assert "overturned" in _labels(contact_ax) and "sliding" in _labels(contact_ax)
+        for ax in axes:                                             # the overturning time marked everywhere
+            assert any(list(ln.get_xdata()) == [t_o, t_o] for ln in ax.get_lines()), ax.get_ylabel()
+    finally:
+        import matplotlib.pyplot as plt
+        plt.close(fig)

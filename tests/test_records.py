@@ -329,3 +329,57 @@ def test_synthetic_record_fixed_numbers():
     assert load_motion("synthetic:2017").pga == pytest.approx(0.4 * 9.81)
     with pytest.raises(ValueError, match="seed must be an integer"):
         load_motion("synthetic:abc")
+
+
+# ------------------------------------------------------------------------------------------- exports, writers
+def test_package_exports_every_public_ground_motion():
+    """Every public GroundMotion subclass of rocking_model.ground_motion (and the readers' Record) can be imported
+    from the package itself, as the README's ground-motion table names them (`from rocking_model import
+    CosinePulse` used to fail while SinePulse worked)."""
+    import inspect
+
+    import rocking_model
+    from rocking_model import ground_motion
+    public = {name for name, cls in inspect.getmembers(ground_motion, inspect.isclass)
+              if issubclass(cls, ground_motion.GroundMotion) and cls.__module__ == ground_motion.__name__
+              and not name.startswith("_")}
+    assert {"SinePulse", "CosinePulse", "RickerPulse", "RectangularPulse", "SampledMotion"} <= public
+    missing = sorted((public | {"Record"}) - set(rocking_model.__all__))
+    assert not missing, f"not in rocking_model.__all__: {missing}"
+    assert sorted(public - set(ground_motion.__all__)) == []
+    for name in public:
+        assert getattr(rocking_model, name) is getattr(ground_motion, name)
+    assert rocking_model.Record is Record
+    namespace = {}
+    exec("from rocking_model import *", namespace)
+    assert all(name in namespace for name in public)
+
+
+def test_writers_take_the_record_the_readers_return(tmp_path):
+    """write_at2 / write_csv accept a Record (what read_at2, read_csv and synthetic_motion return) as well as the
+    arrays t, ag; the round trip gives the same samples (1 ulp for the g <-> m/s2 conversion)."""
+    from rocking_model.records import synthetic_motion
+    rec = synthetic_motion(7, duration=2.0)
+    back = read_at2(write_at2(tmp_path / "r.AT2", rec))
+    assert np.array_equal(back.t, rec.t) and np.allclose(back.ag, rec.ag, rtol=1e-15, atol=0.0)
+    assert (tmp_path / "r.AT2").read_text().splitlines()[0] == rec.name          # the record's name is the title
+    again = read_at2(write_at2(tmp_path / "s.AT2", back, "cm/s2"))               # units positional, as before
+    assert "CM/S2" in (tmp_path / "s.AT2").read_text().splitlines()[2]
+    assert np.allclose(again.ag, rec.ag, rtol=1e-14, atol=0.0)
+    csv = read_csv(write_csv(tmp_path / "r.csv", rec, units="g"))
+    assert np.array_equal(csv.t, rec.t) and np.allclose(csv.ag, rec.ag, rtol=1e-15, atol=0.0)
+    old = read_at2(write_at2(tmp_path / "o.AT2", rec.t, rec.ag, "g"))             # the old signature still works
+    assert np.array_equal(old.ag, back.ag)
+    with pytest.raises(ValueError, match="not both"):
+        write_at2(tmp_path / "x.AT2", rec, rec.ag)
+    with pytest.raises(ValueError, match="ag is missing"):
+        write_at2(tmp_path / "x.AT2", rec.t)
+
+
+def test_at2_units_come_from_the_line_that_states_them(tmp_path):
+    """A title or event line that mentions another unit does not override PEER's "IN UNITS OF G" line."""
+    t, a = synthetic_record(duration=1.0, seed=3)
+    p = write_at2(tmp_path / "r.AT2", t, a, title="shake table run, PGA 0.4 g (g = 9.81 m/s2)",
+                  event="peak 392 cm/s2")
+    r = read_at2(p)
+    assert r.units == "g" and np.allclose(r.ag, a, rtol=1e-15, atol=0.0)

@@ -626,14 +626,18 @@ class ModelSlave(RockingSlave):
         from .variables import AG_INPUT, MAX_STEPS_PARAMETER, model_variables
 
         extra_outputs = (
-            Var("contact", "output", 0, type="Integer", min=0, max=len(model_class.contact_codes()) - 1,
+            Var("contact", "output", 0, type="Integer", min=0, max=model_class.max_contact_code(),
                 description="Contact state: " + model_class.contact_description()),
             Var("impacts", "output", 0, type="Integer", description="Number of impacts so far"),
             Var("overturned", "output", False, type="Boolean",
-                description="True once the structure has overturned (outputs are frozen from then on)"),
+                description="True once the structure has overturned (|phi| reached pi/2): from then on the "
+                            "outputs are frozen at the pose reached, at rest (velocities 0, energy of that "
+                            "pose, contact 10)"),
             Var("friction_demand", "output", 0.0, unit="1",
                 description="The largest friction coefficient the corners needed so far, |sum lambda_T| / "
-                            "sum lambda_N (the paper's sticking law holds where it stays below the surface's "
+                            "sum lambda_N of the forces (event-driven: their continuous maximum; Moreau-Jean: "
+                            "per-step percussions) and of the impact percussions (the paper's sticking law "
+                            "holds where it stays below the surface's "
                             "mu; values near 1e6 mean a lift-off where sticking needs unbounded friction)"),
             Var("painleve", "output", 0, type="Integer",
                 description="Painleve situations met so far (sliding with no or several consistent "

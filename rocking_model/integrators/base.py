@@ -28,9 +28,13 @@ and keep these attributes current: ``model``, ``t`` [s], ``mode`` (the model's c
 ``friction_demand`` (the largest |sum lambda_T| / sum lambda_N of the closed contacts so far, `note_demand`)
 and ``painleve`` (Painleve situations resolved so far), the last two in `get_state`.
 
+Overturning (|phi| = pi/2) ends the motion: a scheme sets ``overturned``, keeps the pose it reached there and
+sets every velocity to 0; time still advances, the state no longer changes, and
+``contact`` reads `OVERTURNED` (`contact_code`) while ``mode`` keeps the last contact mode.
+
 A subclass may provide:
 
-    sample(times, ag, max_steps) -> (modes, values, impacts, overturned)
+    sample(times, ag, max_steps) -> (contact codes, values, impacts, overturned)
                                 outputs at many times in one pass (default: advance to each time and read
                                 `outputs`; the event-driven scheme reads its dense output instead)
     LOGS : tuple                names of its `BoundedLog` attributes (see `Checkpointed`)
@@ -47,8 +51,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..modes import contact_states, slide_sign
-from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
+from ..modes import OVERTURNED, contact_states, slide_sign
+from ..tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .state import Checkpointed
 
 
@@ -78,7 +82,7 @@ class SolverOptions:
     dt_max: float = 0.0
     tolerance: float = 1e-8
     theta: float = 0.5
-    zeno_tol: float = 1e-6
+    zeno_tol: float = ZENO_TOL
     method: str = "DOP853"
     impact_log_size: int | None = None
     tolerances: ContactTolerances = field(default=DEFAULT_TOLERANCES)
@@ -97,7 +101,8 @@ class Integrator(Checkpointed):
     #: reports of the current advance (cleared by the Simulator before each one)
     reports: list
     #: [1] the largest friction coefficient the contacts needed so far: |sum lambda_T| / sum lambda_N of the
-    #: closed contacts (forces, or a time-step's percussions); at most mu, as sliding caps it
+    #: closed contacts (event-driven: the continuous maximum of the forces' ratio and each impact's
+    #: percussions; Moreau-Jean: each time-step's percussions); at most mu, as sliding caps it
     friction_demand: float = 0.0
     #: Painleve situations met so far (each resolved by an impact without collision)
     painleve: int = 0
@@ -123,6 +128,11 @@ class Integrator(Checkpointed):
         raise NotImplementedError
 
     @property
+    def contact_code(self) -> int:
+        """The output ``contact``: the mode's code, `OVERTURNED` once overturned."""
+        return OVERTURNED if self.overturned else int(self.mode)
+
+    @property
     def contacts(self) -> tuple:
         """`ContactState` of each contact now."""
         return contact_states(self.model.closed_of(self.mode), self.model.n_contacts, slide_sign(self.mode))
@@ -131,9 +141,13 @@ class Integrator(Checkpointed):
         """Raise ``friction_demand`` to |lam_T| / lam_N if larger (forces with lam_N above ``floor`` [N],
         `ContactTolerances.demand_floor`)."""
         if lam_N > floor:
-            d = abs(lam_T) / lam_N
-            if d > self.friction_demand:
-                self.friction_demand = d
+            self.note_ratio(abs(lam_T) / lam_N)
+
+    def note_ratio(self, d) -> None:
+        """Raise ``friction_demand`` to the ratio ``d`` [1] if larger (None: no ratio). At most mu: sliding
+        caps it (a stick-slip transition is located where the ratio reaches mu, to round-off)."""
+        if d is not None and d > self.friction_demand:
+            self.friction_demand = min(d, self.model.mu)
 
     def report(self, kind: str, t: float, message: str) -> None:
         """Record a `Report` of the current advance."""
@@ -154,11 +168,11 @@ class Integrator(Checkpointed):
         values = {n: np.array([r[1][n] for r in rows]) for n in names}
         values["friction_demand"] = np.array([r[4] for r in rows])
         values["painleve"] = np.array([r[5] for r in rows])
-        return (np.array([int(r[0]) for r in rows]), values, np.array([r[2] for r in rows]),
+        return (np.array([r[0] for r in rows]), values, np.array([r[2] for r in rows]),
                 np.array([r[3] for r in rows], dtype=bool))
 
     def _row(self):
-        return self.mode, self.outputs(), self.impacts, self.overturned, self.friction_demand, self.painleve
+        return self.contact_code, self.outputs(), self.impacts, self.overturned, self.friction_demand, self.painleve
 
 
 #: registry of the schemes: name -> class (`register_scheme`)

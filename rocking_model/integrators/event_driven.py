@@ -31,6 +31,10 @@
 - Painleve count (``painleve``): each stick-making impulse of a Painleve situation, applied where the uplift LCP
   of a sliding corner has no or several solutions (`_decide`) or made by an impact LCP on a corner that slid
   in Painleve's configuration (`rocking_model.contact.painleve_sticks`).
+- Friction demand (``friction_demand``): the maximum of |sum lambda_T| / sum lambda_N along the motion to the
+  tolerance (at both limits of every event, at step ends, inside a step where it peaks: `_demand_peak`) and
+  of each impact's percussions (`_note_percussions`).
+- Overturning (|phi| = pi/2, located as an event) ends the motion: the pose reached is kept at rest.
 - ``advance(t_end, ag, samples)`` integrates through the sample times (an output grid) and reads the state
   there from the dense output, so a fine output grid does not shorten the steps.
 - Work budget: ``advance(..., max_steps=N)`` counts Runge-Kutta steps plus EVENT_WORK = 30 per event and
@@ -46,13 +50,13 @@ import numpy as np
 from ..contact import closed_candidates, impact, inverse_mass, next_mode, painleve_sticks, project_to_ground
 from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
 from ..models.sliding import shift_of
-from ..modes import SLIDING, BoundedLog, bounded_log
+from ..modes import OVERTURNED, SLIDING, BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from ..validation import WorkLimitError, check_choice, check_real, state_bool, state_float, state_floats, state_int
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .events import bounce_search, dip_search, earliest_root, first_negative
+from .events import bounce_search, brent_max, dip_search, earliest_root, first_negative, parabola_peak
 from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
@@ -66,6 +70,15 @@ _KIND_SLIP, _KIND_CONE = "slip", "cone"
 #: against 20 and 55 us per step), so that the budget bounds the time of an event storm as of a long stretch
 #: of smooth steps
 EVENT_WORK = 30
+#: [1] the friction demand's peak inside a step is searched for (`EventDriven._demand_peak`) when the parabola
+#: through the demand at the step's ends and middle peaks inside the step above (1 - DEMAND_PEAK_MARGIN) times
+#: the largest demand so far: the steps resolve the motion to the tolerance, so the parabola's error on a
+#: step's peak is far below 10 %, and a peak it puts lower cannot raise the maximum (the search is skipped)
+DEMAND_PEAK_MARGIN = 0.1
+#: [1] a step whose ends both need less than this fraction of the largest demand so far is not searched: its
+#: peak would have to double within one step, which the steps' resolution of the motion excludes (away from a
+#: lift-off, where the ends themselves grow); it keeps the search off most steps of a long record
+DEMAND_STEP_GATE = 0.5
 #: the Runge-Kutta pairs of the smooth phases, by name
 METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 #: accepted spellings of ``method``
@@ -89,6 +102,8 @@ class EventDriven(Integrator):
     _live = None            #: the stepper of the last segment, while it may go on (see `_stepper`)
     _max_work = None        #: work budget of the current `advance` (None: unlimited)
     _work_end = math.inf    #: value of n_steps at which the budget runs out
+    _demand_end = None      #: (t, y, totals, demand) at the end of the last segment without an event (the same
+    #:                         totals: the same mode and input, so a segment that carries on keeps its value)
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options: SolverOptions) -> "EventDriven":
@@ -254,6 +269,7 @@ class EventDriven(Integrator):
         state = dict(self.__dict__)
         state.pop("_fn_cache", None)      # closures: rebuilt on demand
         state.pop("_live", None)          # the stepper holds them too; a restart is bit-identical
+        state.pop("_demand_end", None)    # holds a closure; the demand there is recomputed (the same value)
         return state
 
     def _atol(self, mode):
@@ -283,6 +299,7 @@ class EventDriven(Integrator):
         samples = [self._sample_row(self.mode, list(self.y))]
         samples += self._run(float(times[-1]), ag, times, max_steps)
         modes = np.array([int(smp[0]) for smp in samples])
+        overturned = np.array([smp[3] for smp in samples], dtype=bool)
         values = {}
         for code in np.unique(modes):
             idx = np.nonzero(modes == code)[0]
@@ -293,8 +310,9 @@ class EventDriven(Integrator):
                 values.setdefault(name, np.empty(len(samples)))[idx] = arr
         values["friction_demand"] = np.array([smp[5] for smp in samples])
         values["painleve"] = np.array([smp[6] for smp in samples])
-        return (modes, values, np.array([smp[2] for smp in samples]),
-                np.array([smp[3] for smp in samples], dtype=bool))
+        # (the outputs above are evaluated in the last contact mode; the output contact reads OVERTURNED)
+        return (np.where(overturned, OVERTURNED, modes), values, np.array([smp[2] for smp in samples]),
+                overturned)
 
     def _sample_row(self, mode, y, overturned=None):
         """A sample of `sample`: (mode, y, impacts, overturned, shift, friction_demand, painleve)."""
@@ -395,7 +413,20 @@ class EventDriven(Integrator):
             return False
         rhs, G, totals = self._functions(mode, ag)
         kinds = self._kinds(mode)
-        floor = self.force_floor
+        # the friction demand |sum lambda_T| / sum lambda_N, continuous along the segment: noted at its start
+        # (the right limit after an event), at the end of each step, at its maximum inside a step
+        # (`_demand_peak`) and at the event that ends the segment (its left limit: the peak before an impact).
+        # A sliding mode's is mu wherever the normal force carries load: its ends suffice
+        ratio = self._demand_ratio
+        peaks = totals is not None and mode not in SLIDING
+        d_prev = None
+        if totals is not None:
+            last = self._demand_end
+            if last is not None and last[0] == self.t and last[1] is self.y and last[2] is totals:
+                d_prev = last[3]              # the last step's end (a segment carried on across a kink of ag)
+            else:
+                d_prev = ratio(totals(self.t, self.y))
+                self.note_ratio(d_prev)
         # without state (rigid block in full contact) a step only samples the contact forces under a varying
         # input: keep it short enough for the dip search to see a force that comes and goes
         max_step = self.dt_max if k else min(self.dt_max, self.stateless_step)
@@ -415,7 +446,7 @@ class EventDriven(Integrator):
                 raise WorkLimitError(self._work_message(stepper))
             g_new = G(stepper.t, stepper.y)
             # the friction demand at the step's end (right after G: models share their work between the two)
-            lam = totals(stepper.t, stepper.y) if totals is not None else None
+            d_new = ratio(totals(stepper.t, stepper.y)) if totals is not None else None
             rose = {}
             if first:
                 first = False
@@ -429,13 +460,23 @@ class EventDriven(Integrator):
                 self.t = te
                 self.y = dense(te)
                 self._full = None
+                if totals is not None:
+                    # the demand up to the event, its left limit included (the mode's forces at the event)
+                    d_e = ratio(totals(te, self.y))
+                    if peaks:
+                        self._demand_peak(totals, lambda: dense, stepper.t_old, d_prev, te, d_e, None)
+                    self.note_ratio(d_e)
                 self._handle(kinds[i], te, ag)
                 return True
             if pending and pending[0] <= stepper.t:
                 self._record_samples(pending, out, mode, stepper.dense_output(), stepper.t, inclusive=True)
-            if lam is not None:
-                # (noted at the ends of the steps without an event: the mode's forces hold there)
-                self.note_demand(lam[0], lam[1], floor)
+            if totals is not None:
+                # (the ends of the steps without an event: the mode's forces hold there)
+                if peaks:
+                    self._demand_peak(totals, stepper.dense_output, stepper.t_old, d_prev, stepper.t, d_new,
+                                      stepper.hermite_mid)
+                self.note_ratio(d_new)
+                d_prev = d_new
             for i, g in enumerate(g_new):
                 if g > 0.0:
                     armed[i] = True
@@ -447,7 +488,47 @@ class EventDriven(Integrator):
             self._h = stepper.h_abs
         self._full = None
         self._live = stepper
+        if totals is not None:
+            self._demand_end = (self.t, self.y, totals, d_prev)
         return False
+
+    def _demand_ratio(self, lam):
+        """|lam_T| / lam_N of the force totals ``lam`` = (sum lambda_N, sum lambda_T) [N], or None when the normal
+        force is below ``force_floor`` (it carries no load: the ratio would be round-off over round-off)."""
+        lam_N, lam_T = lam
+        return abs(lam_T) / lam_N if lam_N > self.force_floor else None
+
+    def _demand_peak(self, totals, dense_of, t0, d0, t1, d1, mid_of) -> None:
+        """Raise ``friction_demand`` to the peak of the continuous demand inside the step [t0, t1] (ends d0, d1
+        already noted), to the tolerance: when the parabola through the demand at the ends and at the middle
+        (state ``mid_of()``, or the dense output's when None) peaks inside the step near or above the largest
+        demand so far (DEMAND_PEAK_MARGIN), Brent's method on the dense output (``dense_of()``) locates the
+        peak to sqrt(tolerance) of the step, its value to about the tolerance. Near a lift-off (a normal force
+        below ``force_floor`` at an end) the demand grows without bound: the ends are what is reported."""
+        if d0 is None or d1 is None or not t1 > t0 or max(d0, d1) < DEMAND_STEP_GATE * self.friction_demand:
+            return
+        tm = 0.5 * (t0 + t1)
+        dense = None
+        if mid_of is None:
+            dense = dense_of()
+            y_mid = dense(tm)
+        else:
+            y_mid = mid_of()
+        dm = self._demand_ratio(totals(tm, y_mid))
+        if dm is None:
+            return
+        vertex = parabola_peak(d0, dm, d1)
+        if vertex is None or vertex[1] < (1.0 - DEMAND_PEAK_MARGIN) * self.friction_demand:
+            return
+        if dense is None:
+            dense = dense_of()
+        ratio = self._demand_ratio
+
+        def demand(t):
+            return ratio(totals(t, dense(t)))
+        tv = t0 + vertex[0] * (t1 - t0)
+        xtol = max(math.sqrt(self.tolerance) * (t1 - t0), 4.0 * math.ulp(max(abs(t1), 1.0)))
+        self.note_ratio(brent_max(demand, t0, t1, tv, demand(tv), xtol)[1])
 
     def _kinds(self, mode) -> list:
         """What each event function of ``mode`` means: per contact release (closed) or impact (open), then the
@@ -552,10 +633,15 @@ class EventDriven(Integrator):
     def _handle(self, kind, t, ag):
         q, v = self.state()
         if kind == _KIND_OVERTURN:
+            # the motion ends: the pose at |phi| = pi/2 (located to round-off), at rest (the outputs after
+            # overturning must not describe a motion that is no longer computed)
             self.overturned = True
+            self.y = self.y[:self.k] + [0.0] * self.k
+            self._full = None
             return
         if kind == _KIND_IMPACT:
             self._impact(q, v, t, ag(t))
+            self._note_percussions(q, v)
         elif kind == _KIND_CONE:
             # the friction reached mu lambda_N: the corners slide against it (preferred where sticking is
             # still consistent to round-off, as at the far side of the root it is only marginally)
@@ -564,6 +650,18 @@ class EventDriven(Integrator):
             self._enter(q, v, ag(t), t, prefer=slide)
         else:
             self._enter(q, v, ag(t), t)
+
+    def _note_percussions(self, q, v_minus) -> None:
+        """Raise ``friction_demand`` to the ratio |sum Lambda_T| / sum Lambda_N of the percussions of the impact
+        that led from v_minus to the current velocity: sticking at an impact needs that much friction too (a
+        rocking block's impact about its other corner: h b / (R^2/3 + h^2) = 0.1485 for b = 0.2, h = 1, more than
+        the forces of its free rocking need). The rows slide_index and lift_index of M (v+ - v-) carry the
+        totals; a normal percussion below force_floor * time_scale [N s] carries no load."""
+        model = self.model
+        P = model.mass_matrix(q) @ (self.state()[1] - v_minus)
+        lam_N = float(P[model.lift_index])
+        if lam_N > self.force_floor * model.time_scale:
+            self.note_ratio(abs(float(P[model.slide_index])) / lam_N)
 
     def _impact(self, q, v, t, ag_t):
         model = self.model

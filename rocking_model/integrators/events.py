@@ -10,7 +10,8 @@ above.
 - `first_negative`: the sub-sampling loop (the one place a step is cut into ``n`` sub-intervals): the
   first sub-interval at whose end one of the given functions is at or below zero;
 - `dip_search`: a function positive at both ends of a step that may dip below zero inside it;
-- `bounce_search`: a function that starts a step at zero and may rise above it briefly (a short bounce).
+- `bounce_search`: a function that starts a step at zero and may rise above it briefly (a short bounce);
+- `parabola_peak`, `brent_max`: the peak of a quantity inside a step (the friction demand).
 """
 from __future__ import annotations
 
@@ -146,3 +147,74 @@ def bounce_search(dense: Callable, G: Callable, i: int, t0: float, t1: float, le
             return t, gt
         # (below level: closer to the start)
     return None
+
+
+def parabola_peak(f0: float, fm: float, f1: float):
+    """(x, value) of the vertex of the parabola through (0, f0), (1/2, fm), (1, f1) when it is a maximum
+    inside (0, 1), else None (the largest value on [0, 1] is then at an end, up to the parabola's error)."""
+    c = 2.0 * (f0 + f1) - 4.0 * fm
+    if c >= 0.0:
+        return None
+    b = f1 - f0 - c
+    x = -b / (2.0 * c)
+    if not 0.0 < x < 1.0:
+        return None
+    return x, f0 + (b + c * x) * x
+
+
+#: Brent's golden-section fraction
+_CGOLD = 0.3819660112501051
+
+
+def brent_max(f: Callable, a: float, b: float, x: float, fx, xtol: float, max_iter: int = 60):
+    """Brent's method (parabolic steps safeguarded by golden sections) for the largest value of ``f`` on
+    [a, b] from an inner point x with value fx; ``f`` may return None (no value: below everything). Returns
+    (t, f(t)) of the best point found, its abscissa to about ``xtol`` (a smooth peak's value then to about
+    f'' xtol^2 / 2)."""
+    inf = math.inf
+    gx = -fx if fx is not None else inf          # minimises g = -f
+    w = v = x
+    gw = gv = gx
+    d = e = 0.0
+    for _ in range(max_iter):
+        xm = 0.5 * (a + b)
+        tol2 = 2.0 * xtol
+        if abs(x - xm) <= tol2 - 0.5 * (b - a):
+            break
+        golden = True
+        if abs(e) > xtol:
+            r = (x - w) * (gx - gv)
+            q = (x - v) * (gx - gw)
+            p = (x - v) * q - (x - w) * r
+            q = 2.0 * (q - r)
+            if q > 0.0:
+                p = -p
+            q = abs(q)
+            e_old, e = e, d
+            if q != 0.0 and abs(p) < abs(0.5 * q * e_old) and q * (a - x) < p < q * (b - x):
+                d = p / q
+                golden = False
+                if (x + d) - a < tol2 or b - (x + d) < tol2:
+                    d = xtol if xm >= x else -xtol
+        if golden:
+            e = (a - x) if x >= xm else (b - x)
+            d = _CGOLD * e
+        u = x + d if abs(d) >= xtol else x + (xtol if d >= 0.0 else -xtol)
+        fu = f(u)
+        gu = -fu if fu is not None else inf
+        if gu <= gx:
+            if u >= x:
+                a = x
+            else:
+                b = x
+            v, gv, w, gw, x, gx = w, gw, x, gx, u, gu
+        else:
+            if u < x:
+                a = u
+            else:
+                b = u
+            if gu <= gw or w == x:
+                v, gv, w, gw = w, gw, u, gu
+            elif gu <= gv or v == x or v == w:
+                v, gv = u, gu
+    return x, (-gx if gx != inf else None)

@@ -198,7 +198,10 @@ class MoreauJean(Integrator):
         self.mode = model.mode_of(closed, sigma)
         self.n_steps += 1
         if abs(self.q[model.phi_index]) >= 0.5 * math.pi:
+            # the motion ends: the pose at the end of this step (|phi| past pi/2 by at most |phi_dot| dt), at
+            # rest (the outputs after overturning must not describe a motion that is no longer computed)
             self.overturned = True
+            self.v = np.zeros_like(self.v)
 
     def _project(self, q, closed):
         """Put the corners that carried impulse back on the ground (`project_to_ground`). Without it the

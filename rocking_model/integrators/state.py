@@ -47,12 +47,15 @@ def check_times(state, key, times, t, impacts) -> list:
 
 
 def check_configuration(model, state, key, q, v, overturned, gap_tol) -> None:
-    """The full state (q, v) read from field ``key``: |phi| < pi/2 unless overturned, corners not below the
-    ground by more than gap_tol [m], and the outputs finite."""
+    """The full state (q, v) read from field ``key``: |phi| < pi/2 unless overturned, at rest if overturned,
+    corners not below the ground by more than gap_tol [m], and the outputs finite."""
     phi = float(q[model.phi_index])
     if not overturned and not abs(phi) < 0.5 * math.pi:
         raise ValueError(f"state field {key!r}: |phi| = {abs(phi):g} rad reaches pi/2 but 'overturned' is "
                          "False; allowed range (-pi/2, pi/2)")
+    if overturned and any(float(a) != 0.0 for a in v):
+        raise ValueError(f"state field {key!r}: the velocities must be 0 once 'overturned' is True (the pose "
+                         "reached at overturning is kept at rest); got a moving state")
     gaps = model.gaps(q)
     if not overturned and min(gaps) < -gap_tol:
         raise ValueError(f"state field {key!r}: a base corner is {-min(gaps):g} m below the ground; allowed at "

@@ -62,7 +62,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..contact import mode_forces
-from ..modes import CLOSED, MODE_DESCRIPTIONS, SLIDING, Mode, mode_from_closed
+from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, SLIDING, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
 from . import sliding
 
@@ -80,11 +80,12 @@ def body_outputs(body: str, point: str) -> tuple:
     velocity of its reference ``point`` (e.g. "the centroid")."""
     return (
         Param("phi", 0.0, "rad", f"Rotation of the {body}"),
-        Param("phi_dot", 0.0, "rad/s", f"Angular velocity of the {body}"),
+        Param("phi_dot", 0.0, "rad/s", f"Angular velocity of the {body} (0 once overturned: the pose reached "
+              "at |phi| = pi/2 is reported at rest)"),
         Param("x", 0.0, "m", f"Horizontal displacement of {point} relative to the ground"),
         Param("y", 0.0, "m", f"Vertical displacement of {point} from rest"),
-        Param("x_dot", 0.0, "m/s", f"Horizontal velocity of {point} relative to the ground"),
-        Param("y_dot", 0.0, "m/s", f"Vertical velocity of {point}"),
+        Param("x_dot", 0.0, "m/s", f"Horizontal velocity of {point} relative to the ground (0 once overturned)"),
+        Param("y_dot", 0.0, "m/s", f"Vertical velocity of {point} (0 once overturned)"),
         Param("slip", 0.0, "m", "Base sliding displacement: horizontal displacement of the lower base corner from "
               "its rest position (0 while the corners stick)"),
     )
@@ -214,8 +215,14 @@ class RockingModel(ABC):
 
     @classmethod
     def contact_description(cls) -> str:
-        """What the integer codes of the contact modes mean (the FMU output ``contact``)."""
-        return ", ".join(f"{int(m)} {MODE_DESCRIPTIONS[m]}" for m in Mode)
+        """What the integer codes of the output ``contact`` mean: the contact modes, then `OVERTURNED`."""
+        return ", ".join([f"{int(m)} {MODE_DESCRIPTIONS[m]}" for m in Mode]
+                         + [f"{OVERTURNED} {OVERTURNED_DESCRIPTION}"])
+
+    @classmethod
+    def max_contact_code(cls) -> int:
+        """The largest value of the output ``contact`` (`OVERTURNED`, after the contact modes' codes)."""
+        return OVERTURNED
 
     # ------------------------------------------------------------------ dynamical system
     @abstractmethod

@@ -105,11 +105,11 @@ class FlexibleOscillator(RockingModel):
     #: outputs (`outputs`)
     OUTPUTS: ClassVar[tuple] = (
         Param("u", 0.0, "m", "Flexural coordinate (tip deflection relative to the base)"),
-        Param("u_dot", 0.0, "m/s", "Flexural velocity"),
+        Param("u_dot", 0.0, "m/s", "Flexural velocity (0 once overturned)"),
     ) + body_outputs("base", "the base midpoint") + (
         Param("top_displacement", 0.0, "m", "Horizontal displacement of the top mass relative to the ground"),
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
-              "potential + strain)"),
+              "potential + strain); once overturned, the potential + strain energy of the pose reached"),
     )
 
     def __post_init__(self):

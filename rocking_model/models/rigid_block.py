@@ -46,7 +46,7 @@ class RigidBlock(RockingModel):
     #: outputs (`outputs`)
     OUTPUTS: ClassVar[tuple] = body_outputs("block", "the centroid") + (
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
-              "potential)"),
+              "potential); once overturned, the potential energy of the pose reached, m g (b - h) lying on a side"),
     )
 
     def __post_init__(self):
