@@ -14,7 +14,8 @@ Also records whether the Python that builds the extension sums floats with Neuma
 built for.
 
 Run by setup.py at every build; rewrites the header only when its content changes (no needless rebuild).
-Usage: python rocking_model/engine/gen_rk.py [output path]
+Usage: python rocking_model/engine/gen_rk.py (no arguments: setup.py runs it as __main__ with its own argv, so
+the command line is ignored; `generate(path)` writes elsewhere)
 """
 from __future__ import annotations
 
@@ -270,4 +271,4 @@ def generate(path: str = OUTPUT) -> bool:
 
 
 if __name__ == "__main__":
-    generate(sys.argv[1] if len(sys.argv) > 1 else OUTPUT)
+    generate()
