@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from rocking_model import _engine
 from rocking_model.ground_motion import ConstantMotion
-from rocking_model.models import RigidBlock
+from rocking_model.models import FlexibleOscillator, RigidBlock
 from rocking_model.models import sliding
 from rocking_model.models.base import RockingModel
 from rocking_model.modes import CLOSED, SLIDING, Mode
@@ -400,3 +400,281 @@ def test_rigid_initial_value_checks_give_the_python_messages(initial):
         assert str(info.value) == str(exc)
     else:
         call("rigid", values_of(model), "initial_state", a=list(initial))
+
+
+# ------------------------------------------------------------------------------------------ flexible oscillator
+def flexible_params():
+    def build(m, m_c, m_b, rho, h, b, omega, zeta, e_N, law, mu, rule, g):
+        m_tilde = m + 33.0 / 140.0 * m_c
+        EI = min(omega ** 2 * m_tilde * h ** 3 / 3.0, 1e15)
+        return dict(m=m, m_c=m_c, m_b=m_b, rho=rho, h=h, b=b, EI=EI, zeta=zeta, e_N=e_N, impact_law=law, mu=mu,
+                    impact_rule=rule, g=g)
+    return st.builds(
+        build, log_uniform(1e-2, 1e6), st.one_of(st.just(0.0), log_uniform(1e-2, 1e5)), log_uniform(1e-2, 1e5),
+        log_uniform(1e-3, 10.0), log_uniform(1e-2, 1e2), log_uniform(1e-2, 1e2), log_uniform(1.0, 5e3),
+        st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.sampled_from([0, 1]),
+        st.one_of(st.just(math.inf), log_uniform(1e-3, 1e3)), st.sampled_from([0, 1]), log_uniform(1.0, 100.0))
+
+
+def flexible_state(model, mode, u, phi, ud, w, x, dx, dy, lift):
+    """A reduced state y of ``mode`` of the flexible oscillator (corners not below the ground)."""
+    u = u * model.h
+    if mode == Mode.FULL:
+        return [u, ud]
+    if mode in (Mode.LEFT, Mode.RIGHT):
+        phi = abs(phi) if mode == Mode.LEFT else -abs(phi)
+        return [u, phi, ud, w]
+    if mode == Mode.FLIGHT:
+        yc = model.b * abs(math.sin(phi)) + lift * model.length_scale
+        return [u, x, yc, phi, ud, dx, dy, w]
+    stick, _ = SLIDING[mode]
+    base = flexible_state(model, stick, u / model.h, phi, ud, w, x, dx, dy, lift)
+    k = len(base) // 2
+    return base[:k] + [x] + base[k:] + [dx]
+
+
+FSTATE = st.tuples(st.floats(-0.5, 0.5), st.floats(-1.5, 1.5), st.floats(-5.0, 5.0), st.floats(-20.0, 20.0),
+                   st.floats(-2.0, 2.0), st.floats(-5.0, 5.0), st.floats(-5.0, 5.0), st.floats(0.0, 1.0))
+FLEX = FlexibleOscillator
+
+
+def test_registry_declares_the_flexible_oscillator():
+    k = {k["kind"]: k for k in _engine.model_kinds()}["flexible"]
+    model = FLEX()
+    assert k["class_name"] == "FlexibleOscillator"
+    assert (k["n_dof"], k["n_contacts"], k["n_modes"]) == (model.n_dof, model.n_contacts, model.n_modes)
+    assert (k["phi_index"], k["slide_index"], k["lift_index"]) == (model.phi_index, model.slide_index,
+                                                                    model.lift_index)
+    assert [p[0] for p in k["params"]] == [p.name for p in FLEX.parameters()]
+    assert [p[2] for p in k["params"]] == [float(p.default) for p in FLEX.parameters()]
+    assert [p[0] for p in k["initial"]] == [p.name for p in FLEX.INITIAL]
+    assert [p[0] for p in k["outputs"]] == [p.name for p in FLEX.OUTPUTS]
+    names = [p.name for p in FLEX.OUTPUTS]
+    assert [names[i] for i in k["shifted"]] == list(FLEX.SHIFTED_OUTPUTS)
+
+
+@SETTINGS
+@given(flexible_params())
+def test_flexible_derived_constants(kw):
+    model = FLEX(**kw)
+    p = values_of(model)
+    c = call("flexible", p, "derived")
+    same(c["p"], p)
+    for name in ("e_N", "e_T", "mu", "g", "length_scale", "time_scale", "force_scale", "step_limit"):
+        assert c[name] == getattr(model, name), name
+    same(c["dof_scales"], model.dof_scales)
+    same(c["rest_abscissae"], model._rest_abscissae)
+    same(call("flexible", p, "d")[:16], [model.m_tilde, model.k_tilde, model.M_t, model.D, model.A_h, model.C,
+                                         model.I_mb, model.J0, model.J_eff, model.c, model.omega, model.h_cg,
+                                         model.R, model.alpha, model.I_O, model.p])
+    assert call("flexible", p, "work_note") == model.work_note
+    tol = DEFAULT_TOLERANCES.for_model(model)
+    for name, value in call("flexible", p, "scale_tolerances").items():
+        assert value == getattr(tol, name), name
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE, AG)
+def test_flexible_full_coordinate_functions(kw, state, ag):
+    model = FLEX(**kw)
+    p = values_of(model)
+    u, phi, ud, w, x, dx, dy, lift = state
+    q = [u * model.h, x, model.b * abs(math.sin(phi)) + lift * model.length_scale, phi]
+    v = [ud, dx, dy, w]
+    qa, va = np.array(q), np.array(v)
+    M = model.mass_matrix(qa)
+    same(call("flexible", p, "mass_matrix", a=q), M)
+    close(call("flexible", p, "inverse_mass", a=q), np.linalg.inv(M), rtol=LA_RTOL * np.linalg.cond(M))
+    same(call("flexible", p, "forces", a=q, b=v, ag=ag), model.forces(qa, va, ag))
+    K, C = call("flexible", p, "stiff_jacobians", a=q, b=v)
+    pK, pC = model.stiff_jacobians(qa, va)
+    same(K, pK)
+    same(C, pC)
+    same(call("flexible", p, "gaps", a=q), model.gaps(qa))
+    W_N, W_T = call("flexible", p, "contact_jacobians", a=q)
+    pw = model.contact_jacobians(qa)
+    same(W_N, pw[0])
+    same(W_T, pw[1])
+    a_N, a_T = call("flexible", p, "contact_drift", a=q, b=v)
+    pd = model.contact_drift(qa, va)
+    same(a_N, pd[0])
+    same(a_T, pd[1])
+    same(call("flexible", p, "contact_abscissae", a=q), model.contact_abscissae(qa))
+    assert call("flexible", p, "slip", a=q) == model.slip(qa)
+    energy = model.energy(qa, va)
+    close([call("flexible", p, "energy", a=q, b=v)], [energy],
+          scale=model.kinetic_energy(qa, va) + abs(model.potential_energy(qa)) + 0.5 * model.k_tilde * q[0] ** 2)
+    same(call("flexible", p, "outputs", a=q, b=v), out_list(model, model.outputs(qa, va)))
+    same(call("flexible", p, "rest_position"), model.rest_position())
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE, AG)
+def test_flexible_sticking_modes_bitwise(kw, state, ag):
+    model = FLEX(**kw)
+    p = values_of(model)
+    motion = ConstantMotion(ag)
+    for mode in STICK:
+        y = flexible_state(model, mode, *state)
+        k = len(y) // 2
+        r, rd = y[:k], y[k:]
+        assert call("flexible", p, "mode_dofs", mode=mode) == list(model.mode_dofs(mode))
+        q, v = call("flexible", p, "embed", mode=mode, a=r, b=rd)
+        pq, pv = model.embed(mode, np.array(r), np.array(rd))
+        same(q, pq)
+        same(v, pv)
+        J, jd = call("flexible", p, "mode_jacobian", mode=mode, a=r, b=rd)
+        pJ, pjd = model.mode_jacobian(mode, np.array(r), np.array(rd))
+        same(J, pJ)
+        same(jd, pjd)
+        rhs, monitors, totals = model.mode_closures(mode, motion)
+        same(call("flexible", p, "kernel_rhs", mode=mode, a=y, ag=ag), rhs(0.0, list(y)))
+        g, tot = call("flexible", p, "kernel_monitors", mode=mode, a=y, ag=ag)
+        same(g, monitors(0.0, list(y)))
+        if totals is None:
+            assert tot is None
+        else:
+            same(tot, totals(0.0, list(y)))
+        same(call("flexible", p, "mode_outputs", mode=mode, a=y), out_list(model, model.mode_outputs(mode, list(y))))
+        force = model.M_t * (model.g + abs(ag) + model.length_scale * state[3] ** 2 + model.omega ** 2 * abs(y[0]))
+        close(call("flexible", p, "contact_forces", mode=mode, a=pq.tolist(), b=pv.tolist(), ag=ag),
+              model.contact_forces(mode, pq, pv, ag), rtol=1e-12, scale=force)
+        frhs, fmon, ftot = model.functions_of(mode, motion)
+        same(call("flexible", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)))
+        g, tot = call("flexible", p, "monitors", mode=mode, a=y, ag=ag)
+        same(g, fmon(0.0, list(y)))
+        if ftot is None:
+            assert tot is None
+        else:
+            same(tot, ftot(0.0, list(y)))
+        assert call("flexible", p, "dofs_of", mode=mode) == list(model.dofs_of(mode))
+        same(call("flexible", p, "reduce_any", mode=mode, a=q, b=v), np.concatenate(model.reduce_any(mode, pq, pv)))
+        for shift in (0.0, state[4]):
+            same(call("flexible", p, "outputs_of", mode=mode, a=y, ag=shift),
+                 out_list(model, model.outputs_of(mode, list(y), shift)))
+        if mode != Mode.FLIGHT:
+            qs = pq + np.array([0.0, state[4], 0.0, 0.0])
+            assert call("flexible", p, "shift_of", mode=mode, a=qs.tolist()) == sliding.shift_of(model, mode, qs)
+            close(call("flexible", p, "force_totals", mode=mode, a=pq.tolist(), b=pv.tolist(), ag=ag),
+                  sliding.force_totals(model, mode, pq, pv, ag), rtol=1e-12, scale=force)
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE, AG)
+def test_flexible_sliding_modes(kw, state, ag):
+    model = FLEX(**kw)
+    p = values_of(model)
+    motion = ConstantMotion(ag)
+    acc = model.g + abs(ag) + model.length_scale * state[3] ** 2 + model.omega ** 2 * model.h * abs(state[0]) \
+        + model.omega * abs(state[2])
+    for mode in SLIDING:
+        y = flexible_state(model, mode, *state)
+        k = len(y) // 2
+        q, v = call("flexible", p, "embed_any", mode=mode, a=y)
+        pq, pv = model.embed_any(mode, y[:k], y[k:])
+        same(q, pq)
+        same(v, pv)
+        same(call("flexible", p, "reduce_any", mode=mode, a=q, b=v), np.concatenate(model.reduce_any(mode, pq, pv)))
+        rtol = LA_RTOL * slide_cond(model, mode, pq) * np.linalg.cond(model.mass_matrix(pq))
+        a, tau = call("flexible", p, "slide_motion", mode=mode, a=q, b=v, ag=ag)
+        pa, ptau = sliding.slide_motion(model, mode, pq, pv, ag)
+        close(a, pa, rtol, scale=acc)
+        close(tau, ptau, rtol, scale=model.M_t * acc)
+        frhs, fmon, ftot = model.functions_of(mode, motion)
+        close(call("flexible", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)), rtol, scale=acc)
+        g, tot = call("flexible", p, "monitors", mode=mode, a=y, ag=ag)
+        close(g, fmon(0.0, list(y)), rtol, scale=acc / model.g)
+        close(tot, ftot(0.0, list(y)), rtol, scale=model.M_t * acc)
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE, AG)
+def test_flexible_overturned_outputs(kw, state, ag):
+    """The pose at |phi| = pi/2 at rest (what the drivers report once overturned): outputs_of with zero
+    velocities (event-driven) and outputs(q, 0) (Moreau-Jean); energy the potential + strain energy."""
+    model = FLEX(**kw)
+    p = values_of(model)
+    for mode, phi in ((Mode.LEFT, 0.5 * math.pi), (Mode.RIGHT, -0.5 * math.pi)):
+        y = [state[0] * model.h, phi, 0.0, 0.0]
+        same(call("flexible", p, "outputs_of", mode=mode, a=y, ag=state[4]),
+             out_list(model, model.outputs_of(mode, y, state[4])))
+        q, _ = model.embed(mode, np.array(y[:2]), np.zeros(2))
+        same(call("flexible", p, "outputs", a=q.tolist(), b=[0.0] * 4), out_list(model, model.outputs(q, np.zeros(4))))
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE)
+def test_flexible_classical_impact_velocity(kw, state):
+    model = FLEX(**kw)
+    p = values_of(model)
+    u, _, ud, w = state[:4]
+    for pivot in (Mode.LEFT, Mode.RIGHT):
+        s_n = -(-1 if pivot == Mode.LEFT else 1)
+        w_minus = -s_n * (abs(w) + 1e-3)          # closes the gap of the other corner
+        q = np.array([u * model.h, 0.0, 0.0, 0.0])
+        v = np.array([ud, 0.0, -(-s_n) * model.b * w_minus, w_minus])
+        pv = model.classical_impact_velocity(q, v, pivot)
+        cv = call("flexible", p, "classical_impact_velocity", mode=pivot, a=q.tolist(), b=v.tolist())
+        if pv is None:
+            assert model.impact_rule == 0 and cv is None
+        else:
+            same(cv, pv)
+
+
+@SETTINGS
+@given(flexible_params(), st.floats(-1.57, 1.57), st.floats(-1e4, 1e4), st.floats(-1.0, 1.0),
+       st.floats(-1e4, 1e4))
+def test_flexible_initial_state(kw, phi_0, phi_dot_0, u_0, u_dot_0):
+    model = FLEX(**kw)
+    if phi_dot_0 > 5e3:
+        phi_0 = 0.0
+    initial = [phi_0, phi_dot_0, u_0 * model.h, u_dot_0]
+    mode, q, v = call("flexible", values_of(model), "initial_state", a=initial)
+    pm, pq, pv = model.initial_state(*initial)
+    assert mode == pm
+    same(q, pq)
+    same(v, pv)
+
+
+@pytest.mark.parametrize("name", [p.name for p in FLEX.parameters()])
+@pytest.mark.parametrize("bad", BAD_VALUES + (1e16, 1e14))
+def test_flexible_parameter_checks_give_the_python_messages(name, bad):
+    names = [p.name for p in FLEX.parameters()]
+    params = values_of(FLEX())
+    params[names.index(name)] = bad
+    try:
+        FLEX(**dict(zip(names, params)))
+    except ValueError as exc:
+        with pytest.raises(ValueError) as info:
+            call("flexible", params, "derived")
+        assert str(info.value) == str(exc)
+    else:
+        same(call("flexible", params, "derived")["p"], values_of(FLEX(**dict(zip(names, params)))))
+
+
+@pytest.mark.parametrize("kw", [dict(m_c=0.0, m_b=0.0), dict(m_c=0.0, rho=0.0), dict(m_c=0.0, m_b=1e-300, rho=1e-300),
+                                dict(EI=1e15), dict(EI=1e12, m=1.0, m_c=0.0, h=0.1)])
+def test_flexible_derived_checks_give_the_python_messages(kw):
+    names = [p.name for p in FLEX.parameters()]
+    params = values_of(FLEX())
+    for k, value in kw.items():
+        params[names.index(k)] = value
+    with pytest.raises(ValueError) as exc:
+        FLEX(**dict(zip(names, params)))
+    with pytest.raises(ValueError) as info:
+        call("flexible", params, "derived")
+    assert str(info.value) == str(exc.value)
+
+
+@pytest.mark.parametrize("initial", [(0.1, 0.0, 2.0, 0.0), (0.1, 0.0, -1.6, 0.0), (0.0, 0.0, 0.0, 2e4),
+                                     (2.0, 0.0, 0.0, 0.0), (0.0, 0.0, math.nan, 0.0), (0.0, 0.1, 1.5, -1e4)])
+def test_flexible_initial_value_checks_give_the_python_messages(initial):
+    model = FLEX()
+    try:
+        model.initial_state(*initial)
+    except ValueError as exc:
+        with pytest.raises(ValueError) as info:
+            call("flexible", values_of(model), "initial_state", a=list(initial))
+        assert str(info.value) == str(exc)
+    else:
+        call("flexible", values_of(model), "initial_state", a=list(initial))

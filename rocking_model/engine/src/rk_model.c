@@ -17,6 +17,7 @@
 
 static const rk_model_ops *const KINDS[] = {
     &RK_RIGID_BLOCK,
+    &RK_FLEXIBLE_OSCILLATOR,
     NULL
 };
 
