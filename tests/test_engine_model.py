@@ -619,6 +619,19 @@ def test_flexible_classical_impact_velocity(kw, state):
             assert model.impact_rule == 0 and cv is None
         else:
             same(cv, pv)
+        if model.impact_rule == 1:
+            # a rate that opens the other corner's gap, and a sliding mode as the pivot: the Python raises
+            bad = v.copy()
+            bad[3] = -w_minus
+            with pytest.raises(ValueError):
+                model.classical_impact_velocity(q, bad, pivot)
+            with pytest.raises(ValueError):
+                call("flexible", p, "classical_impact_velocity", mode=pivot, a=q.tolist(), b=bad.tolist())
+            slide = Mode.LEFT_SLIDE_POS if pivot == Mode.LEFT else Mode.RIGHT_SLIDE_NEG
+            with pytest.raises(ValueError):
+                model.classical_impact_velocity(q, v, slide)
+            with pytest.raises(ValueError):
+                call("flexible", p, "classical_impact_velocity", mode=slide, a=q.tolist(), b=v.tolist())
 
 
 @SETTINGS

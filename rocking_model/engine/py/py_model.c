@@ -260,7 +260,12 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         return Py_BuildValue("(iNN)", md, list_of(x1, n), list_of(x2, n));
     }
     if (strcmp(name, "classical_impact_velocity") == 0) {
-        if (m.ops->classical_impact_velocity == NULL || !m.ops->classical_impact_velocity(&m, a, b, mode, x1))
+        int rc = m.ops->classical_impact_velocity == NULL ? 0 : m.ops->classical_impact_velocity(&m, a, b, mode, x1);
+        if (rc < 0) {
+            PyErr_SetString(PyExc_ValueError, "classical_impact_velocity: invalid impact (the Python raises here)");
+            return NULL;
+        }
+        if (rc == 0)
             Py_RETURN_NONE;
         return list_of(x1, n);
     }
