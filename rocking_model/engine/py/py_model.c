@@ -148,8 +148,20 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sOs|iOOd", kwlist, &kind, &params_obj, &name, &mode, &a_obj,
                                      &b_obj, &ag))
         return NULL;
+    rk_model_ops bare;
     if (build_model(kind, params_obj, &m) < 0)
         return NULL;
+    if (strncmp(name, "bare:", 5) == 0) {
+        /* a kernel with only the required functions (plus contact_forces and the model's own rules): the
+         * generic fallbacks of rk_model.c, as a third model would get them */
+        bare = *m.ops;
+        bare.inverse_mass_matrix = NULL;
+        bare.mode_rhs = NULL;
+        bare.mode_monitors = NULL;
+        bare.mode_outputs = NULL;
+        m.ops = &bare;
+        name += 5;
+    }
     if (read_list(a_obj, a, N_ALL, &na) < 0 || read_list(b_obj, b, N_ALL, &nb) < 0)
         return NULL;
     n = m.ops->n_dof;
