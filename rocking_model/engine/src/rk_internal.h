@@ -127,6 +127,15 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
 rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *samples, long long n_samples,
                     long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
                     unsigned flags, rk_error *err);
+/* (part D) rk_ed_run with samples writes the rows of the samples only, n_samples rows (the Python's ``_run``);
+ * the row of the current state that Integrator.sample puts first is rk_ed_row(e, e->core.s.ed.mode,
+ * e->core.s.ed.y, e->core.s.ed.overturned, ...), written by the caller before the call. flags:
+ * RK_ADVANCE_CONTINUOUS skips the settle at the start (the Python's ``kink``). */
+/** One row of Integrator.sample for the reduced state y of mode (shift, friction_demand, painleve, impacts:
+ *  the current ones): modes[0] (modes.OVERTURNED = 10 when overturned), values[0 .. n_outputs + 1] (the
+ *  outputs, friction_demand, painleve), impacts[0], over[0]. */
+void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *modes, double *values,
+               long long *impacts, int *over);
 void rk_ed_full_state(rk_engine *e, double *q, double *v);
 void rk_ed_outputs(rk_engine *e, double *out);
 rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
