@@ -88,6 +88,9 @@ class Simulator:
         answer, are only kept in ``last_reports`` for the caller: the FMUs log them), or "ignore".
         ``last_reports`` keeps the reports of the last advance in every case.
     t0 : [s] start time.
+    engine : "python" (default: the reference implementation in Python) or "c" (the compiled engine of
+        `rocking_model.engine`: the same algorithms, steps and results to round-off, the same state format both
+        ways, much faster).
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
 
@@ -100,7 +103,7 @@ class Simulator:
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,
                  max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
-                 on_report: str = "warn", **initial):
+                 on_report: str = "warn", engine: str = "python", **initial):
         if not isinstance(model, RockingModel):
             raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
         self.model = model
@@ -128,7 +131,15 @@ class Simulator:
                                                                "ignore": "ignore"})
         options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
                                 impact_log_size=impact_log_size, tolerances=tolerances)
-        self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
+        from .engine import ENGINES
+
+        self.engine = check_choice("engine", engine, ENGINES)
+        if self.engine == "c":
+            from .engine import CompiledIntegrator
+
+            self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)
+        else:
+            self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
         # the attribute replaced (never mutated) whenever the state changes: caches key on its identity
         self._token = self.integrator.STATE_TOKEN
         #: `Report`s of the last advance

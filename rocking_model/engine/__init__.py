@@ -1,3 +1,249 @@
 """The compiled engine (issue 21): C sources in ``src/``, the extension module `rocking_model._engine`.
 
-See ``DESIGN.md`` in this folder for the architecture, the C API and the task list of each part."""
+See ``DESIGN.md`` in this folder for the architecture, the C API and the task list of each part.
+
+`CompiledIntegrator` implements the `rocking_model.integrators.base.Integrator` contract on top of
+`rocking_model._engine.Engine`, so that `Simulator(..., engine="c")`, `simulate`, the CLI, the ensembles and the
+FMUs run the C engine unchanged; `motion_spec` turns a `GroundMotion` into the plain tuple the engine reads.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..ground_motion import (CheckedMotion, ConstantMotion, GroundMotion, LinearMotion, SampledMotion, ScaledMotion,
+                             SinePulse)
+from ..integrators.base import SCHEMES, Integrator, Report
+from ..modes import ContactState
+
+__all__ = ["CompiledIntegrator", "motion_spec", "ENGINES", "available"]
+
+#: the accepted values of ``Simulator(engine=...)``
+ENGINES = {"c": "c", "python": "python"}
+
+
+def available() -> bool:
+    """Whether the extension module was built (``pip install .`` builds it)."""
+    try:
+        from .. import _engine  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def motion_spec(gm: GroundMotion) -> tuple:
+    """The engine's description of a ground motion: the classes the C engine evaluates itself (same formulas,
+    bit for bit: rk_motion.c), any other one as a callback into Python (exact, slower)."""
+    cls = type(gm)
+    if cls is ConstantMotion:
+        return ("constant", gm.value)
+    if cls is LinearMotion:
+        return ("linear", gm.value, gm.rate, gm.t_ref)
+    if cls is SampledMotion:
+        return ("sampled", np.ascontiguousarray(gm.t, dtype=float), np.ascontiguousarray(gm.ag, dtype=float))
+    if cls is SinePulse:
+        return ("sine", gm.A, gm.omega_p, gm.t0)
+    if cls is ScaledMotion and gm.motion.peak_bound is not None:
+        # (a scaled motion without a known peak is checked value by value: a callback, as the Python runs it)
+        return ("scaled", gm.factor, motion_spec(gm.motion))
+    if cls is CheckedMotion and type(gm.motion) in (SampledMotion, SinePulse, LinearMotion, ConstantMotion):
+        return motion_spec(gm.motion)
+    constant = bool(getattr(gm, "constant", False))
+    return ("callback", gm, constant, float(getattr(gm, "value", 0.0)) if constant else 0.0)
+
+
+class _Log:
+    """What the Simulator reads of a `BoundedLog`: tail() and maxlen (the engine holds the log)."""
+
+    def __init__(self, integ):
+        self._integ = integ
+
+    @property
+    def maxlen(self):
+        return self._integ._options.impact_log_size
+
+    def tail(self) -> list:
+        return self._integ._engine.impact_times
+
+    def __len__(self):
+        return len(self.tail())
+
+    def __iter__(self):
+        return iter(self.tail())
+
+
+class CompiledIntegrator(Integrator):
+    """An integration scheme run by the C engine: the same algorithm as the Python scheme of the same name
+    (``moreau_jean`` or ``event_driven``), the same state format (`get_state` / `set_state`), the same reports and
+    errors. The checkpoint around an advance is a copy of a C struct, the outputs are computed by the engine on
+    demand."""
+
+    engine = "c"
+
+    def __init__(self, model, scheme: str, mode, q, v, t0: float, options):
+        from .. import _engine
+
+        ref_cls = SCHEMES[scheme]
+        self.name, self.code, self.summary = ref_cls.name, ref_cls.code, ref_cls.summary
+        self.STATE_KEYS = ref_cls.STATE_KEYS
+        self.model = model
+        self._scheme_cls = ref_cls
+        self._options = options
+        self._t0 = float(t0)
+        self._start = (int(mode), [float(a) for a in q], [float(a) for a in v])
+        self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
+        self._names = self._engine.output_names
+        self._t_fail = None
+        self.reports = []
+        self.impact_times = _Log(self)
+
+    @classmethod
+    def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
+        # the Python scheme's own checks of its options first (the same messages), then the engine's
+        SCHEMES[scheme].from_options(model, mode, q, v, t0, options)
+        return cls(model, scheme, mode, q, v, t0, options)
+
+    def _engine_args(self):
+        model = self.model
+        params = [float(getattr(model, p.name)) for p in type(model).parameters()]
+        return type(model).__name__, params
+
+    def _engine_kwargs(self):
+        o = self._options
+        return dict(scheme=self._scheme_cls.code, t0=self._t0, dt_max=float(o.dt_max), tolerance=float(o.tolerance),
+                    theta=float(o.theta), zeno_tol=float(o.zeno_tol), method=o.method,
+                    impact_log_size=o.impact_log_size, tolerances=o.tolerances)
+
+    # ------------------------------------------------------------------ pickling (ensembles)
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_engine"] = self._engine.snapshot()
+        state.pop("impact_times", None)
+        return state
+
+    def __setstate__(self, state):
+        from .. import _engine
+
+        snap = state.pop("_engine")
+        self.__dict__.update(state)
+        self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
+        self._engine.restore(snap)
+        self.impact_times = _Log(self)
+
+    # ------------------------------------------------------------------ attributes
+    @property
+    def t(self) -> float:
+        return self._engine.t if self._t_fail is None else self._t_fail
+
+    @property
+    def mode(self):
+        return self.model.mode_code(self._engine.mode)
+
+    @property
+    def impacts(self) -> int:
+        return self._engine.impacts
+
+    @property
+    def overturned(self) -> bool:
+        return self._engine.overturned
+
+    @property
+    def n_steps(self) -> int:
+        return self._engine.n_steps
+
+    @property
+    def friction_demand(self) -> float:
+        return self._engine.friction_demand
+
+    @property
+    def painleve(self) -> int:
+        return self._engine.painleve
+
+    @property
+    def contact_code(self) -> int:
+        return self._engine.contact_code
+
+    @property
+    def contacts(self) -> tuple:
+        return tuple(ContactState(s) for s in self._engine.contacts())
+
+    #: the Simulator keys its output cache on the identity of this attribute: a new object every read (the
+    #: engine caches the outputs itself, by a state token)
+    STATE_TOKEN = "_fresh"
+
+    @property
+    def _fresh(self):
+        return object()
+
+    # ------------------------------------------------------------------ checkpoint (Checkpointed)
+    def checkpoint(self):
+        self._engine.checkpoint()
+        return None
+
+    def rollback(self, snap) -> None:
+        self._t_fail = None
+        self._engine.rollback()
+
+    def commit(self, snap) -> None:
+        self._engine.commit()
+
+    # ------------------------------------------------------------------ stepping
+    def _run(self, call):
+        from .. import _engine
+
+        try:
+            call()
+        except _engine.NonFiniteError as exc:
+            self._t_fail = self._engine.fail_time
+            raise FloatingPointError(str(exc)) from None
+        except np.linalg.LinAlgError:
+            self._t_fail = self._engine.fail_time
+            raise
+        finally:
+            if self._engine.report_count:
+                self.reports = [Report(kind, t, msg) for kind, t, msg in self._engine.reports()]
+
+    def advance(self, t_end: float, ag, max_steps: int | None = None) -> None:
+        eng = self._engine
+        if type(ag) is ConstantMotion:
+            self._run(lambda: eng.advance(t_end, ag.value, 0.0, max_steps))
+        else:
+            spec = motion_spec(ag)
+            self._run(lambda: eng.advance_motion(t_end, spec, max_steps))
+
+    def sample(self, times, ag, max_steps: int | None = None):
+        times = np.ascontiguousarray(times, dtype=float)
+        n = times.size + 1
+        names = self._names
+        modes = np.empty(n, dtype=np.intc)
+        values = np.empty((n, len(names) + 2), dtype=float)
+        impacts = np.empty(n, dtype=np.int64)
+        overturned = np.empty(n, dtype=np.intc)
+        spec = motion_spec(ag)
+        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned))
+        out = {name: values[:, j].copy() for j, name in enumerate(names)}
+        out["friction_demand"] = values[:, len(names)].copy()
+        out["painleve"] = values[:, len(names) + 1].astype(np.int64)
+        return modes.astype(np.int64), out, impacts, overturned.astype(bool)
+
+    # ------------------------------------------------------------------ state
+    def state(self):
+        q, v = self._engine.full_state()
+        return np.array(q), np.array(v)
+
+    def outputs(self) -> dict:
+        return dict(zip(self._names, self._engine.outputs()))
+
+    def get_state(self) -> dict:
+        state = self._engine.get_state()
+        return {key: state[key] for key in self.STATE_KEYS}
+
+    def set_state(self, state) -> None:
+        """Load a `get_state` dict: checked field by field by the Python scheme itself (the same messages), then
+        loaded into the engine (which checks it again in C); nothing changes on error."""
+        ref = self._scheme_cls.from_options(self.model, *self._start, self._t0, self._options)
+        ref.set_state(state)
+        self._engine.set_state(ref.get_state())
+
+    def report(self, kind: str, t: float, message: str) -> None:
+        self.reports.append(Report(kind, float(t), message))
+

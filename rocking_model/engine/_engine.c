@@ -7,26 +7,16 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
-#include "src/rk_engine.h"
+#include "src/rk_internal.h"
+
+#include <math.h>
+#include <string.h>
 
 /* the test entry points of parts A-D (rocking_model/engine/py/py_*.c) */
 extern PyMethodDef rk_py_model_methods[];
 extern PyMethodDef rk_py_contact_methods[];
 extern PyMethodDef rk_py_rk_methods[];
 extern PyMethodDef rk_py_ed_methods[];
-
-static PyObject *raise_status(rk_status status, const char *message)
-{
-    PyObject *type;
-    switch (status) {
-    case RK_ERR_VALUE: case RK_ERR_NONFINITE: type = PyExc_ValueError; break;
-    case RK_ERR_NOT_IMPLEMENTED: type = PyExc_NotImplementedError; break;
-    case RK_ERR_MEMORY: type = PyExc_MemoryError; break;
-    default: type = PyExc_RuntimeError; break;
-    }
-    PyErr_SetString(type, message);
-    return NULL;
-}
 
 static int read_doubles(PyObject *seq, const char *name, double *out, int cap, int *n)
 {
@@ -60,6 +50,1213 @@ static int read_doubles(PyObject *seq, const char *name, double *out, int cap, i
     *n = (int)len;
     return 0;
 }
+
+/* ------------------------------------------------------------------------------------------ errors */
+
+/** NonFiniteError: the motion overflowed (RK_ERR_NONFINITE): a ValueError; the Python layer turns it into the
+ *  Simulator's "the motion is not finite ..." message. Created at module init. */
+static PyObject *NonFiniteError = NULL;
+
+/** Raise the Python exception of a C status (DESIGN.md "Error handling"). */
+static PyObject *raise_status(rk_status status, const char *message)
+{
+    PyObject *type = NULL, *mod = NULL;
+    switch (status) {
+    case RK_ERR_VALUE: type = PyExc_ValueError; break;
+    case RK_ERR_NONFINITE: type = NonFiniteError != NULL ? NonFiniteError : PyExc_ValueError; break;
+    case RK_ERR_NOT_IMPLEMENTED: type = PyExc_NotImplementedError; break;
+    case RK_ERR_MEMORY: type = PyExc_MemoryError; break;
+    case RK_ERR_WORK_LIMIT:
+        mod = PyImport_ImportModule("rocking_model.validation");
+        if (mod != NULL)
+            type = PyObject_GetAttrString(mod, "WorkLimitError");
+        break;
+    case RK_ERR_SOLVER:
+        mod = PyImport_ImportModule("numpy.linalg");
+        if (mod != NULL)
+            type = PyObject_GetAttrString(mod, "LinAlgError");
+        break;
+    default: type = PyExc_RuntimeError; break;
+    }
+    if (mod != NULL) {
+        Py_DECREF(mod);
+        if (type == NULL)
+            return NULL;
+        PyErr_SetString(type, message);
+        Py_DECREF(type);
+        return NULL;
+    }
+    if (type == NULL)
+        return NULL;      /* the import failed: its exception is set */
+    PyErr_SetString(type, message);
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------------------------ motions
+ * A motion spec (built by rocking_model.engine.motion_spec from a GroundMotion) is a tuple:
+ *   ("constant", value) | ("linear", value, rate, t_ref) | ("sampled", t, ag) with t, ag float64 buffers |
+ *   ("sine", A, omega_p, t0) | ("scaled", factor, inner_spec) | ("callback", motion, constant, value)
+ * where a callback motion is any Python GroundMotion (called with the GIL held). */
+
+#define MAX_MOTIONS 8
+
+typedef struct callback_ctx {
+    PyObject *motion;                   /* borrowed */
+    PyObject *exc_type, *exc_value, *exc_tb;   /* the first exception a call raised (owned) */
+} callback_ctx;
+
+typedef struct motion_holder {
+    rk_motion m[MAX_MOTIONS];
+    int n_m;
+    Py_buffer bufs[2 * MAX_MOTIONS];
+    int n_bufs;
+    callback_ctx cbs[MAX_MOTIONS];
+    int n_cbs;
+} motion_holder;
+
+static void cb_store(callback_ctx *c, char *msg)
+{
+    PyObject *type, *value, *tb;
+    PyErr_Fetch(&type, &value, &tb);
+    if (msg != NULL) {
+        PyObject *text = value != NULL ? PyObject_Str(value) : NULL;
+        const char *s = text != NULL ? PyUnicode_AsUTF8(text) : NULL;
+        snprintf(msg, RK_MSG_LEN, "%s", s != NULL ? s : "ag: the ground motion raised an exception");
+        Py_XDECREF(text);
+        PyErr_Clear();
+    }
+    if (c->exc_type == NULL) {
+        c->exc_type = type;
+        c->exc_value = value;
+        c->exc_tb = tb;
+    } else {
+        Py_XDECREF(type);
+        Py_XDECREF(value);
+        Py_XDECREF(tb);
+    }
+}
+
+static double cb_eval(void *ctx, double t, int *failed, char *msg)
+{
+    callback_ctx *c = (callback_ctx *)ctx;
+    PyObject *r = PyObject_CallFunction(c->motion, "d", t);
+    double x;
+    if (r == NULL) {
+        cb_store(c, msg);
+        *failed = 1;
+        return NAN;
+    }
+    x = PyFloat_AsDouble(r);
+    Py_DECREF(r);
+    if (x == -1.0 && PyErr_Occurred()) {
+        cb_store(c, msg);
+        *failed = 1;
+        return NAN;
+    }
+    return x;
+}
+
+static double cb_breakpoint(void *ctx, double t, int *failed, char *msg)
+{
+    callback_ctx *c = (callback_ctx *)ctx;
+    PyObject *r = PyObject_CallMethod(c->motion, "next_breakpoint", "d", t);
+    double x;
+    if (r == NULL) {
+        cb_store(c, msg);
+        *failed = 1;
+        return NAN;
+    }
+    x = PyFloat_AsDouble(r);
+    Py_DECREF(r);
+    if (x == -1.0 && PyErr_Occurred()) {
+        cb_store(c, msg);
+        *failed = 1;
+        return NAN;
+    }
+    return x;
+}
+
+static int cb_continuous(void *ctx, double tb)
+{
+    callback_ctx *c = (callback_ctx *)ctx;
+    PyObject *r = PyObject_CallMethod(c->motion, "continuous_at", "d", tb);
+    int yes;
+    if (r == NULL) {
+        cb_store(c, NULL);
+        return 0;
+    }
+    yes = PyObject_IsTrue(r);
+    Py_DECREF(r);
+    if (yes < 0) {
+        cb_store(c, NULL);
+        return 0;
+    }
+    return yes;
+}
+
+static void holder_release(motion_holder *h)
+{
+    int i;
+    for (i = 0; i < h->n_bufs; i++)
+        PyBuffer_Release(&h->bufs[i]);
+    for (i = 0; i < h->n_cbs; i++) {
+        Py_XDECREF(h->cbs[i].exc_type);
+        Py_XDECREF(h->cbs[i].exc_value);
+        Py_XDECREF(h->cbs[i].exc_tb);
+    }
+    h->n_bufs = h->n_cbs = h->n_m = 0;
+}
+
+/** The first exception a callback raised, restored as the current one (1), or 0 if none. */
+static int holder_reraise(motion_holder *h)
+{
+    int i;
+    for (i = 0; i < h->n_cbs; i++) {
+        callback_ctx *c = &h->cbs[i];
+        if (c->exc_type != NULL) {
+            PyErr_Restore(c->exc_type, c->exc_value, c->exc_tb);
+            c->exc_type = c->exc_value = c->exc_tb = NULL;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static int get_double_buffer(motion_holder *h, PyObject *obj, const char *name, const double **data,
+                             Py_ssize_t *n)
+{
+    Py_buffer *b;
+    if (h->n_bufs >= 2 * MAX_MOTIONS) {
+        PyErr_SetString(PyExc_ValueError, "motion spec: too many arrays");
+        return -1;
+    }
+    b = &h->bufs[h->n_bufs];
+    if (PyObject_GetBuffer(obj, b, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s must be a contiguous float64 array", name);
+        return -1;
+    }
+    h->n_bufs++;
+    if (b->itemsize != (Py_ssize_t)sizeof(double) || b->format == NULL || strcmp(b->format, "d") != 0
+        || b->ndim != 1) {
+        PyErr_Format(PyExc_TypeError, "%s must be a 1-D float64 array", name);
+        return -1;
+    }
+    *data = (const double *)b->buf;
+    *n = b->shape != NULL ? b->shape[0] : b->len / (Py_ssize_t)sizeof(double);
+    return 0;
+}
+
+/** Parse a motion spec into h->m[...]; returns the index of the motion or -1 with an exception. */
+static int parse_motion(motion_holder *h, PyObject *spec, int depth)
+{
+    const char *kind;
+    PyObject *k;
+    Py_ssize_t n;
+    int idx;
+    rk_motion *m;
+    rk_error err;
+    if (depth > 4 || h->n_m >= MAX_MOTIONS) {
+        PyErr_SetString(PyExc_ValueError, "motion spec: nested too deep");
+        return -1;
+    }
+    if (!PyTuple_Check(spec) || PyTuple_GET_SIZE(spec) < 2) {
+        PyErr_SetString(PyExc_TypeError, "motion spec must be a tuple (kind, ...)");
+        return -1;
+    }
+    n = PyTuple_GET_SIZE(spec);
+    k = PyTuple_GET_ITEM(spec, 0);
+    kind = PyUnicode_Check(k) ? PyUnicode_AsUTF8(k) : NULL;
+    if (kind == NULL) {
+        PyErr_SetString(PyExc_TypeError, "motion spec: the kind must be a str");
+        return -1;
+    }
+    idx = h->n_m++;
+    m = &h->m[idx];
+#define ARG(i) PyFloat_AsDouble(PyTuple_GET_ITEM(spec, (i)))
+    if (strcmp(kind, "constant") == 0 && n == 2) {
+        double value = ARG(1);
+        if (PyErr_Occurred())
+            return -1;
+        rk_motion_constant(m, value);
+    } else if (strcmp(kind, "linear") == 0 && n == 4) {
+        double value = ARG(1), rate = ARG(2), t_ref = ARG(3);
+        if (PyErr_Occurred())
+            return -1;
+        rk_motion_linear(m, value, rate, t_ref);
+    } else if (strcmp(kind, "sampled") == 0 && n == 3) {
+        const double *t, *ag;
+        Py_ssize_t nt, na;
+        if (get_double_buffer(h, PyTuple_GET_ITEM(spec, 1), "t", &t, &nt) < 0
+            || get_double_buffer(h, PyTuple_GET_ITEM(spec, 2), "ag", &ag, &na) < 0)
+            return -1;
+        if (nt != na) {
+            PyErr_SetString(PyExc_ValueError, "ground motion: t and ag must be 1-D arrays of equal length >= 2");
+            return -1;
+        }
+        if (rk_motion_sampled(m, t, ag, (long long)nt, &err) != RK_OK) {
+            raise_status(err.status, err.message);
+            return -1;
+        }
+    } else if (strcmp(kind, "sine") == 0 && n == 4) {
+        double A = ARG(1), w = ARG(2), t0 = ARG(3);
+        if (PyErr_Occurred())
+            return -1;
+        if (rk_motion_sine(m, A, w, t0, &err) != RK_OK) {
+            raise_status(err.status, err.message);
+            return -1;
+        }
+    } else if (strcmp(kind, "scaled") == 0 && n == 3) {
+        double factor = ARG(1);
+        int inner;
+        if (PyErr_Occurred())
+            return -1;
+        inner = parse_motion(h, PyTuple_GET_ITEM(spec, 2), depth + 1);
+        if (inner < 0)
+            return -1;
+        memset(m, 0, sizeof(*m));
+        m->kind = RK_MOTION_SCALED;
+        m->factor = factor;
+        m->inner = &h->m[inner];
+        m->constant = h->m[inner].constant;
+        m->value = factor * h->m[inner].value;
+    } else if (strcmp(kind, "callback") == 0 && n == 4) {
+        callback_ctx *c;
+        int constant = PyObject_IsTrue(PyTuple_GET_ITEM(spec, 2));
+        double value = ARG(3);
+        if (constant < 0 || PyErr_Occurred())
+            return -1;
+        if (!PyCallable_Check(PyTuple_GET_ITEM(spec, 1))) {
+            PyErr_SetString(PyExc_TypeError, "motion spec: a callback motion must be callable");
+            return -1;
+        }
+        c = &h->cbs[h->n_cbs++];
+        c->motion = PyTuple_GET_ITEM(spec, 1);
+        c->exc_type = c->exc_value = c->exc_tb = NULL;
+        memset(m, 0, sizeof(*m));
+        m->kind = RK_MOTION_CALLBACK;
+        m->fn = cb_eval;
+        m->fn_breakpoint = cb_breakpoint;
+        m->fn_continuous = cb_continuous;
+        m->ctx = c;
+        m->constant = constant;
+        m->value = value;
+    } else {
+        PyErr_Format(PyExc_ValueError, "motion spec: unknown kind %R or wrong length %zd", k, n);
+        return -1;
+    }
+#undef ARG
+    return idx;
+}
+
+/* ------------------------------------------------------------------------------------------ Engine */
+
+typedef struct EngineObject {
+    PyObject_HEAD
+    rk_engine *e;
+} EngineObject;
+
+static int read_options(PyObject *kw, rk_options *o);
+
+static int engine_init(EngineObject *self, PyObject *args, PyObject *kwargs)
+{
+    static char *kwlist[] = {"kind", "params", "initial", "scheme", "t0", "dt_max", "tolerance", "theta",
+                             "zeno_tol", "method", "impact_log_size", "max_events", "tolerances", "state", NULL};
+    const char *kind;
+    PyObject *params_obj, *initial_obj = Py_None, *scheme = NULL, *method = NULL, *log_size = Py_None;
+    PyObject *tolerances = Py_None, *state = Py_None;
+    double params[RK_MAX_PARAMS], initial[RK_MAX_INITIAL];
+    int n_params, n_initial, max_events = 100000;
+    rk_options o;
+    rk_error err;
+    rk_engine *e;
+    rk_options_default(&o);
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sO|O$OdddddOOiOO", kwlist, &kind, &params_obj, &initial_obj,
+                                     &scheme, &o.t0, &o.dt_max, &o.tolerance, &o.theta, &o.zeno_tol, &method,
+                                     &log_size, &max_events, &tolerances, &state))
+        return -1;
+    o.max_events = max_events;
+    if (read_doubles(params_obj, "params", params, RK_MAX_PARAMS, &n_params) < 0
+        || read_doubles(initial_obj, "initial", initial, RK_MAX_INITIAL, &n_initial) < 0)
+        return -1;
+    if (scheme != NULL) {
+        if (PyUnicode_Check(scheme)) {
+            const char *s = PyUnicode_AsUTF8(scheme);
+            if (s != NULL && strcmp(s, "moreau_jean") == 0)
+                o.scheme = RK_SCHEME_MOREAU_JEAN;
+            else if (s != NULL && strcmp(s, "event_driven") == 0)
+                o.scheme = RK_SCHEME_EVENT_DRIVEN;
+            else {
+                PyErr_Format(PyExc_ValueError, "scheme = %R is not supported; allowed values: 'moreau_jean', "
+                             "'event_driven', 0, 1", scheme);
+                return -1;
+            }
+        } else {
+            long s = PyLong_AsLong(scheme);
+            if (s == -1 && PyErr_Occurred())
+                return -1;
+            o.scheme = (rk_scheme)s;
+        }
+    }
+    if (method != NULL) {
+        if (PyUnicode_Check(method)) {
+            const char *s = PyUnicode_AsUTF8(method);
+            if (s != NULL && strcmp(s, "DOP853") == 0)
+                o.method = RK_METHOD_DOP853;
+            else if (s != NULL && strcmp(s, "DOPRI5") == 0)
+                o.method = RK_METHOD_DOPRI5;
+            else {
+                PyErr_Format(PyExc_ValueError, "method = %R is not supported; allowed values: 'DOP853', 'DOPRI5'",
+                             method);
+                return -1;
+            }
+        } else {
+            long s = PyLong_AsLong(method);
+            if (s == -1 && PyErr_Occurred())
+                return -1;
+            o.method = (rk_method)s;
+        }
+    }
+    if (log_size != Py_None) {
+        long long n = PyLong_AsLongLong(log_size);
+        if (n == -1 && PyErr_Occurred())
+            return -1;
+        if (n < 0) {
+            PyErr_Format(PyExc_ValueError, "impact_log_size = %lld is out of range; allowed range [0, inf) or None "
+                         "(keep all)", n);
+            return -1;
+        }
+        o.impact_log_size = n;
+    } else {
+        o.impact_log_size = -1;
+    }
+    if (tolerances != Py_None && read_options(tolerances, &o) < 0)
+        return -1;
+    if (state != Py_None) {
+        PyObject *mode_obj, *q_obj, *v_obj;
+        double q[RK_MAX_DOF], v[RK_MAX_DOF];
+        int nq, nv;
+        long mode;
+        if (!PyArg_ParseTuple(state, "OOO", &mode_obj, &q_obj, &v_obj))
+            return -1;
+        mode = PyLong_AsLong(mode_obj);
+        if (mode == -1 && PyErr_Occurred())
+            return -1;
+        if (read_doubles(q_obj, "q", q, RK_MAX_DOF, &nq) < 0 || read_doubles(v_obj, "v", v, RK_MAX_DOF, &nv) < 0)
+            return -1;
+        if (nq != nv) {
+            PyErr_SetString(PyExc_ValueError, "state: q and v must have the same length");
+            return -1;
+        }
+        e = rk_engine_create_state(kind, params, n_params, (int)mode, q, v, nq, &o, &err);
+    } else {
+        e = rk_engine_create(kind, params, n_params, initial, n_initial, &o, &err);
+    }
+    if (e == NULL) {
+        raise_status(err.status, err.message);
+        return -1;
+    }
+    rk_engine_free(self->e);
+    self->e = e;
+    return 0;
+}
+
+/** ContactTolerances (any object with its attribute names) into o->tolerances. */
+static int read_options(PyObject *tol, rk_options *o)
+{
+    static const char *const names[] = {"gap", "step_gap", "grazing", "rest_velocity", "step_rest_velocity",
+                                        "event", "rise", "clearly_open", "stateless_step", "lcp_exact",
+                                        "lcp_hint", "demand_floor"};
+    double *fields[12];
+    rk_tolerances *t = &o->tolerances;
+    int i;
+    PyObject *x;
+    fields[0] = &t->gap; fields[1] = &t->step_gap; fields[2] = &t->grazing; fields[3] = &t->rest_velocity;
+    fields[4] = &t->step_rest_velocity; fields[5] = &t->event; fields[6] = &t->rise; fields[7] = &t->clearly_open;
+    fields[8] = &t->stateless_step; fields[9] = &t->lcp_exact; fields[10] = &t->lcp_hint;
+    fields[11] = &t->demand_floor;
+    for (i = 0; i < 12; i++) {
+        x = PyObject_GetAttrString(tol, names[i]);
+        if (x == NULL)
+            return -1;
+        *fields[i] = PyFloat_AsDouble(x);
+        Py_DECREF(x);
+        if (*fields[i] == -1.0 && PyErr_Occurred())
+            return -1;
+    }
+    x = PyObject_GetAttrString(tol, "sub_samples");
+    if (x == NULL)
+        return -1;
+    {
+        long n = PyLong_AsLong(x);
+        Py_DECREF(x);
+        if (n == -1 && PyErr_Occurred())
+            return -1;
+        t->sub_samples = (int)n;
+    }
+    return 0;
+}
+
+static void engine_dealloc(EngineObject *self)
+{
+    PyTypeObject *type = Py_TYPE(self);
+    freefunc tp_free = (freefunc)PyType_GetSlot(type, Py_tp_free);
+    rk_engine_free(self->e);
+    self->e = NULL;
+    tp_free(self);
+    Py_DECREF(type);      /* a heap type: each instance holds a reference */
+}
+
+static int ready(EngineObject *self)
+{
+    if (self->e == NULL) {
+        PyErr_SetString(PyExc_RuntimeError, "Engine is not initialised");
+        return 0;
+    }
+    return 1;
+}
+
+static int read_max_steps(PyObject *obj, long long *out)
+{
+    if (obj == NULL || obj == Py_None) {
+        *out = -1;
+        return 0;
+    }
+    *out = PyLong_AsLongLong(obj);
+    if (*out == -1 && PyErr_Occurred())
+        return -1;
+    if (*out < 0) {
+        PyErr_Format(PyExc_ValueError, "max_steps = %lld is out of range; allowed range [1, 2^53] or None "
+                     "(unlimited)", *out);
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *engine_advance(EngineObject *self, PyObject *args, PyObject *kwargs)
+{
+    static char *kwlist[] = {"t_end", "ag0", "slope", "max_steps", "continuous", "linear", NULL};
+    double t_end, ag0 = 0.0, slope = 0.0;
+    PyObject *ms = Py_None;
+    int continuous = 0, linear = 0;
+    long long max_steps;
+    unsigned flags = 0u;
+    rk_status st;
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "d|ddOpp", kwlist, &t_end, &ag0, &slope, &ms,
+                                                      &continuous, &linear))
+        return NULL;
+    if (read_max_steps(ms, &max_steps) < 0)
+        return NULL;
+    if (continuous)
+        flags |= RK_ADVANCE_CONTINUOUS;
+    if (linear)
+        flags |= RK_ADVANCE_LINEAR;
+    Py_BEGIN_ALLOW_THREADS
+    st = rk_engine_advance(self->e, t_end, ag0, slope, max_steps, flags);
+    Py_END_ALLOW_THREADS
+    if (st != RK_OK)
+        return raise_status(st, rk_engine_message(self->e));
+    Py_RETURN_NONE;
+}
+
+/** Run advance_motion or sample under a parsed motion: the GIL released unless a callback is involved, a
+ *  callback's exception re-raised with the state restored. */
+static PyObject *finish_call(EngineObject *self, motion_holder *h, rk_status st, rk_core *saved)
+{
+    if (h->n_cbs > 0 && holder_reraise(h)) {
+        if (st == RK_OK)
+            rk_engine_load(self->e, saved);     /* the call went on past the exception: undo it */
+        holder_release(h);
+        return NULL;
+    }
+    holder_release(h);
+    if (st != RK_OK)
+        return raise_status(st, rk_engine_message(self->e));
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObject *kwargs)
+{
+    static char *kwlist[] = {"t_end", "motion", "max_steps", NULL};
+    double t_end;
+    PyObject *spec, *ms = Py_None;
+    long long max_steps;
+    motion_holder h;
+    int idx;
+    rk_status st;
+    rk_core *saved = NULL;
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "dO|O", kwlist, &t_end, &spec, &ms))
+        return NULL;
+    if (read_max_steps(ms, &max_steps) < 0)
+        return NULL;
+    memset(&h, 0, sizeof(h));
+    idx = parse_motion(&h, spec, 0);
+    if (idx < 0) {
+        holder_release(&h);
+        return NULL;
+    }
+    if (h.n_cbs > 0) {
+        saved = (rk_core *)PyMem_Malloc(sizeof(rk_core));
+        if (saved == NULL) {
+            holder_release(&h);
+            return PyErr_NoMemory();
+        }
+        rk_engine_save(self->e, saved);
+        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], max_steps);
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], max_steps);
+        Py_END_ALLOW_THREADS
+    }
+    {
+        PyObject *r = finish_call(self, &h, st, saved);
+        PyMem_Free(saved);
+        return r;
+    }
+}
+
+static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssize_t itemsize, Py_ssize_t n)
+{
+    if (PyObject_GetBuffer(obj, b, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s must be a writable contiguous array", name);
+        return -1;
+    }
+    if (b->itemsize != itemsize || b->len != n * itemsize) {
+        PyBuffer_Release(b);
+        PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd bytes", name, n, itemsize);
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
+{
+    static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", NULL};
+    PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r;
+    long long max_steps;
+    motion_holder h;
+    Py_buffer bm, bv, bi, bo;
+    const double *times;
+    Py_ssize_t n;
+    int idx, stride;
+    rk_status st;
+    rk_core *saved = NULL;
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO", kwlist, &times_obj, &spec, &ms,
+                                                      &modes_obj, &values_obj, &impacts_obj, &over_obj))
+        return NULL;
+    if (read_max_steps(ms, &max_steps) < 0)
+        return NULL;
+    memset(&h, 0, sizeof(h));
+    if (get_double_buffer(&h, times_obj, "times", &times, &n) < 0) {
+        holder_release(&h);
+        return NULL;
+    }
+    idx = parse_motion(&h, spec, 0);
+    if (idx < 0) {
+        holder_release(&h);
+        return NULL;
+    }
+    stride = rk_engine_n_outputs(self->e) + 2;
+    if (writable_buffer(modes_obj, &bm, "modes", (Py_ssize_t)sizeof(int), n + 1) < 0) {
+        holder_release(&h);
+        return NULL;
+    }
+    if (writable_buffer(values_obj, &bv, "values", (Py_ssize_t)sizeof(double), (n + 1) * stride) < 0) {
+        PyBuffer_Release(&bm);
+        holder_release(&h);
+        return NULL;
+    }
+    if (writable_buffer(impacts_obj, &bi, "impacts", (Py_ssize_t)sizeof(long long), n + 1) < 0) {
+        PyBuffer_Release(&bm);
+        PyBuffer_Release(&bv);
+        holder_release(&h);
+        return NULL;
+    }
+    if (writable_buffer(over_obj, &bo, "overturned", (Py_ssize_t)sizeof(int), n + 1) < 0) {
+        PyBuffer_Release(&bm);
+        PyBuffer_Release(&bv);
+        PyBuffer_Release(&bi);
+        holder_release(&h);
+        return NULL;
+    }
+    if (h.n_cbs > 0) {
+        saved = (rk_core *)PyMem_Malloc(sizeof(rk_core));
+        if (saved == NULL) {
+            st = RK_ERR_MEMORY;
+            rk_fail(&self->e->error, st, "out of memory");
+        } else {
+            rk_engine_save(self->e, saved);
+            st = rk_engine_sample(self->e, &h.m[idx], times, (long long)n, max_steps, (int *)bm.buf,
+                                  (double *)bv.buf, (long long *)bi.buf, (int *)bo.buf);
+        }
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        st = rk_engine_sample(self->e, &h.m[idx], times, (long long)n, max_steps, (int *)bm.buf, (double *)bv.buf,
+                              (long long *)bi.buf, (int *)bo.buf);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&bm);
+    PyBuffer_Release(&bv);
+    PyBuffer_Release(&bi);
+    PyBuffer_Release(&bo);
+    r = finish_call(self, &h, st, saved);
+    PyMem_Free(saved);
+    return r;
+}
+
+static PyObject *doubles_tuple(const double *x, int n)
+{
+    PyObject *t = PyTuple_New(n);
+    int i;
+    if (t == NULL)
+        return NULL;
+    for (i = 0; i < n; i++) {
+        PyObject *f = PyFloat_FromDouble(x[i]);
+        if (f == NULL) {
+            Py_DECREF(t);
+            return NULL;
+        }
+        PyTuple_SET_ITEM(t, i, f);
+    }
+    return t;
+}
+
+static PyObject *doubles_list(const double *x, long long n)
+{
+    PyObject *l = PyList_New((Py_ssize_t)n);
+    long long i;
+    if (l == NULL)
+        return NULL;
+    for (i = 0; i < n; i++) {
+        PyObject *f = PyFloat_FromDouble(x[i]);
+        if (f == NULL) {
+            Py_DECREF(l);
+            return NULL;
+        }
+        PyList_SET_ITEM(l, (Py_ssize_t)i, f);
+    }
+    return l;
+}
+
+static PyObject *engine_outputs(EngineObject *self, PyObject *unused)
+{
+    double out[RK_MAX_OUTPUTS];
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    rk_engine_outputs(self->e, out);
+    return doubles_tuple(out, rk_engine_n_outputs(self->e));
+}
+
+static PyObject *engine_contacts(EngineObject *self, PyObject *unused)
+{
+    int states[RK_MAX_CONTACTS], n, i;
+    PyObject *t;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_contacts(self->e, states);
+    t = PyTuple_New(n);
+    if (t == NULL)
+        return NULL;
+    for (i = 0; i < n; i++)
+        PyTuple_SET_ITEM(t, i, PyLong_FromLong(states[i]));
+    return t;
+}
+
+static PyObject *engine_full_state(EngineObject *self, PyObject *unused)
+{
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
+    int n;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_full_state(self->e, q, v);
+    return Py_BuildValue("(NN)", doubles_list(q, n), doubles_list(v, n));
+}
+
+static int dict_put(PyObject *d, const char *key, PyObject *value)
+{
+    int r;
+    if (value == NULL)
+        return -1;
+    r = PyDict_SetItemString(d, key, value);
+    Py_DECREF(value);
+    return r;
+}
+
+static PyObject *impact_times_list(rk_engine *e)
+{
+    long long n = rk_engine_impact_times(e, NULL, 0);
+    double *buf = (double *)PyMem_Malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    PyObject *l;
+    if (buf == NULL)
+        return PyErr_NoMemory();
+    rk_engine_impact_times(e, buf, n);
+    l = doubles_list(buf, n);
+    PyMem_Free(buf);
+    return l;
+}
+
+static PyObject *engine_get_state(EngineObject *self, PyObject *unused)
+{
+    rk_plain_state s;
+    rk_engine *e;
+    PyObject *d;
+    int n_dof, nc, i;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    e = self->e;
+    rk_engine_get_state(e, &s);
+    n_dof = rk_engine_n_dof(e);
+    nc = rk_engine_n_contacts(e);
+    d = PyDict_New();
+    if (d == NULL)
+        return NULL;
+    if (dict_put(d, "t", PyFloat_FromDouble(s.t)) < 0)
+        goto fail;
+    if (rk_engine_scheme(e) == RK_SCHEME_MOREAU_JEAN) {
+        PyObject *closed;
+        if (dict_put(d, "q", doubles_list(s.q, n_dof)) < 0 || dict_put(d, "v", doubles_list(s.v, n_dof)) < 0
+            || dict_put(d, "mode", PyLong_FromLong(s.mode)) < 0)
+            goto fail;
+        closed = PyList_New(0);
+        if (closed == NULL)
+            goto fail;
+        for (i = 0; i < nc; i++) {
+            if (RK_IN(s.closed, i)) {
+                PyObject *x = PyLong_FromLong(i);
+                if (x == NULL || PyList_Append(closed, x) < 0) {
+                    Py_XDECREF(x);
+                    Py_DECREF(closed);
+                    goto fail;
+                }
+                Py_DECREF(x);
+            }
+        }
+        if (dict_put(d, "closed", closed) < 0 || dict_put(d, "impacts", PyLong_FromLongLong(s.impacts)) < 0
+            || dict_put(d, "overturned", PyBool_FromLong(s.overturned)) < 0
+            || dict_put(d, "n_steps", PyLong_FromLongLong(s.n_steps)) < 0
+            || dict_put(d, "impact_times", impact_times_list(e)) < 0
+            || dict_put(d, "friction_demand", PyFloat_FromDouble(s.friction_demand)) < 0
+            || dict_put(d, "painleve", PyLong_FromLongLong(s.painleve)) < 0)
+            goto fail;
+    } else {
+        long long rows = rk_engine_impact_log(e, NULL, 0);
+        int row_len = 1 + 2 * n_dof;
+        double *buf;
+        PyObject *flat;
+        if (dict_put(d, "mode", PyLong_FromLong(s.mode)) < 0 || dict_put(d, "y", doubles_list(s.y, s.n_y)) < 0
+            || dict_put(d, "impacts", PyLong_FromLongLong(s.impacts)) < 0
+            || dict_put(d, "overturned", PyBool_FromLong(s.overturned)) < 0
+            || dict_put(d, "n_steps", PyLong_FromLongLong(s.n_steps)) < 0
+            || dict_put(d, "h", PyFloat_FromDouble(s.h)) < 0
+            || dict_put(d, "impact_times", impact_times_list(e)) < 0)
+            goto fail;
+        buf = (double *)PyMem_Malloc((size_t)(rows > 0 ? rows : 1) * (size_t)row_len * sizeof(double));
+        if (buf == NULL) {
+            PyErr_NoMemory();
+            goto fail;
+        }
+        rk_engine_impact_log(e, buf, rows);
+        flat = doubles_list(buf, rows * row_len);
+        PyMem_Free(buf);
+        if (dict_put(d, "impact_log", flat) < 0 || dict_put(d, "shift", PyFloat_FromDouble(s.shift)) < 0
+            || dict_put(d, "friction_demand", PyFloat_FromDouble(s.friction_demand)) < 0
+            || dict_put(d, "painleve", PyLong_FromLongLong(s.painleve)) < 0)
+            goto fail;
+    }
+    return d;
+fail:
+    Py_DECREF(d);
+    return NULL;
+}
+
+static PyObject *get_key(PyObject *d, const char *key)
+{
+    PyObject *x = PyMapping_GetItemString(d, key);
+    if (x == NULL && PyErr_ExceptionMatches(PyExc_KeyError)) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_ValueError, "state field '%s' is missing", key);
+    }
+    return x;
+}
+
+static int key_double(PyObject *d, const char *key, double *out)
+{
+    PyObject *x = get_key(d, key);
+    if (x == NULL)
+        return -1;
+    *out = PyFloat_AsDouble(x);
+    Py_DECREF(x);
+    if (*out == -1.0 && PyErr_Occurred()) {
+        PyErr_Format(PyExc_ValueError, "state field '%s' must be a float", key);
+        return -1;
+    }
+    return 0;
+}
+
+static int key_ll(PyObject *d, const char *key, long long *out)
+{
+    PyObject *x = get_key(d, key);
+    if (x == NULL)
+        return -1;
+    *out = PyLong_AsLongLong(x);
+    Py_DECREF(x);
+    if (*out == -1 && PyErr_Occurred()) {
+        PyErr_Format(PyExc_ValueError, "state field '%s' must be an int", key);
+        return -1;
+    }
+    return 0;
+}
+
+/** A list of floats into a PyMem buffer (*out owned by the caller). */
+static int key_doubles(PyObject *d, const char *key, double **out, long long *n)
+{
+    PyObject *x = get_key(d, key), *fast;
+    Py_ssize_t i, len;
+    if (x == NULL)
+        return -1;
+    fast = PySequence_Fast(x, "");
+    Py_DECREF(x);
+    if (fast == NULL) {
+        PyErr_Format(PyExc_ValueError, "state field '%s' must be a list of floats", key);
+        return -1;
+    }
+    len = PySequence_Fast_GET_SIZE(fast);
+    *out = (double *)PyMem_Malloc((size_t)(len > 0 ? len : 1) * sizeof(double));
+    if (*out == NULL) {
+        Py_DECREF(fast);
+        PyErr_NoMemory();
+        return -1;
+    }
+    for (i = 0; i < len; i++) {
+        double v = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(fast, i));
+        if (v == -1.0 && PyErr_Occurred()) {
+            Py_DECREF(fast);
+            PyMem_Free(*out);
+            *out = NULL;
+            PyErr_Format(PyExc_ValueError, "state field '%s'[%zd] must be a float", key, i);
+            return -1;
+        }
+        (*out)[i] = v;
+    }
+    Py_DECREF(fast);
+    *n = (long long)len;
+    return 0;
+}
+
+static int key_fixed(PyObject *d, const char *key, double *out, int want)
+{
+    double *buf = NULL;
+    long long n = 0;
+    if (key_doubles(d, key, &buf, &n) < 0)
+        return -1;
+    if (n != want) {
+        PyMem_Free(buf);
+        PyErr_Format(PyExc_ValueError, "state field '%s' has %lld values; expected %d", key, n, want);
+        return -1;
+    }
+    memcpy(out, buf, (size_t)want * sizeof(double));
+    PyMem_Free(buf);
+    return 0;
+}
+
+/** set_state(dict): the scheme's fields (STATE_KEYS, without the header) as plain values; the consistency
+ *  checks run in C with the Python's messages, nothing changes on error. */
+static PyObject *engine_set_state(EngineObject *self, PyObject *d)
+{
+    rk_plain_state s;
+    rk_engine *e;
+    double *times = NULL, *log = NULL;
+    long long n_times = 0, n_log = 0, x;
+    int n_dof, row_len, over;
+    PyObject *o;
+    rk_status st;
+    if (!ready(self))
+        return NULL;
+    if (!PyMapping_Check(d)) {
+        PyErr_SetString(PyExc_ValueError, "state must be a mapping (dict) of plain values");
+        return NULL;
+    }
+    e = self->e;
+    n_dof = rk_engine_n_dof(e);
+    row_len = 1 + 2 * n_dof;
+    memset(&s, 0, sizeof(s));
+    s.h = NAN;
+    if (key_double(d, "t", &s.t) < 0 || key_ll(d, "mode", &x) < 0)
+        return NULL;
+    if (x < -1 || x > 1000) {
+        PyErr_Format(PyExc_ValueError, "state field 'mode' = %lld is out of range; allowed range [0, %d]", x,
+                     rk_engine_n_modes(e) - 1);
+        return NULL;
+    }
+    s.mode = (int)x;
+    if (key_ll(d, "impacts", &s.impacts) < 0 || key_ll(d, "n_steps", &s.n_steps) < 0
+        || key_double(d, "friction_demand", &s.friction_demand) < 0 || key_ll(d, "painleve", &s.painleve) < 0)
+        return NULL;
+    o = get_key(d, "overturned");
+    if (o == NULL)
+        return NULL;
+    over = PyObject_IsTrue(o);
+    Py_DECREF(o);
+    if (over < 0)
+        return NULL;
+    s.overturned = over;
+    if (rk_engine_scheme(e) == RK_SCHEME_MOREAU_JEAN) {
+        PyObject *closed, *fast;
+        Py_ssize_t i;
+        if (key_fixed(d, "q", s.q, n_dof) < 0 || key_fixed(d, "v", s.v, n_dof) < 0)
+            return NULL;
+        closed = get_key(d, "closed");
+        if (closed == NULL)
+            return NULL;
+        fast = PySequence_Fast(closed, "state field 'closed' must be a list of ints");
+        Py_DECREF(closed);
+        if (fast == NULL)
+            return NULL;
+        for (i = 0; i < PySequence_Fast_GET_SIZE(fast); i++) {
+            long c = PyLong_AsLong(PySequence_Fast_GET_ITEM(fast, i));
+            if ((c == -1 && PyErr_Occurred()) || c < 0 || c >= rk_engine_n_contacts(e)) {
+                Py_DECREF(fast);
+                PyErr_Clear();
+                PyErr_Format(PyExc_ValueError, "state field 'closed'[%zd] must be an int in [0, %d]", i,
+                             rk_engine_n_contacts(e) - 1);
+                return NULL;
+            }
+            s.closed |= 1u << c;
+        }
+        Py_DECREF(fast);
+    } else {
+        double *y = NULL;
+        long long ny = 0;
+        if (key_doubles(d, "y", &y, &ny) < 0)
+            return NULL;
+        if (ny > RK_MAX_Y) {
+            PyMem_Free(y);
+            PyErr_Format(PyExc_ValueError, "state field 'y' has %lld values; allowed at most %d", ny, RK_MAX_Y);
+            return NULL;
+        }
+        memcpy(s.y, y, (size_t)ny * sizeof(double));
+        s.n_y = (int)ny;
+        PyMem_Free(y);
+        if (key_double(d, "h", &s.h) < 0 || key_double(d, "shift", &s.shift) < 0)
+            return NULL;
+        if (key_doubles(d, "impact_log", &log, &n_log) < 0)
+            return NULL;
+        if (n_log % row_len) {
+            PyMem_Free(log);
+            PyErr_Format(PyExc_ValueError, "state field 'impact_log' has %lld values; expected a multiple of %d",
+                         n_log, row_len);
+            return NULL;
+        }
+        n_log /= row_len;
+    }
+    if (key_doubles(d, "impact_times", &times, &n_times) < 0) {
+        PyMem_Free(log);
+        return NULL;
+    }
+    st = rk_engine_set_state(e, &s, times, n_times, log, n_log);
+    PyMem_Free(times);
+    PyMem_Free(log);
+    if (st != RK_OK)
+        return raise_status(st, rk_engine_message(e));
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_checkpoint(EngineObject *self, PyObject *unused)
+{
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    rk_engine_checkpoint(self->e);
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_rollback(EngineObject *self, PyObject *unused)
+{
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    if (rk_engine_rollback(self->e) != RK_OK)
+        return raise_status(rk_engine_status(self->e), rk_engine_message(self->e));
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_commit(EngineObject *self, PyObject *unused)
+{
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    rk_engine_commit(self->e);
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_snapshot(EngineObject *self, PyObject *unused)
+{
+    size_t n;
+    PyObject *b;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_snapshot_size(self->e);
+    b = PyBytes_FromStringAndSize(NULL, (Py_ssize_t)n);
+    if (b == NULL)
+        return NULL;
+    if (rk_engine_snapshot(self->e, PyBytes_AS_STRING(b), n) != RK_OK) {
+        Py_DECREF(b);
+        PyErr_SetString(PyExc_RuntimeError, "snapshot failed");
+        return NULL;
+    }
+    return b;
+}
+
+static PyObject *engine_restore(EngineObject *self, PyObject *arg)
+{
+    Py_buffer b;
+    rk_status st;
+    if (!ready(self))
+        return NULL;
+    if (PyObject_GetBuffer(arg, &b, PyBUF_SIMPLE) < 0)
+        return NULL;
+    st = rk_engine_restore(self->e, b.buf, (size_t)b.len);
+    PyBuffer_Release(&b);
+    if (st != RK_OK)
+        return raise_status(st, rk_engine_message(self->e));
+    Py_RETURN_NONE;
+}
+
+static PyObject *engine_reports(EngineObject *self, PyObject *unused)
+{
+    const rk_reports *r;
+    PyObject *l;
+    int i, n;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    r = rk_engine_reports(self->e);
+    n = r->count < RK_MAX_REPORTS ? r->count : RK_MAX_REPORTS;
+    l = PyList_New(n);
+    if (l == NULL)
+        return NULL;
+    for (i = 0; i < n; i++) {
+        const rk_report *it = &r->items[i];
+        PyObject *t = Py_BuildValue("(sds)", it->kind == RK_REPORT_INEXACT_CONTACT ? "inexact_contact"
+                                                                                    : "failed_step",
+                                    it->t, it->message);
+        if (t == NULL) {
+            Py_DECREF(l);
+            return NULL;
+        }
+        PyList_SET_ITEM(l, i, t);
+    }
+    return l;
+}
+
+static PyMethodDef engine_methods[] = {
+    {"advance", (PyCFunction)(void (*)(void))engine_advance, METH_VARARGS | METH_KEYWORDS,
+     "advance(t_end, ag0=0.0, slope=0.0, max_steps=None, continuous=False, linear=False): integrate to t_end "
+     "under ag(t) = ag0 + slope (t - t); the state is unchanged on any error."},
+    {"advance_motion", (PyCFunction)(void (*)(void))engine_advance_motion, METH_VARARGS | METH_KEYWORDS,
+     "advance_motion(t_end, motion, max_steps=None): integrate to t_end under a motion spec."},
+    {"sample", (PyCFunction)(void (*)(void))engine_sample, METH_VARARGS | METH_KEYWORDS,
+     "sample(times, motion, max_steps, modes, values, impacts, overturned): Integrator.sample into the given "
+     "arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1)."},
+    {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
+    {"contacts", (PyCFunction)engine_contacts, METH_NOARGS, "contacts() -> tuple of ContactState codes."},
+    {"full_state", (PyCFunction)engine_full_state, METH_NOARGS, "full_state() -> (q, v) lists."},
+    {"get_state", (PyCFunction)engine_get_state, METH_NOARGS, "get_state() -> dict of the scheme's STATE_KEYS."},
+    {"set_state", (PyCFunction)engine_set_state, METH_O, "set_state(dict): load get_state's fields."},
+    {"checkpoint", (PyCFunction)engine_checkpoint, METH_NOARGS, "checkpoint(): save the state in the slot."},
+    {"rollback", (PyCFunction)engine_rollback, METH_NOARGS, "rollback(): restore the slot exactly."},
+    {"commit", (PyCFunction)engine_commit, METH_NOARGS, "commit(): drop the slot."},
+    {"snapshot", (PyCFunction)engine_snapshot, METH_NOARGS, "snapshot() -> bytes of the whole state."},
+    {"restore", (PyCFunction)engine_restore, METH_O, "restore(bytes): load a snapshot of an engine built alike."},
+    {"reports", (PyCFunction)engine_reports, METH_NOARGS, "reports() -> [(kind, t, message)] of the last call."},
+    {NULL, NULL, 0, NULL}
+};
+
+#define GETTER(name, expr) \
+    static PyObject *get_##name(EngineObject *self, void *closure) \
+    { \
+        (void)closure; \
+        if (!ready(self)) \
+            return NULL; \
+        return expr; \
+    }
+
+GETTER(t, PyFloat_FromDouble(rk_engine_time(self->e)))
+GETTER(mode, PyLong_FromLong(rk_engine_mode(self->e)))
+GETTER(contact_code, PyLong_FromLong(rk_engine_contact_code(self->e)))
+GETTER(impacts, PyLong_FromLongLong(rk_engine_impacts(self->e)))
+GETTER(overturned, PyBool_FromLong(rk_engine_overturned(self->e)))
+GETTER(n_steps, PyLong_FromLongLong(rk_engine_n_steps(self->e)))
+GETTER(friction_demand, PyFloat_FromDouble(rk_engine_friction_demand(self->e)))
+GETTER(painleve, PyLong_FromLongLong(rk_engine_painleve(self->e)))
+GETTER(fail_time, PyFloat_FromDouble(rk_engine_fail_time(self->e)))
+GETTER(n_outputs, PyLong_FromLong(rk_engine_n_outputs(self->e)))
+GETTER(n_dof, PyLong_FromLong(rk_engine_n_dof(self->e)))
+GETTER(n_contacts, PyLong_FromLong(rk_engine_n_contacts(self->e)))
+GETTER(n_modes, PyLong_FromLong(rk_engine_n_modes(self->e)))
+GETTER(scheme, PyLong_FromLong((long)rk_engine_scheme(self->e)))
+GETTER(model_class, PyUnicode_FromString(rk_engine_model_class(self->e)))
+GETTER(report_count, PyLong_FromLong(rk_engine_reports(self->e)->count))
+GETTER(impact_times, impact_times_list(self->e))
+
+static PyObject *get_output_names(EngineObject *self, void *closure)
+{
+    int i, n;
+    PyObject *t;
+    (void)closure;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_n_outputs(self->e);
+    t = PyTuple_New(n);
+    if (t == NULL)
+        return NULL;
+    for (i = 0; i < n; i++)
+        PyTuple_SET_ITEM(t, i, PyUnicode_FromString(rk_engine_output_name(self->e, i)));
+    return t;
+}
+
+static PyGetSetDef engine_getset[] = {
+    {"t", (getter)get_t, NULL, "time [s]", NULL},
+    {"mode", (getter)get_mode, NULL, "contact mode", NULL},
+    {"contact_code", (getter)get_contact_code, NULL, "mode, or 10 once overturned", NULL},
+    {"impacts", (getter)get_impacts, NULL, "impacts so far", NULL},
+    {"overturned", (getter)get_overturned, NULL, "overturned", NULL},
+    {"n_steps", (getter)get_n_steps, NULL, "internal steps", NULL},
+    {"friction_demand", (getter)get_friction_demand, NULL, "largest |lambda_T| / lambda_N so far", NULL},
+    {"painleve", (getter)get_painleve, NULL, "Painleve situations so far", NULL},
+    {"fail_time", (getter)get_fail_time, NULL, "time reached when the last call failed [s]", NULL},
+    {"n_outputs", (getter)get_n_outputs, NULL, "number of outputs", NULL},
+    {"output_names", (getter)get_output_names, NULL, "output names in order", NULL},
+    {"n_dof", (getter)get_n_dof, NULL, "full coordinates", NULL},
+    {"n_contacts", (getter)get_n_contacts, NULL, "contacts", NULL},
+    {"n_modes", (getter)get_n_modes, NULL, "contact modes", NULL},
+    {"scheme", (getter)get_scheme, NULL, "0 moreau_jean, 1 event_driven", NULL},
+    {"model_class", (getter)get_model_class, NULL, "the Python class name of the model", NULL},
+    {"report_count", (getter)get_report_count, NULL, "reports of the last call (all counted)", NULL},
+    {"impact_times", (getter)get_impact_times, NULL, "the last impact_log_size impact times [s]", NULL},
+    {NULL, NULL, NULL, NULL, NULL}
+};
+
+static PyType_Slot engine_slots[] = {
+    {Py_tp_dealloc, (void *)engine_dealloc},
+    {Py_tp_doc, (void *)"Engine(kind, params, initial=None, *, scheme=1, t0=0.0, dt_max=0.0, tolerance=1e-8, "
+                        "theta=0.5, zeno_tol=1e-6, method=0, impact_log_size=None, max_events=100000, "
+                        "tolerances=None, state=None): one simulation in the C engine (rk_engine.h). state = "
+                        "(mode, q, v) starts there instead of at the initial values."},
+    {Py_tp_methods, (void *)engine_methods},
+    {Py_tp_getset, (void *)engine_getset},
+    {Py_tp_init, (void *)engine_init},
+    {Py_tp_new, (void *)PyType_GenericNew},
+    {0, NULL}
+};
+
+static PyType_Spec engine_spec = {
+    "rocking_model._engine.Engine", (int)sizeof(EngineObject), 0, Py_TPFLAGS_DEFAULT, engine_slots
+};
 
 static PyObject *py_version(PyObject *self, PyObject *args)
 {
@@ -95,9 +1292,69 @@ static PyObject *py_create_and_free(PyObject *self, PyObject *args, PyObject *kw
     Py_RETURN_NONE;
 }
 
+/** motion_eval(spec, times) -> (values, breakpoints, continuous): rk_motion_eval, next_breakpoint and
+ *  continuous_at at each time, in order on one motion (its interval cache carried from one time to the next,
+ *  as the Python object's): the pinning entry point of tests/test_engine_api.py. */
+static PyObject *py_motion_eval(PyObject *self, PyObject *args)
+{
+    PyObject *spec, *times_obj, *values = NULL, *bps = NULL, *cont = NULL, *fast;
+    motion_holder h;
+    Py_ssize_t i, n;
+    int idx;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "OO", &spec, &times_obj))
+        return NULL;
+    memset(&h, 0, sizeof(h));
+    idx = parse_motion(&h, spec, 0);
+    if (idx < 0) {
+        holder_release(&h);
+        return NULL;
+    }
+    fast = PySequence_Fast(times_obj, "times must be a sequence");
+    if (fast == NULL) {
+        holder_release(&h);
+        return NULL;
+    }
+    n = PySequence_Fast_GET_SIZE(fast);
+    values = PyList_New(n);
+    bps = PyList_New(n);
+    cont = PyList_New(n);
+    if (values == NULL || bps == NULL || cont == NULL)
+        goto fail;
+    for (i = 0; i < n; i++) {
+        double t = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(fast, i)), x;
+        int failed = 0;
+        char msg[RK_MSG_LEN];
+        if (t == -1.0 && PyErr_Occurred())
+            goto fail;
+        x = rk_motion_eval(&h.m[idx], t, &failed, msg);
+        if (failed) {
+            holder_reraise(&h);
+            goto fail;
+        }
+        PyList_SET_ITEM(values, i, PyFloat_FromDouble(x));
+        PyList_SET_ITEM(bps, i, PyFloat_FromDouble(rk_motion_next_breakpoint(&h.m[idx], t)));
+        PyList_SET_ITEM(cont, i, PyBool_FromLong(rk_motion_continuous_at(&h.m[idx], t)));
+        if (holder_reraise(&h))
+            goto fail;
+    }
+    Py_DECREF(fast);
+    holder_release(&h);
+    return Py_BuildValue("(NNN)", values, bps, cont);
+fail:
+    Py_DECREF(fast);
+    Py_XDECREF(values);
+    Py_XDECREF(bps);
+    Py_XDECREF(cont);
+    holder_release(&h);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
     {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
+    {"motion_eval", py_motion_eval, METH_VARARGS,
+     "motion_eval(spec, times) -> (ag, next_breakpoint, continuous_at) lists: the C ground motions (tests)."},
     {"create_and_free", (PyCFunction)(void (*)(void))py_create_and_free, METH_VARARGS | METH_KEYWORDS,
      "create_and_free(kind, params, initial=None): create a C engine for model kind ('rigid', 'flexible') with "
      "the declared parameters in order and free it; raises ValueError on bad input, NotImplementedError for a "
@@ -120,6 +1377,31 @@ PyMODINIT_FUNC PyInit__engine(void)
         || PyModule_AddFunctions(m, rk_py_rk_methods) < 0 || PyModule_AddFunctions(m, rk_py_ed_methods) < 0) {
         Py_DECREF(m);
         return NULL;
+    }
+    {
+        PyObject *type = PyType_FromSpec(&engine_spec);
+        if (type == NULL || PyModule_AddObject(m, "Engine", type) < 0) {
+            Py_XDECREF(type);
+            Py_DECREF(m);
+            return NULL;
+        }
+    }
+    NonFiniteError = PyErr_NewExceptionWithDoc("rocking_model._engine.NonFiniteError",
+                                               "The motion overflowed (non-finite state or outputs); the state was "
+                                               "restored.", PyExc_ValueError, NULL);
+    if (NonFiniteError == NULL || PyModule_AddObject(m, "NonFiniteError", NonFiniteError) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    Py_INCREF(NonFiniteError);
+    {
+        PyObject *info = Py_BuildValue("{s:n,s:n,s:n}", "engine", (Py_ssize_t)sizeof(rk_engine), "core",
+                                       (Py_ssize_t)sizeof(rk_core), "stepper", (Py_ssize_t)sizeof(rk_stepper));
+        if (info == NULL || PyModule_AddObject(m, "SIZES", info) < 0) {
+            Py_XDECREF(info);
+            Py_DECREF(m);
+            return NULL;
+        }
     }
     return m;
 }

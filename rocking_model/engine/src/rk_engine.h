@@ -37,6 +37,18 @@ typedef struct rk_engine rk_engine;
  *  err filled (err may not be NULL). */
 rk_engine *rk_engine_create(const char *kind, const double *params, int n_params, const double *initial,
                             int n_initial, const rk_options *options, rk_error *err);
+/** Create at a given full state (mode, q[n_dof], v[n_dof]) instead of initial values: what
+ *  Integrator.from_options receives from the Simulator (model.initial_state computed by the caller). The
+ *  state is taken as given (as the Python schemes do); n_dof must be the model's. (Added by part E.) */
+rk_engine *rk_engine_create_state(const char *kind, const double *params, int n_params, int mode,
+                                  const double *q, const double *v, int n_dof, const rk_options *options,
+                                  rk_error *err);
+/** The time the scheme had reached when the last call failed [s] (before the restore). (Added by part E.) */
+double rk_engine_fail_time(const rk_engine *e);
+/** The contact code now: the mode, or RK_OVERTURNED once overturned (Integrator.contact_code). (Added.) */
+#define RK_OVERTURNED 10
+int rk_engine_contact_code(const rk_engine *e);
+
 /** Free (NULL is a no-op). */
 void rk_engine_free(rk_engine *e);
 

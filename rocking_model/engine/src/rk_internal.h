@@ -117,7 +117,35 @@ struct rk_engine {
     unsigned long long out_token;       /**< token of the cached outputs */
     double out_cache[RK_MAX_OUTPUTS];
     rk_error error;                     /**< status and message of the last failed call */
+    /* (part E, added) */
+    unsigned long long token_serial;    /**< source of core.token values: never rolled back, so that a token
+                                             is never reused for another state (the output cache key) */
+    double fail_t;                      /**< [s] the time the scheme had reached when the last call failed
+                                             (Simulator._diverged's "at t = ..."), before the restore */
+    unsigned long long motion_calls;    /**< advance / sample calls with a non-constant motion so far */
 };
+
+/* ------------------------------------------------------------------------------------------ shared helpers (E)
+ * rk_engine.c: the checks of a loaded state (integrators/state.py) and the inexact-contact report text, used
+ * by both schemes' set_state / reports. */
+/** state.check_times: times[0..n-1] at most ``impacts`` of them, non-decreasing, not after t (up to
+ *  round-off); RK_ERR_VALUE naming field ``key`` otherwise. */
+rk_status rk_check_times(const char *key, const double *times, long long n, double t, long long impacts,
+                         rk_error *err);
+/** state.check_configuration: |phi| < pi/2 unless overturned, at rest if overturned, corners not below the
+ *  ground by more than gap_tol [m], outputs finite; RK_ERR_VALUE naming field ``key`` otherwise. */
+rk_status rk_check_configuration(const rk_model *m, const char *key, const double *q, const double *v,
+                                 int overturned, double gap_tol, rk_error *err);
+/** Save / load the state (rk_core and the log cursors) to / from a caller's slot (the extension's guard
+ *  around a call with a Python callback motion). */
+void rk_engine_save(rk_engine *e, rk_core *slot);
+void rk_engine_load(rk_engine *e, const rk_core *slot);
+/** moreau_jean.inexact_message: the text of an "inexact_contact" report of the LCP ``what`` at t. */
+void rk_inexact_message(char *buf, size_t size, const rk_lcp_solution *sol, int n_contacts, double t,
+                        const char *what);
+/** Integrator.note_demand on a friction_demand field: raise *demand to |lam_T| / lam_N (at most mu) when
+ *  lam_N > floor [N]. */
+void rk_note_demand(double *demand, double mu, double lam_N, double lam_T, double floor);
 
 /* ------------------------------------------------------------------------------------------ event-driven (D) */
 /** EventDriven.from_options + __init__ (options checked with the Python messages). */

@@ -42,6 +42,10 @@ typedef struct rk_param_decl {
     int lo_open, hi_open;       /**< 1: the bound itself is excluded */
     int inf_ok;                 /**< 1: +inf is allowed (mu) */
     int integer;                /**< 1: an integer choice (impact_law, impact_rule) */
+    /* added by part A (at the end, DESIGN.md section 1): the names of an integer choice's items, codes
+     * 0 .. n_items-1 (Param.items), for the message of a value that is not a code */
+    int n_items;
+    const char *const *items;
 } rk_param_decl;
 
 /** The kernel of one model kind. All function pointers are required unless marked "optional (NULL: ...)". */
@@ -219,6 +223,33 @@ rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const do
 rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
                                 double *r_ddot);
 void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, double *J, double *jd);
+
+/* ------------------------------------------------------------------------------------------ helpers
+ * (added by part A: shared by the kernels, rk_model.c) */
+/** Param.check of one value: RK_OK and the checked value in *out (a choice as its code), or RK_ERR_VALUE with
+ *  the Python message ("b = 0 is out of range; allowed range [1e-06, 1000]", "... is not finite ...",
+ *  "impact_law = 2.0 is not supported; allowed values: 0, 1, 'newton', 'energy_consistent'"). */
+rk_status rk_param_check(const rk_param_decl *decl, double value, double *out, rk_error *err);
+/** Python's repr() of a float ("0.1", "1e-06", "2.0", "inf", "nan") into buf (at least 32 bytes). */
+void rk_float_repr(double x, char *buf, size_t n);
+/** Python's math.hypot(a, b) (CPython's vector_norm, which is not libm's hypot: they differ in the last bit
+ *  on about 1 in 700 arguments). */
+double rk_py_hypot(double a, double b);
+/** The four sticking and six sliding modes of the two-corner models (rocking_model.modes): mode_from_closed,
+ *  CLOSED, SLIDING/stick_mode/slide_sign, pivot_sign (-1 left, +1 right). */
+int rk_two_corner_mode_of(const rk_model *m, rk_set closed, int sigma);
+rk_set rk_two_corner_closed_of(const rk_model *m, int mode);
+int rk_two_corner_stick_of(const rk_model *m, int mode, int *sigma);
+int rk_pivot_sign(int mode);
+/** RockingModel.mode_of_initial_state. */
+int rk_mode_of_initial_state(double phi_0, double phi_dot_0);
+/** Small dense solves (n <= RK_MAX_DOF): Gaussian elimination with partial pivoting (np.linalg.solve;
+ *  RK_ERR_SOLVER on an exactly zero pivot, where LAPACK reports a singular matrix), and minimum-norm least
+ *  squares through an SVD (np.linalg.lstsq; rcond < 0: numpy's default eps * max(rows, cols)). Row-major. */
+rk_status rk_la_solve(int n, const double *A, const double *b, double *x);
+rk_status rk_la_lstsq(int rows, int cols, const double *A, const double *b, double rcond, double *x);
+/** the overturning angle HALF_PI = 0.5 * math.pi [rad] */
+#define RK_HALF_PI (0.5 * 3.141592653589793)
 
 /* ------------------------------------------------------------------------------------------ kernels */
 extern const rk_model_ops RK_RIGID_BLOCK;          /* rk_rigid.c */

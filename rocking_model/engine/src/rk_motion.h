@@ -38,9 +38,11 @@ struct rk_motion {
     const rk_motion *inner;             /**< SCALED */
     /** CALLBACK: ag(t); set *failed = 1 and write msg (RK_MSG_LEN) on failure */
     double (*fn)(void *ctx, double t, int *failed, char *msg);
-    /** CALLBACK: next breakpoint after t (INFINITY: none); NULL: none */
+    /** CALLBACK: next breakpoint after t (INFINITY: none); NULL: none. A failure returns NAN from
+     *  rk_motion_next_breakpoint (the extension then re-raises the Python exception with the state restored) */
     double (*fn_breakpoint)(void *ctx, double t, int *failed, char *msg);
-    /** CALLBACK: continuity at a breakpoint; NULL: continuous */
+    /** CALLBACK: continuity at a breakpoint; NULL: not continuous (GroundMotion.continuous_at's default, a
+     *  jump) */
     int (*fn_continuous)(void *ctx, double tb);
     void *ctx;
     int constant;                       /**< 1: the Python's ``ag.constant`` (CONSTANT, SCALED of constant) */

@@ -1,0 +1,364 @@
+"""The C engine's public API through Python (issue 21, part E): ground motions pinned to ground_motion.py, the
+Engine type, its errors, state round trips C <-> Python (both schemes), checkpoint / rollback, snapshots,
+bounded logs, and Simulator(engine=...)."""
+import math
+import pickle
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rocking_model import _engine
+from rocking_model.engine import CompiledIntegrator, motion_spec
+from rocking_model.ground_motion import (ConstantMotion, FunctionMotion, LinearMotion, RickerPulse, SampledMotion,
+                                         ScaledMotion, SinePulse, checked_motion)
+from rocking_model.models import FlexibleOscillator, RigidBlock
+from rocking_model.simulation import Simulator, simulate
+from rocking_model.validation import WorkLimitError
+
+
+def _engine_works(kind="rigid", scheme="moreau_jean"):
+    """None if an engine of this model and scheme can run a step, else the reason (the part not merged)."""
+    model = RigidBlock() if kind == "rigid" else FlexibleOscillator()
+    try:
+        sim = Simulator(model, scheme, engine="c", phi_0=0.05)
+        sim.advance(0.01, 0.0)
+    except NotImplementedError as exc:
+        return str(exc)
+    return None
+
+
+_REASON = _engine_works()
+needs_mj = pytest.mark.skipif(_REASON is not None, reason=f"needs parts A and B merged: {_REASON}")
+_REASON_ED = _engine_works(scheme="event_driven")
+needs_ed = pytest.mark.skipif(_REASON_ED is not None, reason=f"needs parts A-D merged: {_REASON_ED}")
+
+
+# ---------------------------------------------------------------------------------------------- ground motions
+def _python_trace(gm, times):
+    return ([gm(t) for t in times], [gm.next_breakpoint(t) for t in times], [gm.continuous_at(t) for t in times])
+
+
+def _times(lo, hi, n=200, seed=0):
+    rng = np.random.default_rng(seed)
+    t = list(rng.uniform(lo, hi, n))
+    return t + [lo, hi, 0.5 * (lo + hi)]
+
+
+RECORD_T = np.cumsum(np.r_[0.0, np.random.default_rng(1).uniform(0.002, 0.01, 300)])
+RECORD_AG = np.random.default_rng(2).normal(0.0, 3.0, RECORD_T.size)
+
+
+@pytest.mark.parametrize("gm", [
+    ConstantMotion(1.25),
+    LinearMotion(0.7, -3.1, 0.37, 0.0, 1.0),
+    SampledMotion(RECORD_T, RECORD_AG),
+    SinePulse(2.5, 7.0, 0.2),
+    ScaledMotion(SinePulse(2.5, 7.0, 0.2), -1.7),
+    ScaledMotion(SampledMotion(RECORD_T, RECORD_AG), 0.3),
+], ids=["constant", "linear", "sampled", "sine", "scaled_sine", "scaled_record"])
+def test_motions_equal_the_python_classes_bit_for_bit(gm):
+    spec = motion_spec(gm)
+    assert spec[0] != "callback"
+    times = _times(-0.5, 3.0)
+    # the samples themselves, their neighbours and the ends: the interval cache and the bisection
+    times += list(RECORD_T[::7]) + [np.nextafter(x, -1.0) for x in RECORD_T[::11]] + [RECORD_T[-1] + 1.0]
+    c = _engine.motion_eval(spec, times)
+    p = _python_trace(gm, times)
+    assert c[0] == p[0]
+    assert c[1] == p[1]
+    assert c[2] == p[2]
+
+
+def test_a_python_motion_runs_as_a_callback_with_its_breakpoints():
+    gm = checked_motion(RickerPulse(3.0, 6.0))
+    spec = motion_spec(gm)
+    assert spec[0] == "callback"
+    times = _times(0.0, 3.0)
+    assert _engine.motion_eval(spec, times) == tuple(_python_trace(gm, times))
+
+
+def test_a_failing_callback_raises_the_python_exception():
+    gm = FunctionMotion(lambda t: 1e9 if t > 0.5 else 0.0)
+    with pytest.raises(ValueError, match=r"ag\(0\.75\) = 1e\+09 is out of range"):
+        _engine.motion_eval(motion_spec(gm), [0.25, 0.75])
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(st.floats(-1e3, 1e3), st.floats(0.1, 100.0), st.floats(-5.0, 5.0),
+       st.lists(st.floats(-10.0, 20.0), min_size=1, max_size=20))
+def test_sine_pulses_agree_everywhere(A, w, t0, times):
+    gm = SinePulse(A, w, t0)
+    assert _engine.motion_eval(motion_spec(gm), times) == tuple(_python_trace(gm, times))
+
+
+def test_bad_motion_specs_are_clear_errors():
+    with pytest.raises(ValueError, match="strictly increasing"):
+        _engine.motion_eval(("sampled", np.array([0.0, 1.0, 1.0]), np.array([0.0, 1.0, 2.0])), [0.5])
+    with pytest.raises(ValueError, match="omega_p"):
+        _engine.motion_eval(("sine", 1.0, -2.0, 0.0), [0.5])
+    with pytest.raises(TypeError, match="float64"):
+        _engine.motion_eval(("sampled", np.array([0, 1, 2]), np.array([0.0, 1.0, 2.0])), [0.5])
+    with pytest.raises(ValueError, match="unknown kind"):
+        _engine.motion_eval(("cosine", 1.0), [0.5])
+
+
+# ---------------------------------------------------------------------------------------------- Engine, errors
+def test_engine_type_reports_what_is_missing_or_runs():
+    params = [float(getattr(RigidBlock(), p.name)) for p in RigidBlock.parameters()]
+    try:
+        eng = _engine.Engine("rigid", params, [0.05, 0.0], scheme="moreau_jean")
+    except NotImplementedError as exc:
+        assert "not implemented yet" in str(exc) and 'engine="python"' in str(exc)
+        return
+    assert eng.output_names == tuple(p.name for p in RigidBlock.OUTPUTS)
+    assert eng.t == 0.0 and eng.n_dof == 3 and eng.model_class == "RigidBlock"
+
+
+def test_unknown_engine_is_refused_with_the_allowed_values():
+    with pytest.raises(ValueError, match="engine = 'fortran' is not supported; allowed values: 'c', 'python'"):
+        Simulator(RigidBlock(), engine="fortran")
+
+
+def test_engine_python_is_unchanged_and_the_default():
+    a = Simulator(RigidBlock(), phi_0=0.1)
+    b = Simulator(RigidBlock(), phi_0=0.1, engine="python")
+    for t in (0.5, 1.0, 2.5):
+        a.advance(t, 0.3)
+        b.advance(t, 0.3)
+    assert a.engine == "python" and a.get_state() == b.get_state()
+
+
+@needs_mj
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(theta=0.3), r"theta = 0\.3 is out of range; allowed range \[0\.5, 1\]"),
+    (dict(dt_max=-1.0), r"dt_max = -1 is out of range"),
+    (dict(dt_max=1e-9), r"dt_max = 1e-09 is out of range; allowed values 0"),
+    (dict(phi_0=2.0), r"phi_0"),
+])
+def test_bad_input_gives_the_python_message(kwargs, match):
+    for engine in ("python", "c"):
+        with pytest.raises(ValueError, match=match):
+            Simulator(RigidBlock(), "moreau_jean", engine=engine, **kwargs)
+
+
+@needs_mj
+@pytest.mark.parametrize("t_end, ag, match", [
+    (-1.0, 0.0, r"t_end = -1 is before the current time"),
+    (float("nan"), 0.0, r"t_end = nan is not finite"),
+    (1.0, 2e3, r"ag = 2000 is out of range; allowed range \[-1000, 1000\]"),
+    (1.0, float("inf"), r"ag = inf is not finite"),
+])
+def test_bad_advances_are_refused_alike_and_keep_the_state(t_end, ag, match):
+    for engine in ("python", "c"):
+        sim = Simulator(RigidBlock(), "moreau_jean", engine=engine, phi_0=0.1)
+        sim.advance(0.1, 0.0)
+        before = sim.get_state()
+        with pytest.raises(ValueError, match=match):
+            sim.advance(t_end, ag)
+        assert sim.get_state() == before
+
+
+@needs_mj
+def test_the_raw_engine_checks_its_inputs_too():
+    params = [float(getattr(RigidBlock(), p.name)) for p in RigidBlock.parameters()]
+    eng = _engine.Engine("rigid", params, [0.05, 0.0], scheme="moreau_jean")
+    for args, match in [((-1.0,), "before the current time"), ((1.0, float("nan")), "ag = nan is not finite"),
+                        ((1.0, 1e4), "ag = 10000 is out of range"),
+                        ((1.0, 0.0, float("inf")), "ag rate = inf is not finite"),
+                        ((1.0, 900.0, 500.0), r"peak \|ag\| = 1400")]:
+        with pytest.raises(ValueError, match=match):
+            eng.advance(*args)
+        assert eng.t == 0.0
+    with pytest.raises(ValueError, match="model 'rigid' takes 7 parameters, got 2"):
+        _engine.Engine("rigid", [1.0, 2.0])
+    with pytest.raises(ValueError, match="b = "):
+        _engine.Engine("rigid", [-1.0] + params[1:])
+
+
+# ---------------------------------------------------------------------------------------------- work limit
+@needs_mj
+def test_work_refusal_before_any_work_with_the_python_message():
+    msgs = []
+    for engine in ("python", "c"):
+        sim = Simulator(RigidBlock(), "moreau_jean", engine=engine, phi_0=0.1, max_steps=50)
+        sim.advance(0.02, 0.0)
+        before = sim.get_state()
+        with pytest.raises(WorkLimitError) as info:
+            sim.advance(1.0, 0.0)
+        assert sim.get_state() == before
+        msgs.append(str(info.value))
+    assert msgs[0] == msgs[1]
+
+
+# ---------------------------------------------------------------------------------------------- state, checkpoint
+def _scene(engine, scheme="moreau_jean", model=None, **kw):
+    sim = Simulator(model or RigidBlock(b=0.25, h=1.0, e_N=0.9), scheme, engine=engine, phi_0=0.15, **kw)
+    return sim
+
+
+def _run(sim, t0, t1, dt=0.05, ag=lambda t: 0.0):
+    t = t0
+    while t < t1 - 1e-12:
+        t = min(t + dt, t1)
+        sim.advance(t, ag(t))
+
+
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_state_moves_between_the_engines_both_ways(scheme):
+    ag = lambda t: 2.0 * math.sin(7.0 * t)  # noqa: E731
+    py, c = _scene("python", scheme), _scene("c", scheme)
+    _run(py, 0.0, 0.6, ag=ag)
+    _run(c, 0.0, 0.6, ag=ag)
+    # C -> Python and Python -> C: each continues exactly as the engine it came from
+    py2, c2 = _scene("python", scheme), _scene("c", scheme)
+    py2.set_state(c.get_state())
+    c2.set_state(py.get_state())
+    for sim in (py, c, py2, c2):
+        _run(sim, 0.6, 1.2, ag=ag)
+    assert py2.get_state() == c.get_state() or _close_states(py2.get_state(), c.get_state())
+    assert c2.get_state() == py.get_state() or _close_states(c2.get_state(), py.get_state())
+    assert _close_states(c.get_state(), py.get_state())
+
+
+def _close_states(a, b, tol=1e-12):
+    assert a.keys() == b.keys()
+    for k in a:
+        x, y = a[k], b[k]
+        if isinstance(x, list):
+            assert len(x) == len(y), k
+            assert np.allclose(x, y, rtol=0.0, atol=tol), (k, x, y)
+        elif isinstance(x, float):
+            assert (math.isnan(x) and math.isnan(y)) or abs(x - y) <= tol * max(1.0, abs(x)), (k, x, y)
+        else:
+            assert x == y, (k, x, y)
+    return True
+
+
+@needs_mj
+def test_bad_states_are_refused_with_the_python_messages_and_nothing_changes():
+    py, c = _scene("python"), _scene("c")
+    _run(py, 0.0, 0.3)
+    _run(c, 0.0, 0.3)
+    good = c.get_state()
+    bad_states = []
+    for key, value in [("mode", 3), ("closed", [1, 0]), ("impacts", -1), ("t", float("nan")),
+                       ("q", [0.0, 0.0]), ("impact_times", [5.0]), ("friction_demand", -1.0), ("version", 1),
+                       ("overturned", 1)]:
+        s = dict(good)
+        s[key] = value
+        bad_states.append(s)
+    s = dict(good)
+    s["q"] = [0.0, -2.0, 0.0]
+    bad_states.append(s)
+    for s in bad_states:
+        msgs = []
+        for sim in (py, c):
+            before = sim.get_state()
+            with pytest.raises(ValueError) as info:
+                sim.set_state(s)
+            assert sim.get_state() == before
+            msgs.append(str(info.value))
+        assert msgs[0] == msgs[1]
+
+
+@needs_mj
+def test_the_c_engine_checks_a_loaded_state_itself():
+    """The C API (the FMI binary's path) refuses an inconsistent state without the Python checks."""
+    c = _scene("c")
+    _run(c, 0.0, 0.3)
+    eng = c.integrator._engine
+    good = eng.get_state()
+    for key, value, match in [("mode", 0, "does not match 'closed'"), ("impact_times", [9.0], "after t"),
+                              ("q", [0.0, -2.0, 0.0], "below the ground"),
+                              ("impacts", -3, "'impacts' = -3 is out of range")]:
+        s = dict(good)
+        s[key] = value
+        if key == "mode":
+            s["closed"] = []
+        with pytest.raises(ValueError, match=match):
+            eng.set_state(s)
+        assert eng.get_state() == good
+
+
+@needs_mj
+def test_checkpoint_rollback_and_snapshots_restore_exactly():
+    c = _scene("c")
+    _run(c, 0.0, 0.4, ag=lambda t: 1.5)
+    eng = c.integrator._engine
+    s0, out0, snap = eng.get_state(), eng.outputs(), eng.snapshot()
+    eng.checkpoint()
+    eng.advance(1.3, 0.7)
+    assert eng.get_state() != s0
+    eng.rollback()
+    assert eng.get_state() == s0 and eng.outputs() == out0
+    eng.advance(1.3, 0.7)
+    s1 = eng.get_state()
+    eng.restore(snap)
+    assert eng.get_state() == s0 and eng.outputs() == out0
+    eng.advance(1.3, 0.7)
+    assert eng.get_state() == s1
+    with pytest.raises(ValueError, match="no checkpoint"):
+        eng.rollback()
+    other = _engine.Engine("rigid", [0.3, 1.0, 1.0, 9.81, 0.9, 0.0, math.inf], scheme="moreau_jean")
+    with pytest.raises(ValueError, match="another model, parameters or options"):
+        other.restore(snap)
+    with pytest.raises(ValueError, match="too short|expected"):
+        eng.restore(snap[:-8])
+
+
+@needs_mj
+def test_a_simulator_on_the_c_engine_pickles_and_continues_identically():
+    c = _scene("c")
+    _run(c, 0.0, 0.4)
+    c2 = pickle.loads(pickle.dumps(c))
+    _run(c, 0.4, 0.9)
+    _run(c2, 0.4, 0.9)
+    assert c.get_state() == c2.get_state()
+
+
+@needs_mj
+def test_the_impact_log_stays_bounded_over_a_long_run():
+    c = _scene("c", impact_log_size=5)
+    eng = c.integrator._engine
+    ag = lambda t: 4.0 * math.sin(9.0 * t)  # noqa: E731
+    _run(c, 0.0, 6.0, dt=0.5, ag=ag)
+    assert eng.impacts > 10
+    times = c.impact_times
+    assert len(times) == 5 and times == sorted(times)
+    snap = len(eng.snapshot())
+    _run(c, 6.0, 12.0, dt=0.5, ag=ag)
+    assert len(c.impact_times) == 5 and len(eng.snapshot()) == snap
+
+
+@needs_mj
+def test_nan_and_huge_inputs_never_crash():
+    c = _scene("c")
+    for ag in (float("nan"), 1e308, -float("inf")):
+        with pytest.raises(ValueError):
+            c.advance(1.0, ag)
+    with pytest.raises(ValueError):
+        c.advance(1.0, lambda t: float("nan"))
+    assert c.t == 0.0
+    c.advance(0.5, 1000.0)
+    assert math.isfinite(c.outputs()["phi"])
+
+
+@needs_mj
+def test_simulate_runs_on_the_c_engine_with_the_same_layout():
+    gm = SinePulse(3.0, 6.0, 0.1)
+    a = simulate(RigidBlock(), gm, 1.0, scheme="moreau_jean", phi_0=0.05)
+    b = simulate(RigidBlock(), gm, 1.0, scheme="moreau_jean", phi_0=0.05, engine="c")
+    assert a.values.keys() == b.values.keys()
+    for k in a.values:
+        assert a.values[k].dtype == b.values[k].dtype, k
+        assert np.allclose(a.values[k], b.values[k], rtol=0.0, atol=1e-12), k
+    assert a.n_steps == b.n_steps
+
+
+def test_compiled_integrator_is_an_integrator():
+    from rocking_model.integrators.base import Integrator
+
+    assert issubclass(CompiledIntegrator, Integrator)
