@@ -1313,3 +1313,44 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
     e->core.token++;
     return RK_OK;
 }
+
+/* ------------------------------------------------------------------------------------------ pending part B
+ * Weak stand-ins for the contact.py functions of part B (rk_contact.c) that the driver calls, so that the
+ * module links before part B lands: rk_impact and rk_next_mode say what is missing (RK_ERR_NOT_IMPLEMENTED);
+ * the two set-valued ones are only reached after one of those has failed (the advance is then refused and
+ * rolled back: no wrong result is ever seen). Part B's strong definitions replace them. */
+#if defined(__GNUC__)
+#define ED_PENDING __attribute__((weak))
+
+ED_PENDING rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, rk_set candidates,
+                               const rk_contact_args *a, rk_lcp_solution *out, rk_error *err)
+{
+    (void)m; (void)q; (void)v_minus; (void)candidates; (void)a; (void)out;
+    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.impact of the C engine is not implemented yet (issue 21, "
+                   "part B); use engine=\"python\"");
+}
+
+ED_PENDING rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double gap_tol,
+                                  double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
+                                  rk_error *err)
+{
+    (void)m; (void)q; (void)v; (void)ag; (void)gap_tol; (void)v_tol; (void)prefer; (void)mode; (void)sol;
+    (void)has_solution;
+    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.next_mode of the C engine is not implemented yet (issue "
+                   "21, part B); use engine=\"python\"");
+}
+
+ED_PENDING rk_set rk_closed_candidates(const rk_model *m, const double *q, const double *v, double gap_tol,
+                                       double v_tol)
+{
+    (void)m; (void)q; (void)v; (void)gap_tol; (void)v_tol;
+    return 0;
+}
+
+ED_PENDING rk_set rk_painleve_sticks(const rk_model *m, const double *q, const double *v_minus,
+                                     const double *v_plus, rk_set candidates, double v_tol)
+{
+    (void)m; (void)q; (void)v_minus; (void)v_plus; (void)candidates; (void)v_tol;
+    return 0;
+}
+#endif
