@@ -1,0 +1,1356 @@
+/* rk_ed.c -- the event-driven scheme (part D): a port of rocking_model/integrators/event_driven.py, function
+ * by function (the Python names are given in each comment), so that the C takes the same steps, finds the
+ * same events and solves the same contact problems as the Python reference (DESIGN.md "Numerics").
+ *
+ * - Smooth phases: the reduced state y = [r, r_dot] of the current contact mode, integrated by the
+ *   Runge-Kutta pair of rk_rk.h; the event functions of rk_mode_monitors located on the dense output.
+ * - Events: impact (the impact LCP under the Zeno rule, the classical rule, grazing landings, the Painleve
+ *   count), release / slip / cone (the uplift LCP decides the next mode, a Painleve impulse where it has no
+ *   solution), overturning (the pose reached is kept at rest).
+ * - The friction demand: at both limits of every event, at step ends, at its peak inside a step
+ *   (`_demand_peak`), and each impact's percussions (`_note_percussions`).
+ * - The work budget (max_steps: Runge-Kutta steps plus EVENT_WORK per event) and max_events.
+ *
+ * The ground motion is evaluated where the Python evaluates it: a constant input as its value (ag.value),
+ * any other at the time of the call (ag(t)); the kernels get values only.
+ * No allocation; every work array is on the stack. */
+#include "rk_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/** [steps] what one event counts in the work budget (event_driven.EVENT_WORK: locating it and its LCPs cost
+ *  about as much as 20 to 35 Runge-Kutta steps) */
+#define ED_EVENT_WORK 30
+/** [1] event_driven.DEMAND_PEAK_MARGIN: the demand's peak inside a step is searched for when the parabola
+ *  through its ends and middle peaks above (1 - margin) times the largest demand so far */
+#define ED_DEMAND_PEAK_MARGIN 0.1
+/** [1] event_driven.DEMAND_STEP_GATE: a step whose ends need less than this fraction of the largest demand so
+ *  far is not searched */
+#define ED_DEMAND_STEP_GATE 0.5
+/** Brent's golden-section fraction (events._CGOLD) and iteration cap (brent_max's max_iter) */
+#define ED_CGOLD 0.3819660112501051
+#define ED_BRENT_MAX_ITER 60
+/** [1] check_times: an impact time may exceed t by this relative round-off */
+#define ED_TIMES_RTOL 1e-12
+/** math.pi */
+#define ED_PI 3.141592653589793
+
+#define ED(e) (&(e)->core.s.ed)
+
+/* event kinds (event_driven._KIND_*) */
+enum { ED_IMPACT = 0, ED_RELEASE = 1, ED_OVERTURN = 2, ED_SLIP = 3, ED_CONE = 4 };
+
+/* ------------------------------------------------------------------------------------------ helpers */
+
+/** math.ulp of a finite x >= 0 (the callers pass max(|t|, 1)) */
+static double ed_ulp(double x)
+{
+    return nextafter(x, INFINITY) - x;
+}
+
+static int ed_popcount(rk_set s)
+{
+    int n = 0;
+    while (s) {
+        n += (int)(s & 1u);
+        s >>= 1;
+    }
+    return n;
+}
+
+static int ed_sliding(const rk_model *m, int mode)
+{
+    int sigma = 0;
+    m->ops->stick_of(m, mode, &sigma);
+    return sigma != 0;
+}
+
+static const char *ed_mode_name(int mode, char *buf, size_t n)
+{
+    static const char *const NAMES[] = {"FULL", "LEFT", "RIGHT", "FLIGHT", "FULL_SLIDE_POS", "FULL_SLIDE_NEG",
+                                        "LEFT_SLIDE_POS", "LEFT_SLIDE_NEG", "RIGHT_SLIDE_POS",
+                                        "RIGHT_SLIDE_NEG"};
+    if (mode >= 0 && mode < 10)
+        return NAMES[mode];
+    snprintf(buf, n, "%d", mode);
+    return buf;
+}
+
+/** Note the ratio d [1] (NAN: None): Integrator.note_ratio (at most mu) */
+static void ed_note_ratio(rk_engine *e, double d)
+{
+    rk_ed_state *s = ED(e);
+    if (d > s->friction_demand)
+        s->friction_demand = d < e->model.mu ? d : e->model.mu;
+}
+
+/** _demand_ratio: |lam_T| / lam_N, NAN (None) when lam_N carries no load */
+static double ed_ratio(const rk_ed_state *s, const double *lam)
+{
+    return lam[0] > s->force_floor ? fabs(lam[1]) / lam[0] : NAN;
+}
+
+/** moreau_jean.inexact_message, the text of an "inexact_contact" report */
+static void ed_report_inexact(rk_engine *e, const rk_lcp_solution *sol, double t, const char *what)
+{
+    char set[64];
+    int i, n = 0, len;
+    len = snprintf(set, sizeof set, "(");
+    for (i = 0; i < e->model.ops->n_contacts; i++) {
+        if (RK_IN(sol->active, i)) {
+            len += snprintf(set + len, sizeof set - (size_t)len, n ? ", %d" : "%d", i);
+            n++;
+        }
+    }
+    snprintf(set + len, sizeof set - (size_t)len, n == 1 ? ",)" : ")");
+    rk_report_add(&e->reports, RK_REPORT_INEXACT_CONTACT, t, "the %s at t = %.17g s has no exact solution (least "
+                  "violation %.3g, closed contacts %s): kept the least-violating one; a corner may sink or lift "
+                  "against the contact law", what, t, sol->violation, set);
+}
+
+/* ------------------------------------------------------------------------------------------ the mode's functions
+ * `_functions`: (rhs, G, totals) of a mode under the input. The closures of the Python read ag.value of a
+ * constant input and ag(t) otherwise. */
+typedef struct ed_fn {
+    rk_engine *e;
+    int mode;
+    rk_motion *ag;
+    int constant;
+    double a0;                  /**< ag.value of a constant input */
+    rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
+} ed_fn;
+
+static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag)
+{
+    f->e = e;
+    f->mode = mode;
+    f->ag = ag;
+    f->constant = ag->constant;
+    /* (ScaledMotion.value = factor * motion(0.0); ConstantMotion.value = the value) */
+    f->a0 = ag->constant ? rk_motion_eval(ag, 0.0, NULL, NULL) : 0.0;
+    rk_error_clear(&f->err);
+}
+
+/** ag(t) as the Python reads it: a0 for a constant input */
+static rk_status ed_ag(ed_fn *f, double t, double *a)
+{
+    int failed = 0;
+    char msg[RK_MSG_LEN];
+    if (f->constant) {
+        *a = f->a0;
+        return RK_OK;
+    }
+    msg[0] = '\0';
+    *a = rk_motion_eval(f->ag, t, &failed, msg);
+    if (failed)
+        return rk_fail(&f->err, RK_ERR_VALUE, "%s", msg);
+    return RK_OK;
+}
+
+/** ag(t) called directly (the Python's ag(t) at an event) */
+static rk_status ed_ag_call(rk_motion *ag, double t, double *a, rk_error *err)
+{
+    int failed = 0;
+    char msg[RK_MSG_LEN];
+    msg[0] = '\0';
+    *a = rk_motion_eval(ag, t, &failed, msg);
+    if (failed)
+        return rk_fail(err, RK_ERR_VALUE, "%s", msg);
+    return RK_OK;
+}
+
+static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    double a;
+    rk_status st = ed_ag(f, t, &a);
+    if (st != RK_OK)
+        return st;
+    st = rk_mode_rhs(&f->e->model, f->mode, y, a, dy);
+    if (st != RK_OK)
+        return rk_fail(&f->err, st, "the acceleration of mode %d has no solution at t = %.17g s", f->mode, t);
+    return RK_OK;
+}
+
+static rk_status ed_G(void *ctx, double t, const double *y, double *g)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    double a;
+    rk_status st = ed_ag(f, t, &a);
+    if (st != RK_OK)
+        return st;
+    rk_mode_monitors(&f->e->model, f->mode, y, a, g, NULL, NULL);
+    return RK_OK;
+}
+
+/** totals(t, y): (sum lambda_N, sum lambda_T) [N]; *has 0 in flight (the Python's totals is None) */
+static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
+{
+    double a, g[RK_MAX_EVENTS];
+    int has = 0;
+    rk_status st = ed_ag(f, t, &a);
+    if (st != RK_OK)
+        return st;
+    lam[0] = lam[1] = NAN;
+    rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, &has);
+    return RK_OK;
+}
+
+/** Copy a callback's failure into err (the status st came back from a call that ran the callbacks) */
+static rk_status ed_pass(ed_fn *f, rk_status st, rk_error *err)
+{
+    if (st != RK_OK && f->err.status != RK_OK && err != NULL)
+        *err = f->err;
+    return st;
+}
+
+#define ED_TRY(x) do { rk_status st_ = (x); if (st_ != RK_OK) return st_; } while (0)
+#define ED_TRYF(f, x) do { rk_status st_ = (x); if (st_ != RK_OK) return ed_pass((f), st_, err); } while (0)
+
+/** `_kinds`: the meaning of each event function of mode; returns their number */
+static int ed_kinds(const rk_model *m, int mode, int *kinds)
+{
+    rk_set closed = m->ops->closed_of(m, mode);
+    int nc = m->ops->n_contacts, i, n = 0;
+    for (i = 0; i < nc; i++)
+        kinds[n++] = RK_IN(closed, i) ? ED_RELEASE : ED_IMPACT;
+    if (ed_sliding(m, mode))
+        kinds[n++] = ED_SLIP;
+    else if (closed && !isinf(m->mu))
+        kinds[n++] = ED_CONE;
+    kinds[n++] = ED_OVERTURN;
+    return n;
+}
+
+/** whether the mode has force totals (the Python's totals is not None: closed contacts) */
+static int ed_has_totals(const rk_model *m, int mode)
+{
+    return m->ops->closed_of(m, mode) != 0;
+}
+
+/** `_atol_of` */
+static void ed_atol(const rk_engine *e, int mode, double *atol)
+{
+    const rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int idx[RK_MAX_DOF], k, j;
+    double ts = m->time_scale;
+    k = rk_dofs_of(m, mode, idx);
+    for (j = 0; j < k; j++) {
+        atol[j] = s->tolerance * m->dof_scales[idx[j]];
+        atol[k + j] = s->tolerance * m->dof_scales[idx[j]] / ts;
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ state */
+
+/** `_set_state` (has_old 0 at __init__: no previous mode) */
+static void ed_set_state(rk_engine *e, int mode, const double *q, const double *v, int has_old)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int old = s->mode;
+    double shift = 0.0;
+    s->mode = mode;
+    s->k = rk_reduce_any(m, mode, q, v, s->y);
+    /* a sticking mode on the ground keeps the base's horizontal offset outside its reduced state: unchanged
+     * from a sticking mode, read off the state after flight or sliding (below gap_tol: round-off) */
+    if (!ed_sliding(m, mode) && m->ops->closed_of(m, mode)) {
+        if (has_old && !ed_sliding(m, old) && m->ops->closed_of(m, old)) {
+            shift = s->shift;
+        } else {
+            shift = rk_shift_of(m, mode, q);
+            if (fabs(shift) <= s->gap_tol)
+                shift = 0.0;
+        }
+    }
+    s->shift = shift;
+    s->live = 0;
+    e->core.token++;
+}
+
+void rk_ed_full_state(rk_engine *e, double *q, double *v)
+{
+    const rk_ed_state *s = ED(e);
+    rk_embed_any(&e->model, s->mode, s->y, q, v);
+    if (s->shift != 0.0)
+        q[e->model.ops->slide_index] += s->shift;
+}
+
+void rk_ed_outputs(rk_engine *e, double *out)
+{
+    const rk_ed_state *s = ED(e);
+    rk_outputs_of(&e->model, s->mode, s->y, s->shift, out);
+}
+
+/* ------------------------------------------------------------------------------------------ init */
+
+static rk_status ed_check_real(const char *name, double x, double lo, double hi, int lo_open, rk_error *err)
+{
+    char rng[96];
+    if (isfinite(x) && (x > lo || (!lo_open && x == lo)) && x <= hi)
+        return RK_OK;
+    snprintf(rng, sizeof rng, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
+    if (!isfinite(x))
+        return rk_fail(err, RK_ERR_VALUE, "%s = %.17g is not finite; allowed range %s", name, x, rng);
+    return rk_fail(err, RK_ERR_VALUE, "%s = %g is out of range; allowed range %s", name, x, rng);
+}
+
+rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_options *o = &e->options;
+    rk_model_tolerances sc;
+    ED_TRY(ed_check_real("tolerance", o->tolerance, 1e-14, 1e-2, 0, err));
+    ED_TRY(ed_check_real("zeno_tol", o->zeno_tol, 0.0, 1e-2, 1, err));
+    if (o->method != RK_METHOD_DOP853 && o->method != RK_METHOD_DOPRI5)
+        return rk_fail(err, RK_ERR_VALUE, "method = %d is not supported; allowed values: 'DOP853', 'DOPRI5', "
+                       "'RK45', 0, 1", (int)o->method);
+    if (mode < 0 || mode >= e->model.ops->n_modes)
+        return rk_fail(err, RK_ERR_VALUE, "mode = %d is out of range; allowed range [0, %d]", mode,
+                       e->model.ops->n_modes - 1);
+    memset(s, 0, sizeof(*s));
+    rk_model_scale_tolerances(&e->model, &o->tolerances, &sc);
+    s->t = o->t0;
+    s->tolerance = o->tolerance;
+    s->dt_max = o->dt_max > 0.0 ? o->dt_max : INFINITY;     /* options.dt_max or math.inf */
+    s->tab = rk_tableau_of(o->method);
+    if (s->tab == NULL)
+        return rk_fail(err, RK_ERR_INTERNAL, "no Runge-Kutta tableau for method %d", (int)o->method);
+    s->gap_tol = sc.gap;
+    s->v_tol = sc.rest_velocity;
+    s->v_zeno = o->zeno_tol * sc.velocity_scale;
+    s->event_tol = o->tolerances.event;
+    s->stateless_step = sc.stateless_step;
+    s->force_floor = sc.force_floor;
+    s->max_events = o->max_events;
+    s->impacts = 0;
+    s->overturned = 0;
+    s->n_steps = 0;
+    s->h = NAN;
+    s->friction_demand = 0.0;
+    s->painleve = 0;
+    s->live = 0;
+    s->rhs_mode = -1;
+    s->max_work = -1;
+    s->work_end = INFINITY;
+    ed_set_state(e, mode, q, v, 0);
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ samples */
+
+/** The rows of a sample call (the Python's ``pending`` deque and ``out`` list). */
+typedef struct ed_out {
+    const double *times;
+    long long n, next;          /**< pending: times[next .. n) */
+    int *modes;
+    double *values;
+    long long *impacts;
+    int *overturned;
+    long long row;              /**< rows written */
+} ed_out;
+
+static int ed_pending(const ed_out *o)
+{
+    return o != NULL && o->next < o->n;
+}
+
+void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *modes, double *values,
+               long long *impacts, int *over)
+{
+    const rk_ed_state *s = ED(e);
+    int n_out = e->model.ops->n_outputs;
+    rk_outputs_of(&e->model, mode, y, s->shift, values);
+    values[n_out] = s->friction_demand;
+    values[n_out + 1] = (double)s->painleve;
+    *modes = overturned ? 10 : mode;        /* modes.OVERTURNED */
+    *impacts = s->impacts;
+    *over = overturned;
+}
+
+/** `_sample_row` appended to out; overturned < 0: the current flag (the Python's None) */
+static void ed_row(rk_engine *e, ed_out *o, int mode, const double *y, int overturned)
+{
+    int stride = e->model.ops->n_outputs + 2;
+    long long r = o->row++;
+    o->next++;
+    rk_ed_row(e, mode, y, overturned < 0 ? ED(e)->overturned : overturned, o->modes + r,
+              o->values + r * stride, o->impacts + r, o->overturned + r);
+}
+
+/** `_record_samples`: the pending samples before (or up to, inclusive) t_last, read from the dense output */
+static rk_status ed_record_samples(rk_engine *e, ed_out *o, int mode, double t_last, int inclusive, ed_fn *f,
+                                   rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    double y[RK_MAX_Y];
+#define ED_BEFORE(t) (inclusive ? (t) <= t_last : (t) < t_last)
+    if (ed_pending(o) && ED_BEFORE(o->times[o->next])) {
+        while (ed_pending(o) && ED_BEFORE(o->times[o->next])) {
+            ED_TRYF(f, rk_dense_eval(&s->stepper, o->times[o->next], y, err));
+            ed_row(e, o, mode, y, 0);
+        }
+        if (s->max_work >= 0)
+            s->work_end = (double)s->n_steps + (double)s->max_work;     /* the budget applies per sample */
+    }
+#undef ED_BEFORE
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ contact events */
+
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+                           int *mode, double *v_out, int *changed, rk_error *err);
+
+/** `_record_impact` */
+static rk_status ed_record_impact(rk_engine *e, double t, const double *v_minus, const double *v_plus,
+                                  rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    int n = e->model.ops->n_dof, i;
+    double row[1 + 2 * RK_MAX_DOF];
+    rk_status st;
+    s->impacts++;
+    st = rk_log_append(&e->impact_times, &t);
+    if (st != RK_OK)
+        return rk_fail(err, st, "out of memory growing the impact log (impact_log_size = None)");
+    row[0] = t;
+    for (i = 0; i < n; i++) {
+        row[1 + i] = v_minus[i];
+        row[1 + n + i] = v_plus[i];
+    }
+    st = rk_log_append(&e->impact_log, row);
+    if (st != RK_OK)
+        return rk_fail(err, st, "out of memory growing the impact log (impact_log_size = None)");
+    return RK_OK;
+}
+
+/** `_count_painleve` */
+static void ed_count_painleve(rk_engine *e, const double *q, const double *v_minus, const double *v_plus,
+                              rk_set cand)
+{
+    rk_ed_state *s = ED(e);
+    if (rk_painleve_sticks(&e->model, q, v_minus, v_plus, cand, s->v_tol) != 0)
+        s->painleve++;
+}
+
+/** W^T x for the columns of W (n_dof x n_contacts) */
+static void ed_wtx(const rk_model *m, const double *W, const double *x, double *out)
+{
+    int n = m->ops->n_dof, nc = m->ops->n_contacts, i, c;
+    for (c = 0; c < nc; c++) {
+        double acc = 0.0;
+        for (i = 0; i < n; i++)
+            acc += W[i * nc + c] * x[i];
+        out[c] = acc;
+    }
+}
+
+/** `_impact_velocity`: the impact LCP under the Zeno rule; writes the post-impact velocity */
+static rk_status ed_impact_velocity(rk_engine *e, const double *q, const double *v, rk_set cand, rk_set closed,
+                                    double ag_t, double t, double *v_out, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int n = m->ops->n_dof, nc = m->ops->n_contacts, i, j;
+    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS];
+    double U_plus[RK_MAX_CONTACTS];
+    rk_set forced = cand & closed;
+    rk_contact_args a;
+    rk_lcp_solution sol;
+    m->ops->contact_jacobians(m, q, W_N, W_T);
+    rk_contact_args_default(&a);
+    a.forced = forced;
+    ED_TRY(rk_impact(m, q, v, cand, &a, &sol, err));
+    for (;;) {
+        rk_set new_ = 0;
+        ed_wtx(m, W_N, sol.v, U_plus);
+        /* velocity test (a corner that takes impulse and stays at rest needs no closure) */
+        for (i = 0; i < nc; i++) {
+            if (RK_IN(cand, i) && !RK_IN(forced, i) && U_plus[i] < s->v_zeno
+                && (!RK_IN(sol.active, i) || U_plus[i] > s->v_tol))
+                new_ |= 1u << i;
+        }
+        if (!new_ && !forced && cand) {
+            int all = 1;
+            for (i = 0; i < nc; i++)
+                if (RK_IN(cand, i) && !(U_plus[i] >= s->v_zeno))
+                    all = 0;
+            if (all) {
+                /* bounce test, in flight only: a_N the corner's normal acceleration in free flight */
+                double Minv[RK_MAX_DOF * RK_MAX_DOF], f[RK_MAX_DOF], acc[RK_MAX_DOF], a_N[RK_MAX_CONTACTS];
+                double d_N[RK_MAX_CONTACTS], d_T[RK_MAX_CONTACTS];
+                int best = -1;
+                double best_key = 0.0;
+                rk_model_inverse_mass(m, q, Minv);
+                m->ops->forces(m, q, sol.v, ag_t, f);
+                for (i = 0; i < n; i++) {
+                    double sacc = 0.0;
+                    for (j = 0; j < n; j++)
+                        sacc += Minv[i * n + j] * f[j];
+                    acc[i] = sacc;
+                }
+                ed_wtx(m, W_N, acc, a_N);
+                m->ops->contact_drift(m, q, sol.v, d_N, d_T);
+                for (i = 0; i < nc; i++)
+                    a_N[i] = a_N[i] + d_N[i];
+                for (i = 0; i < nc; i++) {
+                    if (RK_IN(cand, i) && a_N[i] < 0.0) {
+                        double key = U_plus[i] * U_plus[i] / -a_N[i];
+                        if (best < 0 || key < best_key) {
+                            best = i;
+                            best_key = key;
+                        }
+                    }
+                }
+                if (best >= 0 && U_plus[best] * U_plus[best] < -2.0 * a_N[best] * s->gap_tol)
+                    new_ = 1u << best;
+            }
+        }
+        if (!new_)
+            break;
+        forced |= new_;
+        a.forced = forced;
+        ED_TRY(rk_impact(m, q, v, cand, &a, &sol, err));
+    }
+    if (!sol.exact)
+        ed_report_inexact(e, &sol, t, "impact LCP");
+    memcpy(v_out, sol.v, (size_t)n * sizeof(double));
+    return RK_OK;
+}
+
+/** `_select_mode` */
+static rk_status ed_select_mode(rk_engine *e, const double *q, const double *v, double ag_t, double t,
+                                int prefer, int *mode, rk_lcp_solution *sol, int *has_sol, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    ED_TRY(rk_next_mode(&e->model, q, v, ag_t, s->gap_tol, s->v_tol, prefer, mode, sol, has_sol, err));
+    if (*has_sol && !sol->exact && !rk_lcp_painleve(sol))
+        ed_report_inexact(e, sol, t, "uplift LCP");
+    return RK_OK;
+}
+
+/** `_decide`: (mode, v) after the consistent state (q, v); *changed 1 when a Painleve impulse changed v */
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+                           int *mode, double *v_out, int *changed, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    rk_lcp_solution sol;
+    int has = 0;
+    *changed = 0;
+    memcpy(v_out, v, (size_t)m->ops->n_dof * sizeof(double));
+    ED_TRY(ed_select_mode(e, q, v, ag_t, t, prefer, mode, &sol, &has, err));
+    if (has && rk_lcp_painleve(&sol)) {
+        /* Painleve: an impact without collision makes the sliding corners stick (Genot & Brogliato 1999),
+         * then the acceleration problem at rest tangentially */
+        rk_contact_args a;
+        rk_lcp_solution sol_i;
+        rk_set cands = sol.active ? sol.active : rk_closed_candidates(m, q, v, s->gap_tol, s->v_tol);
+        s->painleve++;
+        rk_contact_args_default(&a);
+        a.has_e = 1;
+        a.e_N = 0.0;
+        a.e_T = 0.0;
+        a.prefer = RK_STICK;
+        ED_TRY(rk_impact(m, q, v, cands, &a, &sol_i, err));
+        if (!sol_i.exact)
+            ed_report_inexact(e, &sol_i, t, "Painleve impact LCP");
+        memcpy(v_out, sol_i.v, (size_t)m->ops->n_dof * sizeof(double));
+        *changed = 1;
+        ED_TRY(ed_select_mode(e, q, v_out, ag_t, t, -1, mode, &sol, &has, err));
+    }
+    return RK_OK;
+}
+
+/** `_enter` */
+static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+                          rk_error *err)
+{
+    int mode, changed;
+    double v2[RK_MAX_DOF];
+    ED_TRY(ed_decide(e, q, v, ag_t, t, prefer, &mode, v2, &changed, err));
+    ed_set_state(e, mode, q, v2, 1);
+    return RK_OK;
+}
+
+/** `_impact` */
+static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, double t, double ag_t,
+                           rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int nc = m->ops->n_contacts, n = m->ops->n_dof, i, mode, changed;
+    double g[RK_MAX_CONTACTS], q[RK_MAX_DOF], v_plus[RK_MAX_DOF], v_impact[RK_MAX_DOF];
+    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], U_minus[RK_MAX_CONTACTS];
+    rk_set cand = 0, grazing = 0, closed_before;
+    int recorded;
+    memcpy(q, q_in, (size_t)n * sizeof(double));
+    m->ops->gaps(m, q, g);
+    for (i = 0; i < nc; i++)
+        if (g[i] <= s->gap_tol)
+            cand |= 1u << i;
+    closed_before = m->ops->closed_of(m, s->mode);
+    /* a corner found below the ground beyond round-off fired event_tol below it: a grazing landing, put back
+     * onto the ground and closed plastically (the Zeno rule) */
+    for (i = 0; i < nc; i++)
+        if (RK_IN(cand, i) && g[i] < -e->options.tolerances.grazing * s->gap_tol)
+            grazing |= 1u << i;
+    if (grazing)
+        ED_TRY(rk_project_to_ground(m, q_in, cand | closed_before, q, err));
+    if (ed_popcount(closed_before) == 1 && ed_popcount(cand) == nc && nc == 2
+        && m->ops->classical_impact_velocity != NULL) {
+        /* an impact rule of the model (the classical rule) replaces the impact LCP at a rocking impact */
+        if (m->ops->classical_impact_velocity(m, q, v, s->mode, v_plus)) {
+            ED_TRY(ed_record_impact(e, t, v, v_plus, err));
+            ed_count_painleve(e, q, v, v_plus, cand);
+            return ed_enter(e, q, v_plus, ag_t, t, -1, err);
+        }
+    }
+    ED_TRY(ed_impact_velocity(e, q, v, cand, grazing, ag_t, t, v_impact, err));
+    ED_TRY(ed_decide(e, q, v_impact, ag_t, t, -1, &mode, v_plus, &changed, err));
+    if (grazing & ~m->ops->closed_of(m, mode)) {
+        /* held closed, the corner is still sent into flight (the sticking LCP has no solution): not held */
+        memcpy(q, q_in, (size_t)n * sizeof(double));
+        ED_TRY(ed_impact_velocity(e, q, v, cand, 0, ag_t, t, v_impact, err));
+        ED_TRY(ed_decide(e, q, v_impact, ag_t, t, -1, &mode, v_plus, &changed, err));
+    }
+    m->ops->contact_jacobians(m, q, W_N, W_T);
+    ed_wtx(m, W_N, v, U_minus);
+    recorded = 0;
+    for (i = 0; i < nc; i++)
+        if (RK_IN(cand, i) && U_minus[i] < -s->v_zeno)
+            recorded = 1;
+    if (recorded)
+        ED_TRY(ed_record_impact(e, t, v, v_plus, err));
+    ed_count_painleve(e, q, v, v_impact, cand);
+    ed_set_state(e, mode, q, v_plus, 1);
+    return RK_OK;
+}
+
+/** `_note_percussions`: |sum Lambda_T| / sum Lambda_N of the impact from v_minus to the current velocity */
+static void ed_note_percussions(rk_engine *e, const double *q, const double *v_minus)
+{
+    const rk_model *m = &e->model;
+    const rk_ed_state *s = ED(e);
+    int n = m->ops->n_dof, i, j;
+    double M[RK_MAX_DOF * RK_MAX_DOF], qq[RK_MAX_DOF], v[RK_MAX_DOF], dv[RK_MAX_DOF], P[RK_MAX_DOF];
+    double lam_N;
+    m->ops->mass_matrix(m, q, M);
+    rk_ed_full_state(e, qq, v);
+    for (i = 0; i < n; i++)
+        dv[i] = v[i] - v_minus[i];
+    for (i = 0; i < n; i++) {
+        double acc = 0.0;
+        for (j = 0; j < n; j++)
+            acc += M[i * n + j] * dv[j];
+        P[i] = acc;
+    }
+    lam_N = P[m->ops->lift_index];
+    if (lam_N > s->force_floor * m->time_scale)
+        ed_note_ratio(e, fabs(P[m->ops->slide_index]) / lam_N);
+}
+
+/** `_handle` */
+static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], a;
+    int j;
+    rk_ed_full_state(e, q, v);
+    if (kind == ED_OVERTURN) {
+        /* the motion ends: the pose at |phi| = pi/2, at rest */
+        s->overturned = 1;
+        for (j = 0; j < s->k; j++)
+            s->y[s->k + j] = 0.0;
+        e->core.token++;
+        return RK_OK;
+    }
+    if (kind == ED_IMPACT) {
+        ED_TRY(ed_ag_call(f->ag, t, &a, err));
+        ED_TRY(ed_impact(e, q, v, t, a, err));
+        ed_note_percussions(e, q, v);
+    } else if (kind == ED_CONE) {
+        /* the friction reached mu lambda_N: the corners slide against it */
+        double lam[2];
+        ED_TRYF(f, ed_totals(f, t, s->y, lam));
+        ED_TRY(ed_ag_call(f->ag, t, &a, err));
+        ED_TRY(ed_enter(e, q, v, a, t, lam[1] > 0.0 ? RK_SLIDE_NEG : RK_SLIDE_POS, err));
+    } else {
+        ED_TRY(ed_ag_call(f->ag, t, &a, err));
+        ED_TRY(ed_enter(e, q, v, a, t, -1, err));
+    }
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ demand peak */
+
+/** events.parabola_peak: 1 with (x, value) of the vertex when it is a maximum inside (0, 1) */
+static int ed_parabola_peak(double f0, double fm, double f1, double *x, double *value)
+{
+    double c = 2.0 * (f0 + f1) - 4.0 * fm, b;
+    if (c >= 0.0)
+        return 0;
+    b = f1 - f0 - c;
+    *x = -b / (2.0 * c);
+    if (!(0.0 < *x && *x < 1.0))
+        return 0;
+    *value = f0 + (b + c * *x) * *x;
+    return 1;
+}
+
+/** the demand ratio on the dense output of the last step (NAN: None) */
+static rk_status ed_demand_at(rk_engine *e, ed_fn *f, double t, double *d, rk_error *err)
+{
+    double y[RK_MAX_Y], lam[2];
+    ED_TRYF(f, rk_dense_eval(&ED(e)->stepper, t, y, err));
+    ED_TRYF(f, ed_totals(f, t, y, lam));
+    *d = ed_ratio(ED(e), lam);
+    return RK_OK;
+}
+
+/** events.brent_max on the demand (None <-> NAN); writes the best value (NAN: None) */
+static rk_status ed_brent_max(rk_engine *e, ed_fn *f, double a, double b, double x, double fx, double xtol,
+                              double *best, rk_error *err)
+{
+    double gx = !isnan(fx) ? -fx : INFINITY;
+    double w = x, v = x, gw = gx, gv = gx, d = 0.0, ee = 0.0;
+    int it;
+    for (it = 0; it < ED_BRENT_MAX_ITER; it++) {
+        double xm = 0.5 * (a + b), tol2 = 2.0 * xtol, u, fu, gu;
+        int golden = 1;
+        if (fabs(x - xm) <= tol2 - 0.5 * (b - a))
+            break;
+        if (fabs(ee) > xtol) {
+            double r = (x - w) * (gx - gv);
+            double q = (x - v) * (gx - gw);
+            double p = (x - v) * q - (x - w) * r, e_old;
+            q = 2.0 * (q - r);
+            if (q > 0.0)
+                p = -p;
+            q = fabs(q);
+            e_old = ee;
+            ee = d;
+            if (q != 0.0 && fabs(p) < fabs(0.5 * q * e_old) && q * (a - x) < p && p < q * (b - x)) {
+                d = p / q;
+                golden = 0;
+                if ((x + d) - a < tol2 || b - (x + d) < tol2)
+                    d = xm >= x ? xtol : -xtol;
+            }
+        }
+        if (golden) {
+            ee = x >= xm ? (a - x) : (b - x);
+            d = ED_CGOLD * ee;
+        }
+        u = fabs(d) >= xtol ? x + d : x + (d >= 0.0 ? xtol : -xtol);
+        ED_TRY(ed_demand_at(e, f, u, &fu, err));
+        gu = !isnan(fu) ? -fu : INFINITY;
+        if (gu <= gx) {
+            if (u >= x)
+                a = x;
+            else
+                b = x;
+            v = w;
+            gv = gw;
+            w = x;
+            gw = gx;
+            x = u;
+            gx = gu;
+        } else {
+            if (u < x)
+                a = u;
+            else
+                b = u;
+            if (gu <= gw || w == x) {
+                v = w;
+                gv = gw;
+                w = u;
+                gw = gu;
+            } else if (gu <= gv || v == x || v == w) {
+                v = u;
+                gv = gu;
+            }
+        }
+    }
+    *best = gx != INFINITY ? -gx : NAN;
+    return RK_OK;
+}
+
+/** `_demand_peak`: raise friction_demand to the peak of the demand inside [t0, t1] (ends d0, d1 noted);
+ *  hermite 1: the middle state from the cubic Hermite estimate (mid_of), else from the dense output */
+static rk_status ed_demand_peak(rk_engine *e, ed_fn *f, double t0, double d0, double t1, double d1, int hermite,
+                                rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    double tm, y_mid[RK_MAX_Y], lam[2], dm, vx, vv, tv, dv, xtol, best;
+    if (isnan(d0) || isnan(d1) || !(t1 > t0) || (d0 > d1 ? d0 : d1) < ED_DEMAND_STEP_GATE * s->friction_demand)
+        return RK_OK;
+    tm = 0.5 * (t0 + t1);
+    if (!hermite)
+        ED_TRYF(f, rk_dense_eval(&s->stepper, tm, y_mid, err));
+    else
+        rk_hermite_mid(&s->stepper, y_mid);
+    ED_TRYF(f, ed_totals(f, tm, y_mid, lam));
+    dm = ed_ratio(s, lam);
+    if (isnan(dm))
+        return RK_OK;
+    if (!ed_parabola_peak(d0, dm, d1, &vx, &vv) || vv < (1.0 - ED_DEMAND_PEAK_MARGIN) * s->friction_demand)
+        return RK_OK;
+    tv = t0 + vx * (t1 - t0);
+    xtol = sqrt(s->tolerance) * (t1 - t0);
+    if (4.0 * ed_ulp(fmax(fabs(t1), 1.0)) > xtol)      /* max(a, b): b only when larger */
+        xtol = 4.0 * ed_ulp(fmax(fabs(t1), 1.0));
+    ED_TRY(ed_demand_at(e, f, tv, &dv, err));
+    ED_TRY(ed_brent_max(e, f, t0, t1, tv, dv, xtol, &best, err));
+    ed_note_ratio(e, best);
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ segment */
+
+/** Per-segment event bookkeeping */
+typedef struct ed_ev {
+    int n;                              /**< event functions */
+    int armed[RK_MAX_EVENTS], watch[RK_MAX_EVENTS];
+    int has_start[RK_MAX_EVENTS];       /**< rose: bounce found (start_t, start_g) */
+    double start_t[RK_MAX_EVENTS];
+    double start_g[RK_MAX_EVENTS * RK_MAX_EVENTS];
+} ed_ev;
+
+/** `_bounces` after the first step of a segment */
+static rk_status ed_bounces(rk_engine *e, rk_event_ctx *c, const int *kinds, ed_ev *ev, const double *g_new,
+                            ed_fn *f, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    double level = e->options.tolerances.rise * s->event_tol;
+    int i;
+    for (i = 0; i < ev->n; i++) {
+        if (ev->watch[i] && kinds[i] == ED_IMPACT && g_new[i] <= 0.0) {
+            int found = 0;
+            double tf, gf[RK_MAX_EVENTS];
+            ED_TRYF(f, rk_bounce_search(c, i, s->stepper.t_old, s->stepper.t, level, &found, &tf, gf, err));
+            if (found) {
+                ev->armed[i] = 1;
+                ev->watch[i] = 0;
+                ev->has_start[i] = 1;
+                ev->start_t[i] = tf;
+                memcpy(ev->start_g + i * ev->n, gf, (size_t)ev->n * sizeof(double));
+            }
+        }
+    }
+    return RK_OK;
+}
+
+/** `_find_event`: *found 1 with (te, index) of the first event in the last step */
+static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const double *g_prev,
+                               const double *g_new, int *found, double *te, int *idx, ed_fn *f, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    double tol = s->event_tol, t0 = s->stepper.t_old, t_hit = s->stepper.t, xtol;
+    int n_sub = e->options.tolerances.sub_samples, n = ev->n, i;
+    int hits[RK_MAX_EVENTS], n_hits = 0, others[RK_MAX_EVENTS], n_others = 0;
+    double ga_buf[RK_MAX_EVENTS], gb_buf[RK_MAX_EVENTS], shifts[RK_MAX_EVENTS];
+    const double *g_a = g_prev, *g_b = g_new;
+    *found = 0;
+    for (i = 0; i < n; i++)
+        if ((ev->armed[i] && g_new[i] <= 0.0) || (ev->watch[i] && g_new[i] <= -tol))
+            hits[n_hits++] = i;
+    if (!n_hits) {
+        int used_dense = 0;
+        ED_TRYF(f, rk_dip_search(c, ev->armed, g_prev, g_new, n_sub, hits, &n_hits, &t0, &t_hit, ga_buf,
+                                 gb_buf, &used_dense, err));
+        if (!n_hits)
+            return RK_OK;
+        g_a = ga_buf;
+        g_b = gb_buf;
+    }
+    xtol = 4.0 * ed_ulp(fmax(fabs(s->stepper.t), 1.0));
+    for (i = 0; i < n; i++)
+        shifts[i] = ev->armed[i] ? 0.0 : tol;
+    ED_TRYF(f, rk_earliest_root(c, hits, n_hits, shifts, ev->has_start, ev->start_t, ev->start_g, t0, g_a, t_hit,
+                                g_b, xtol, te, idx, err));
+    for (i = 0; i < n - 1; i++) {
+        int j, in_hits = 0;
+        for (j = 0; j < n_hits; j++)
+            if (hits[j] == i)
+                in_hits = 1;
+        if (ev->armed[i] && !in_hits)
+            others[n_others++] = i;
+    }
+    if (n_others && *te > t0) {
+        int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0;
+        double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS];
+        ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga, &tn,
+                                     gn, err));
+        if (fn)
+            ED_TRYF(f, rk_earliest_root(c, neg, n_neg, shifts, ev->has_start, ev->start_t, ev->start_g, ta, ga,
+                                        tn, gn, xtol, te, idx, err));
+    }
+    *found = 1;
+    return RK_OK;
+}
+
+/** `_stepper`: the live stepper carried on, restarted under a new rhs, or a new one */
+static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    rk_stepper *st = &s->stepper;
+    int same_rhs = s->rhs_mode == f->mode
+                   && (f->constant ? (s->rhs_constant && s->rhs_value == f->a0)
+                                   : (!s->rhs_constant && s->rhs_motion == s->motion_serial));
+    if (s->live && st->t == s->t && st->max_step == max_step) {
+        st->fun = ed_rhs;
+        st->ctx = f;
+        if (!same_rhs)
+            ED_TRYF(f, rk_stepper_restart(st, ed_rhs, f, s->t, s->y, s->h, err));
+    } else {
+        double atol[RK_MAX_Y];
+        ed_atol(e, f->mode, atol);
+        ED_TRYF(f, rk_stepper_init(st, s->tab, ed_rhs, f, s->t, s->y, 2 * s->k, s->tolerance, atol, max_step,
+                                   s->k ? s->h : NAN, NULL, err));
+    }
+    s->rhs_mode = f->mode;
+    s->rhs_constant = f->constant;
+    s->rhs_value = f->a0;
+    s->rhs_motion = s->motion_serial;
+    return RK_OK;
+}
+
+/** `_work_message` */
+static rk_status ed_work_limit(rk_engine *e, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    char note[160], stiff[176], nb[16];
+    note[0] = '\0';
+    stiff[0] = '\0';
+    if (m->ops->work_note != NULL)
+        m->ops->work_note(m, note, sizeof note);
+    if (note[0])
+        snprintf(stiff, sizeof stiff, ", %s", note);
+    return rk_fail(err, RK_ERR_WORK_LIMIT, "event_driven: advancing from t = %.17g s by %.6g s needs more than "
+                   "max_steps = %lld internal steps (Runge-Kutta steps, each event counting %d); %lld impacts so "
+                   "far in this step; stopped at t = %.17g s in mode %s with steps of %.3g s (tolerance = %g, "
+                   "dt_max = %g s, method %s%s, time scale 1/p = %.3g s); the step was refused and the state kept. "
+                   "Way out: shorter communication steps, a looser tolerance, a larger dt_max (0: uncapped), or "
+                   "max_steps=None (unlimited, for trusted batch runs)", s->span0, s->span1 - s->span0,
+                   s->max_work, ED_EVENT_WORK, s->impacts - s->impacts0, s->stepper.t,
+                   ed_mode_name(s->mode, nb, sizeof nb), s->stepper.h_abs, s->tolerance, s->dt_max,
+                   rk_tableau_name(s->tab), stiff, m->time_scale);
+}
+
+/** `_segment`: integrate the current mode towards t_stop; *event 1 if an event ended it */
+static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *o, int *event, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int mode = s->mode, k = s->k, kinds[RK_MAX_EVENTS], has_totals, peaks, first, i;
+    ed_fn f;
+    ed_ev ev;
+    rk_event_ctx c;
+    double lam[2], d_prev = NAN, max_step, g_prev[RK_MAX_EVENTS], g_new[RK_MAX_EVENTS];
+    *event = 0;
+    ed_fn_init(&f, e, mode, ag);
+    if (ed_pending(o) && o->times[o->next] <= s->t) {
+        while (ed_pending(o) && o->times[o->next] <= s->t)
+            ed_row(e, o, mode, s->y, 0);
+        if (s->max_work >= 0)
+            s->work_end = (double)s->n_steps + (double)s->max_work;
+    }
+    has_totals = ed_has_totals(m, mode);
+    if (k == 0 && ag->constant) {
+        /* nothing moves and the (positive) contact forces cannot change */
+        if (has_totals) {
+            ED_TRYF(&f, ed_totals(&f, s->t, s->y, lam));
+            if (lam[0] > s->force_floor)
+                ed_note_ratio(e, fabs(lam[1]) / lam[0]);
+        }
+        s->t = t_stop;
+        while (ed_pending(o) && o->times[o->next] <= t_stop)
+            ed_row(e, o, mode, s->y, 0);
+        e->core.token++;
+        return RK_OK;
+    }
+    ev.n = ed_kinds(m, mode, kinds);
+    /* the friction demand: at the segment's start, at step ends, at its peak inside a step, at the event
+     * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
+    peaks = has_totals && !ed_sliding(m, mode);
+    if (has_totals) {
+        ED_TRYF(&f, ed_totals(&f, s->t, s->y, lam));
+        d_prev = ed_ratio(s, lam);
+        ed_note_ratio(e, d_prev);
+    }
+    /* without state a step only samples the contact forces under a varying input: short enough for the dip
+     * search to see a force that comes and goes */
+    max_step = k ? s->dt_max : (s->dt_max < s->stateless_step ? s->dt_max : s->stateless_step);
+    ED_TRY(ed_stepper(e, &f, max_step, err));
+    c.stepper = &s->stepper;
+    c.G = ed_G;
+    c.G_ctx = &f;
+    c.n_events = ev.n;
+    ED_TRYF(&f, ed_G(&f, s->t, s->y, g_prev));
+    for (i = 0; i < ev.n; i++) {
+        ev.armed[i] = g_prev[i] > 0.0;
+        ev.watch[i] = !ev.armed[i] && g_prev[i] > -s->event_tol;
+        ev.has_start[i] = 0;
+    }
+    first = 1;
+    while (s->stepper.t < t_stop) {
+        double d_new = NAN, te;
+        int found, idx;
+        ED_TRYF(&f, rk_step(&s->stepper, t_stop, err));
+        s->n_steps++;
+        if (s->stepper.failed) {
+            s->stepper.failed = 0;
+            rk_report_add(&e->reports, RK_REPORT_FAILED_STEP, s->stepper.t, "%s", s->stepper.failure);
+        }
+        if ((double)s->n_steps > s->work_end)
+            return ed_work_limit(e, err);
+        ED_TRYF(&f, ed_G(&f, s->stepper.t, s->stepper.y, g_new));
+        /* the demand at the step's end */
+        if (has_totals) {
+            ED_TRYF(&f, ed_totals(&f, s->stepper.t, s->stepper.y, lam));
+            d_new = ed_ratio(s, lam);
+        }
+        for (i = 0; i < ev.n; i++)
+            ev.has_start[i] = 0;
+        if (first) {
+            first = 0;
+            ED_TRY(ed_bounces(e, &c, kinds, &ev, g_new, &f, err));
+        }
+        ED_TRY(ed_find_event(e, &c, &ev, g_prev, g_new, &found, &te, &idx, &f, err));
+        if (found) {
+            double t_old = s->stepper.t_old;
+            ED_TRY(ed_record_samples(e, o, mode, te, 0, &f, err));
+            if (k && s->stepper.h_abs > 0)
+                s->h = s->stepper.h_abs;
+            s->t = te;
+            ED_TRYF(&f, rk_dense_eval(&s->stepper, te, s->y, err));
+            s->live = 0;
+            e->core.token++;
+            if (has_totals) {
+                /* the demand up to the event, its left limit included */
+                double d_e;
+                ED_TRYF(&f, ed_totals(&f, te, s->y, lam));
+                d_e = ed_ratio(s, lam);
+                if (peaks)
+                    ED_TRY(ed_demand_peak(e, &f, t_old, d_prev, te, d_e, 0, err));
+                ed_note_ratio(e, d_e);
+            }
+            ED_TRY(ed_handle(e, kinds[idx], te, &f, err));
+            *event = 1;
+            return RK_OK;
+        }
+        if (ed_pending(o) && o->times[o->next] <= s->stepper.t)
+            ED_TRY(ed_record_samples(e, o, mode, s->stepper.t, 1, &f, err));
+        if (has_totals) {
+            if (peaks)
+                ED_TRY(ed_demand_peak(e, &f, s->stepper.t_old, d_prev, s->stepper.t, d_new, 1, err));
+            ed_note_ratio(e, d_new);
+            d_prev = d_new;
+        }
+        for (i = 0; i < ev.n; i++) {
+            if (g_new[i] > 0.0) {
+                ev.armed[i] = 1;
+                ev.watch[i] = 0;
+            }
+        }
+        memcpy(g_prev, g_new, (size_t)ev.n * sizeof(double));
+    }
+    s->t = s->stepper.t;
+    memcpy(s->y, s->stepper.y, (size_t)(2 * k) * sizeof(double));
+    if (k)
+        s->h = s->stepper.h_abs;
+    s->live = 1;
+    e->core.token++;
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ settle */
+
+/** `_settle`: re-decide the mode of the current state by the acceleration LCP (after an input change) */
+static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int mode = s->mode, nc = m->ops->n_contacts, n_e, i, ok, new_mode, changed;
+    rk_set closed = m->ops->closed_of(m, mode), cc;
+    double ev[RK_MAX_EVENTS], clear = e->options.tolerances.clearly_open, q[RK_MAX_DOF], v[RK_MAX_DOF];
+    double v_new[RK_MAX_DOF], a;
+    ed_fn f;
+    int kinds[RK_MAX_EVENTS];
+    ed_fn_init(&f, e, mode, ag);
+    n_e = ed_kinds(m, mode, kinds);
+    ED_TRYF(&f, ed_G(&f, t, s->y, ev));
+    /* fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip going
+     * on or just starting */
+    ok = 1;
+    for (i = 0; i < n_e - 1; i++) {
+        int c = i >= nc ? ev[i] >= 0.0 : RK_IN(closed, i) ? ev[i] > 0.0 : ev[i] > clear;
+        if (!c) {
+            ok = 0;
+            break;
+        }
+    }
+    if (ok)
+        return RK_OK;
+    rk_ed_full_state(e, q, v);
+    cc = rk_closed_candidates(m, q, v, s->gap_tol, s->v_tol);
+    if ((cc & ~closed) == 0) {
+        int all = 1;
+        for (i = 0; i < nc; i++)
+            if (RK_IN(closed, i) && !(ev[i] > 0.0))
+                all = 0;
+        for (i = nc; i < n_e - 1; i++)
+            if (!(ev[i] >= 0.0))
+                all = 0;
+        if (all)
+            return RK_OK;
+    }
+    ED_TRY(ed_ag_call(ag, t, &a, err));
+    ED_TRY(ed_decide(e, q, v, a, t, -1, &new_mode, v_new, &changed, err));
+    if (new_mode != mode || changed)
+        ed_set_state(e, new_mode, q, v_new, 1);
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ run */
+
+rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *samples, long long n_samples,
+                    long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
+                    unsigned flags, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    ed_out out, *o = NULL;
+    long long n_events = 0;
+    int kink, event;
+    double end_tol;
+    if (samples != NULL) {
+        out.times = samples;
+        out.n = n_samples;
+        out.next = 0;
+        out.modes = modes;
+        out.values = values;
+        out.impacts = impacts;
+        out.overturned = overturned;
+        out.row = 0;
+        o = &out;
+    }
+    if (!ag->constant)
+        s->motion_serial++;             /* a new GroundMotion object: its closures are new */
+    s->max_work = max_steps < 0 ? -1 : max_steps;
+    s->work_end = max_steps < 0 ? INFINITY : (double)s->n_steps + (double)max_steps;
+    s->span0 = s->t;
+    s->span1 = t_end;
+    s->impacts0 = s->impacts;
+    if (t_end <= s->t || s->overturned) {
+        if (t_end > s->t) {
+            s->t = t_end;
+            e->core.token++;
+        }
+        while (ed_pending(o))
+            ed_row(e, o, s->mode, s->y, -1);
+        return RK_OK;
+    }
+    kink = (flags & RK_ADVANCE_CONTINUOUS) != 0;
+    end_tol = 4.0 * ed_ulp(fmax(fabs(t_end), 1.0));
+    while (!s->overturned) {
+        double tb, t_stop;
+        if (t_end - s->t <= end_tol)
+            break;
+        tb = rk_motion_next_breakpoint(ag, s->t);
+        t_stop = t_end < tb ? t_end : tb;
+        if (m->ops->closed_of(m, s->mode) && !kink)
+            ED_TRY(ed_settle(e, s->t, ag, err));
+        ED_TRY(ed_segment(e, t_stop, ag, o, &event, err));
+        if (event) {
+            s->live = 0;
+            kink = 0;
+            n_events++;
+            s->work_end -= ED_EVENT_WORK;
+            if (n_events > s->max_events)
+                return rk_fail(err, RK_ERR_WORK_LIMIT, "event_driven: more than %d events in one advance at "
+                               "t = %.17g s; the motion does not settle; the step was refused. Way out: shorter "
+                               "communication steps", s->max_events, s->t);
+        } else if (t_stop == tb) {
+            /* a kink of ag (a sample of a record): the mode holds and the step goes on across it; a jump:
+             * re-decide the mode and restart */
+            kink = rk_motion_continuous_at(ag, tb);
+            if (!kink)
+                s->live = 0;
+        }
+    }
+    s->t = t_end;
+    e->core.token++;
+    while (ed_pending(o))               /* samples at t_end (or after overturning: frozen state) */
+        ed_row(e, o, s->mode, s->y, -1);
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ plain-data state */
+
+static rk_status ed_check_times(const char *key, const double *times, long long n, double t, long long impacts,
+                                long long stride, rk_error *err)
+{
+    double t_max = t + ED_TIMES_RTOL * fmax(1.0, fabs(t));
+    long long i;
+    if (n > impacts)
+        return rk_fail(err, RK_ERR_VALUE, "state field '%s' holds %lld impacts, more than impacts = %lld", key, n,
+                       impacts);
+    for (i = 0; i < n; i++) {
+        double ti = times[i * stride];
+        if (!isfinite(ti))
+            return rk_fail(err, RK_ERR_VALUE, "state field '%s'[%lld] = %.17g is not finite", key, i * stride, ti);
+        if (ti > t_max || (i && ti < times[(i - 1) * stride]))
+            return rk_fail(err, RK_ERR_VALUE, "state field '%s': impact time %.17g is after t = %.17g or out of "
+                           "order", key, ti, t);
+    }
+    return RK_OK;
+}
+
+rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *impact_times, long long n_times,
+                          const double *impact_log, long long n_log_rows, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int n = m->ops->n_dof, nc = m->ops->n_contacts, k, i, idx[RK_MAX_DOF], row_len = 1 + 2 * m->ops->n_dof;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], g[RK_MAX_CONTACTS], out[RK_MAX_OUTPUTS], phi, gmin;
+    long long r;
+    char bad[256];
+    if (!isfinite(st->t))
+        return rk_fail(err, RK_ERR_VALUE, "state field 't' = %.17g is not finite; allowed range [-inf, inf]", st->t);
+    if (st->mode < 0 || st->mode >= m->ops->n_modes)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'mode' = %d is out of range; allowed range [0, %d]",
+                       st->mode, m->ops->n_modes - 1);
+    k = rk_dofs_of(m, st->mode, idx);
+    if (st->n_y != 2 * k)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'y' has %d values; expected %d", st->n_y, 2 * k);
+    for (i = 0; i < st->n_y; i++)
+        if (!isfinite(st->y[i]))
+            return rk_fail(err, RK_ERR_VALUE, "state field 'y'[%d] = %.17g is not finite", i, st->y[i]);
+    if (st->impacts < 0)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'impacts' = %lld is out of range", st->impacts);
+    if (st->n_steps < 0)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'n_steps' = %lld is out of range", st->n_steps);
+    if (!isnan(st->h) && !(isfinite(st->h) && st->h > 0.0))
+        return rk_fail(err, RK_ERR_VALUE, "state field 'h' = %.17g is not in range; allowed range (0, inf) or nan "
+                       "(unset)", st->h);
+    if (e->impact_times.maxlen >= 0 && n_times > e->impact_times.maxlen)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'impact_times' has %lld values; allowed at most %lld",
+                       n_times, e->impact_times.maxlen);
+    ED_TRY(ed_check_times("impact_times", impact_times, n_times, st->t, st->impacts, 1, err));
+    if (e->impact_log.maxlen >= 0 && n_log_rows > e->impact_log.maxlen)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'impact_log' has %lld values; allowed at most %lld",
+                       n_log_rows * row_len, e->impact_log.maxlen * row_len);
+    for (r = 0; r < n_log_rows * row_len; r++)
+        if (!isfinite(impact_log[r]))
+            return rk_fail(err, RK_ERR_VALUE, "state field 'impact_log'[%lld] = %.17g is not finite", r,
+                           impact_log[r]);
+    ED_TRY(ed_check_times("impact_log", impact_log, n_log_rows, st->t, st->impacts, row_len, err));
+    rk_embed_any(m, st->mode, st->y, q, v);
+    if (!isfinite(st->shift))
+        return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g is not finite", st->shift);
+    if (st->shift != 0.0 && (ed_sliding(m, st->mode) || !m->ops->closed_of(m, st->mode)))
+        return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g must be 0 in mode %d (its reduced state "
+                       "holds the base's position)", st->shift, st->mode);
+    if (!(isfinite(st->friction_demand) && st->friction_demand >= 0.0))
+        return rk_fail(err, RK_ERR_VALUE, "state field 'friction_demand' = %.17g is not in range; allowed range "
+                       "[0, inf]", st->friction_demand);
+    if (st->painleve < 0)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'painleve' = %lld is out of range", st->painleve);
+    /* check_configuration(model, state, "y", q, v, overturned, gap_tol=length_scale) */
+    phi = q[m->ops->phi_index];
+    if (!st->overturned && !(fabs(phi) < 0.5 * ED_PI))
+        return rk_fail(err, RK_ERR_VALUE, "state field 'y': |phi| = %g rad reaches pi/2 but 'overturned' is False; "
+                       "allowed range (-pi/2, pi/2)", fabs(phi));
+    if (st->overturned)
+        for (i = 0; i < n; i++)
+            if (v[i] != 0.0)
+                return rk_fail(err, RK_ERR_VALUE, "state field 'y': the velocities must be 0 once 'overturned' is "
+                               "True (the pose reached at overturning is kept at rest); got a moving state");
+    m->ops->gaps(m, q, g);
+    gmin = g[0];
+    for (i = 1; i < nc; i++)
+        if (g[i] < gmin)
+            gmin = g[i];
+    if (!st->overturned && gmin < -m->length_scale)
+        return rk_fail(err, RK_ERR_VALUE, "state field 'y': a base corner is %g m below the ground; allowed at most "
+                       "%g m", -gmin, m->length_scale);
+    m->ops->outputs(m, q, v, out);
+    bad[0] = '\0';
+    for (i = 0; i < m->ops->n_outputs; i++) {
+        if (!isfinite(out[i])) {
+            size_t len = strlen(bad);
+            snprintf(bad + len, sizeof bad - len, "%s%s", len ? ", " : "", m->ops->output_decls[i].name);
+        }
+    }
+    if (bad[0])
+        return rk_fail(err, RK_ERR_VALUE, "state field 'y' gives non-finite outputs (%s); the values are too large "
+                       "for the model", bad);
+    /* all checked: assign */
+    s->t = st->t;
+    s->impacts = st->impacts;
+    s->overturned = st->overturned != 0;
+    s->n_steps = st->n_steps;
+    s->h = st->h;
+    s->mode = st->mode;
+    s->k = k;
+    memcpy(s->y, st->y, (size_t)(2 * k) * sizeof(double));
+    s->shift = st->shift;
+    s->friction_demand = st->friction_demand;
+    s->painleve = st->painleve;
+    s->live = 0;
+    e->impact_times.first = e->impact_times.end;
+    e->impact_log.first = e->impact_log.end;
+    for (r = 0; r < n_times; r++)
+        ED_TRY(rk_log_append(&e->impact_times, impact_times + r));
+    for (r = 0; r < n_log_rows; r++)
+        ED_TRY(rk_log_append(&e->impact_log, impact_log + r * row_len));
+    e->core.token++;
+    return RK_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ pending part B
+ * Weak stand-ins for the contact.py functions of part B (rk_contact.c) that the driver calls, so that the
+ * module links before part B lands: rk_impact and rk_next_mode say what is missing (RK_ERR_NOT_IMPLEMENTED);
+ * the two set-valued ones are only reached after one of those has failed (the advance is then refused and
+ * rolled back: no wrong result is ever seen). Part B's strong definitions replace them. */
+#if defined(__GNUC__)
+#define ED_PENDING __attribute__((weak))
+
+ED_PENDING rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, rk_set candidates,
+                               const rk_contact_args *a, rk_lcp_solution *out, rk_error *err)
+{
+    (void)m; (void)q; (void)v_minus; (void)candidates; (void)a; (void)out;
+    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.impact of the C engine is not implemented yet (issue 21, "
+                   "part B); use engine=\"python\"");
+}
+
+ED_PENDING rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double gap_tol,
+                                  double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
+                                  rk_error *err)
+{
+    (void)m; (void)q; (void)v; (void)ag; (void)gap_tol; (void)v_tol; (void)prefer; (void)mode; (void)sol;
+    (void)has_solution;
+    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.next_mode of the C engine is not implemented yet (issue "
+                   "21, part B); use engine=\"python\"");
+}
+
+ED_PENDING rk_set rk_closed_candidates(const rk_model *m, const double *q, const double *v, double gap_tol,
+                                       double v_tol)
+{
+    (void)m; (void)q; (void)v; (void)gap_tol; (void)v_tol;
+    return 0;
+}
+
+ED_PENDING rk_set rk_painleve_sticks(const rk_model *m, const double *q, const double *v_minus,
+                                     const double *v_plus, rk_set candidates, double v_tol)
+{
+    (void)m; (void)q; (void)v_minus; (void)v_plus; (void)candidates; (void)v_tol;
+    return 0;
+}
+#endif
