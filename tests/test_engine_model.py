@@ -250,6 +250,7 @@ def test_rigid_sticking_modes_bitwise(kw, state, ag):
         same(call("rigid", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)))
         g, tot = call("rigid", p, "monitors", mode=mode, a=y, ag=ag)
         same(g, fmon(0.0, list(y)))
+        same(call("rigid", p, "monitors_only", mode=mode, a=y, ag=ag), g)
         if ftot is None:
             assert tot is None
         else:
@@ -543,6 +544,7 @@ def test_flexible_sticking_modes_bitwise(kw, state, ag):
         same(call("flexible", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)))
         g, tot = call("flexible", p, "monitors", mode=mode, a=y, ag=ag)
         same(g, fmon(0.0, list(y)))
+        same(call("flexible", p, "monitors_only", mode=mode, a=y, ag=ag), g)
         if ftot is None:
             assert tot is None
         else:

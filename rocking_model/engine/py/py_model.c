@@ -362,6 +362,10 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
             return Py_BuildValue("(NO)", list_of(x1, ng), Py_None);
         return Py_BuildValue("(NN)", list_of(x1, ng), list_of(x2, 2));
     }
+    if (strcmp(name, "monitors_only") == 0) {   /* rk_mode_monitors without totals (the event functions) */
+        int ng = rk_mode_monitors(&m, mode, a, ag, x1, NULL, NULL);
+        return list_of(x1, ng);
+    }
     if (strcmp(name, "outputs_of") == 0) {     /* a = y, ag = shift */
         rk_outputs_of(&m, mode, a, ag, x1);
         return list_of(x1, m.ops->n_outputs);
