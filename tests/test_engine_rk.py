@@ -481,3 +481,54 @@ def test_sources_compile_without_warnings(tmp_path):
                               "-pedantic", "-Werror", "-c", os.path.join(src, name), "-o", str(tmp_path / (name + ".o"))],
                              capture_output=True, text=True, timeout=120)
         assert res.returncode == 0, res.stderr
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-10, 10, allow_nan=False), st.floats(-10, 10, allow_nan=False), st.floats(-10, 10, allow_nan=False))
+def test_parabola_peak(f0, fm, f1):
+    for args in ((f0, fm, f1), (0.0, 1.0, 0.5), (1.0, 1.0, 1.0), (0.0, 0.25, 1.0), (1.0, 0.0, 1.0)):
+        c, py = _engine.rk_events_parabola_peak(*args), events.parabola_peak(*args)
+        if py is None:
+            assert c is None
+        else:
+            same(c, py)
+
+
+def python_brent(setup, i, a, b, x, fx, xtol, max_iter, none_below):
+    s, G = python_events(setup)
+    dense = s.dense_output()
+
+    def f(t):
+        v = G(t, dense(t))[i]
+        return None if v < none_below else v
+    return events.brent_max(f, a, b, x, fx, xtol, max_iter)
+
+
+@settings(max_examples=80, deadline=None)
+@given(k=st.integers(0, len(SETUPS) - 1), i=st.integers(0, 2), frac=st.floats(0.01, 0.99),
+       xtol_exp=st.integers(-14, -2), max_iter=st.sampled_from([3, 60]),
+       none_below=st.sampled_from([-math.inf, 0.0, 0.3]), fx_none=st.booleans())
+def test_brent_max_same_peak(k, i, frac, xtol_exp, max_iter, none_below, fx_none):
+    """Brent's peak search on G_i over the step (smooth peaks, ends, and None values below a floor)."""
+    setup = SETUPS[k]
+    s, G = python_events(setup)
+    dense = s.dense_output()
+    a, b = s.t_old, s.t
+    x = a + frac * (b - a)
+    v = G(x, dense(x))[i]
+    fx = None if fx_none or v < none_below else v
+    xtol = 10.0 ** xtol_exp * (b - a)
+    py = python_brent(setup, i, a, b, x, fx, xtol, max_iter, none_below)
+    same(_engine.rk_events_brent_max(setup, i, a, b, x, fx, xtol, max_iter, none_below), py)
+
+
+def test_brent_max_finds_an_inner_peak():
+    """cos t - 0.3 over a step across t = 2 pi peaks inside (a real parabolic search, not an end)."""
+    setup = harmonic_setup(DOP, 3, rtol=1e-2, first=2.0)
+    s, G = python_events(setup)
+    assert s.t_old < 2 * math.pi < s.t
+    x = s.t_old + 0.3 * (s.t - s.t_old)
+    dense = s.dense_output()
+    py = python_brent(setup, 0, s.t_old, s.t, x, G(x, dense(x))[0], 1e-9, 60, -math.inf)
+    assert abs(py[0] - 2 * math.pi) < 0.05     # the interpolant of a step at rtol 1e-2: a coarse peak
+    same(_engine.rk_events_brent_max(setup, 0, s.t_old, s.t, x, G(x, dense(x))[0], 1e-9, 60, -math.inf), py)

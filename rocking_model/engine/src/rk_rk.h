@@ -124,6 +124,19 @@ rk_status rk_dip_search(rk_event_ctx *c, const int *armed, const double *g_prev,
 rk_status rk_bounce_search(rk_event_ctx *c, int i, double t0, double t1, double level, int *found, double *t,
                            double *g, rk_error *err);
 
+/* added by part C (events.py's peak search, used by EventDriven._demand_peak) */
+/** events.parabola_peak: 1 with (*x, *value) of the vertex of the parabola through (0, f0), (1/2, fm), (1, f1)
+ *  when it is a maximum inside (0, 1); 0 (None) otherwise. */
+int rk_parabola_peak(double f0, double fm, double f1, double *x, double *value);
+/** A scalar function of time for rk_brent_max: *value, or *has = 0 (the Python's None: no value, below
+ *  everything). */
+typedef rk_status (*rk_scalar_fn)(void *ctx, double t, double *value, int *has);
+/** events.brent_max: Brent's method for the largest value of f on [a, b] from an inner point x with value fx
+ *  (has_fx 0: None), abscissa to about xtol, at most max_iter evaluations (the Python's default: 60). Writes
+ *  the best point (*t_out, *f_out; *has_out 0 when no point had a value). */
+rk_status rk_brent_max(rk_scalar_fn f, void *ctx, double a, double b, double x, double fx, int has_fx, double xtol,
+                       int max_iter, double *t_out, double *f_out, int *has_out, rk_error *err);
+
 #ifdef __cplusplus
 }
 #endif
