@@ -83,7 +83,9 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err);
 /** ExplicitRK.hermite_mid: cubic Hermite estimate of y at the middle of the last step (no evaluation). */
 void rk_hermite_mid(const rk_stepper *s, double *y_mid);
 /** DenseOutput(t): y at t in [t_old, t] of the last step (exact end values at t == s->t; builds the
- *  interpolant on first use, which may evaluate the rhs: hence non-const and a status). */
+ *  interpolant on first use, which may evaluate the rhs: hence non-const and a status). Always the LAST step
+ *  of the stepper (a Python DenseOutput object keeps its own step after further steps; the C does not), and
+ *  DOP853's extra stages call s->fun / s->ctx as bound at the time of the call. */
 rk_status rk_dense_eval(rk_stepper *s, double t, double *y, rk_error *err);
 
 /* ------------------------------------------------------------------------------------------ events.py */
@@ -98,7 +100,9 @@ typedef struct rk_event_ctx {
 /** G(t, dense(t)) into g. */
 rk_status rk_event_eval(rk_event_ctx *c, double t, double *g, rk_error *err);
 /** events.locate on function i shifted up by ``shift``: regula falsi with Anderson-Bjorck on a bracket with
- *  ga > 0 >= gb; *t_out = a time with g <= 0 within xtol of the root. */
+ *  ga > 0 >= gb; *t_out = a time with g <= 0 within xtol of the root. ga and gb are values of the SHIFTED
+ *  function (the Python's locate(gi, a, ga_i[i] + shift, b, gb[i] + shift, xtol)); shift is added to every
+ *  evaluation G(t, dense(t))[i]. */
 rk_status rk_locate(rk_event_ctx *c, int i, double shift, double a, double ga, double b, double gb, double xtol,
                     double *t_out, rk_error *err);
 /** events.earliest_root over the functions ``ids`` (n_ids of them), shifts per function, starts: per function
