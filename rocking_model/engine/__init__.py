@@ -191,12 +191,15 @@ class CompiledIntegrator(Integrator):
     def _run(self, call):
         from .. import _engine
 
+        self._t_fail = None
         try:
             call()
         except _engine.NonFiniteError as exc:
             self._t_fail = self._engine.fail_time
             raise FloatingPointError(str(exc)) from None
-        except np.linalg.LinAlgError:
+        except BaseException:
+            # the engine is restored; ``t`` says where the scheme had got to (Simulator._diverged's "at t = ...",
+            # as the Python integrator's t before its rollback) until the Simulator rolls back
             self._t_fail = self._engine.fail_time
             raise
         finally:
