@@ -78,6 +78,27 @@ rk_status rk_solve_contact_lcp(const rk_lcp_problem *p, rk_lcp_solution *out, rk
 /** lcp.solve_friction_lcp (uses mu, sliding, count, hint_states). */
 rk_status rk_solve_friction_lcp(const rk_lcp_problem *p, rk_lcp_solution *out, rk_error *err);
 
+/** Wider variants (added by part B): the same solvers for up to RK_LCP_MAX_CONTACTS contacts, so that the
+ *  pivoting (more than RK_ENUMERATE_MAX free candidates) and the frictional descent (more than
+ *  RK_FRICTION_ENUMERATE_MAX candidates) can be pinned to the Python although no model of the engine has that
+ *  many contacts. rk_solve_contact_lcp / rk_solve_friction_lcp call them and copy the result. */
+#define RK_LCP_MAX_CONTACTS 8
+typedef struct rk_lcp_wide_solution {
+    double v[RK_MAX_DOF];
+    double P_N[RK_LCP_MAX_CONTACTS], P_T[RK_LCP_MAX_CONTACTS];
+    double w_N[RK_LCP_MAX_CONTACTS], w_T[RK_LCP_MAX_CONTACTS];
+    rk_set active;
+    int exact;
+    double violation;
+    int frictional;
+    int states[RK_LCP_MAX_CONTACTS];
+    int n_solutions;
+    int sliding[RK_LCP_MAX_CONTACTS];
+    int has_sliding;
+} rk_lcp_wide_solution;
+rk_status rk_solve_contact_lcp_wide(const rk_lcp_problem *p, rk_lcp_wide_solution *out, rk_error *err);
+rk_status rk_solve_friction_lcp_wide(const rk_lcp_problem *p, rk_lcp_wide_solution *out, rk_error *err);
+
 /* ------------------------------------------------------------------------------------------ contact.py */
 /** Optional arguments of the contact.py functions: what the Python passes as keywords. */
 typedef struct rk_contact_args {
@@ -130,6 +151,16 @@ int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts);
 /** contact.mode_forces: normal forces [N] of the closed contacts of a sticking mode held closed. */
 rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double *lam,
                          rk_error *err);
+
+/** Added by part B: integrators/moreau_jean.inexact_message, the text of an "inexact_contact" report (shared by
+ *  the event-driven scheme and Moreau-Jean): "the <what> at t = <t> s has no exact solution (least violation
+ *  <.3g>, closed contacts <tuple>): kept the least-violating one; a corner may sink or lift against the
+ *  contact law". n_contacts bounds the contacts listed. */
+void rk_inexact_message(const rk_lcp_solution *sol, int n_contacts, double t, const char *what, char *buf,
+                        size_t n);
+/** Added by part B: np.linalg.lstsq(A, b, rcond=1e-12)[0] for a square A (n x n, row-major, n <= 16): the
+ *  minimum-norm least-squares solution (singular values <= 1e-12 * the largest dropped). */
+void rk_lstsq_square(int n, const double *A, const double *b, double *x);
 
 #ifdef __cplusplus
 }
