@@ -742,3 +742,31 @@ def test_a_kernel_with_only_the_required_functions_runs_every_mode(kind, rkw, fk
         close(call(kind, p, "bare:outputs_of", mode=mode, a=y, ag=0.5), out_list(model, model.outputs_of(mode, y, 0.5)),
               1e-14, scale=1.0)
         close(call(kind, p, "bare:inverse_mass", a=q.tolist()), np.linalg.inv(model.mass_matrix(q)), LA_RTOL * cond)
+
+
+@SETTINGS
+@given(st.sampled_from(["rigid", "flexible"]), rigid_params(), flexible_params(), STATE, FSTATE, AG)
+def test_the_generic_monitors_without_kernel_contact_forces_use_the_contact_problem(kind, rkw, fkw, rstate, fstate,
+                                                                                     ag):
+    """Without a kernel contact_forces the generic monitors take the closed corners' forces from
+    contact.mode_forces (part B's rk_mode_forces): RockingModel.contact_forces' default."""
+    from rocking_model.contact import mode_forces
+
+    model = RigidBlock(**rkw) if kind == "rigid" else FLEX(**fkw)
+    p = values_of(model)
+    state_of = (lambda mode: rigid_state(model, mode, *rstate)) if kind == "rigid" else \
+        (lambda mode: flexible_state(model, mode, *fstate))
+    w = rstate[1] if kind == "rigid" else fstate[3]
+    acc = model.g + abs(ag) + model.length_scale * w ** 2
+    if kind == "flexible":
+        acc += model.omega ** 2 * model.h * abs(fstate[0]) + model.omega * abs(fstate[2])
+    for mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+        y = state_of(mode)
+        k = len(y) // 2
+        q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
+        lam = mode_forces(model, mode, q, v, ag)
+        _, g, _ = generic_expectations(model, mode, y, ag)
+        for i in CLOSED[mode]:
+            g[i] = float(lam[i]) / model.force_scale
+        cg, _ = call(kind, p, "bare_all:monitors", mode=mode, a=y, ag=ag)
+        close(cg, g, 1e-12 * np.linalg.cond(model.mass_matrix(q)), scale=acc / model.g)

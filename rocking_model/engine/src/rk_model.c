@@ -8,6 +8,7 @@
  * checks and messages (Param.check / check_real / check_choice), repr() of a float, math.hypot, the modes of
  * the two-corner models. */
 #include "rk_model.h"
+#include "rk_contact.h"
 
 #include <float.h>
 #include <math.h>
@@ -769,11 +770,15 @@ void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, dou
     k = m->ops->mode_dofs(m, mode, idx);
     m->ops->embed(m, mode, y, y + k, q, v);
     if (closed) {
-        if (m->ops->contact_forces != NULL)
+        if (m->ops->contact_forces != NULL) {
             m->ops->contact_forces(m, mode, q, v, ag, lam);
-        else
-            for (i = 0; i < nc; i++)
-                lam[i] = NAN;       /* TODO(part A): rk_mode_forces of part B once merged */
+        } else {
+            /* RockingModel.contact_forces: contact.mode_forces, the contact LCP with the closed set forced */
+            rk_error err;
+            if (rk_mode_forces(m, mode, q, v, ag, lam, &err) != RK_OK)
+                for (i = 0; i < nc; i++)
+                    lam[i] = NAN;   /* where numpy raises: the driver sees non-finite event functions */
+        }
     }
     m->ops->gaps(m, q, gap);
     phi = q[m->ops->phi_index];
