@@ -576,7 +576,9 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         double base[RK_MAX_EVENTS], F = m->force_scale, V = sqrt(m->g * m->length_scale), tau_sum = 0.0;
         double inv_mu = isinf(m->mu) ? 0.0 : 1.0 / m->mu;
         rk_slide_embed(m, mode, y, y + k, q, v);
-        rk_slide_motion(m, mode, q, v, ag, a, tau);
+        if (rk_slide_motion(m, mode, q, v, ag, a, tau) != RK_OK)
+            for (i = 0; i < RK_MAX_CONTACTS; i++)
+                tau[i] = NAN;       /* numpy's lstsq failed too: non-finite event functions stop the driver */
         for (i = 0; i < k - 1; i++) {
             ys[i] = y[i];
             ys[k - 1 + i] = y[k + i];
