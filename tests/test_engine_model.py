@@ -283,6 +283,9 @@ def test_rigid_overturned_outputs(kw, state, ag):
         q, _ = model.embed(mode, np.array([phi]), np.array([0.0]))
         same(call("rigid", p, "outputs", a=q.tolist(), b=[0.0, 0.0, 0.0]),
              out_list(model, model.outputs(q, np.zeros(3))))
+    for mode, phi in ((Mode.LEFT_SLIDE_POS, 0.5 * math.pi), (Mode.RIGHT_SLIDE_NEG, -0.5 * math.pi)):
+        y = [phi, state[2], 0.0, 0.0]           # a sliding mode's pose: the base offset kept, at rest
+        same(call("rigid", p, "outputs_of", mode=mode, a=y, ag=0.0), out_list(model, model.outputs_of(mode, y)))
 
 
 @SETTINGS
@@ -602,6 +605,9 @@ def test_flexible_overturned_outputs(kw, state, ag):
              out_list(model, model.outputs_of(mode, y, state[4])))
         q, _ = model.embed(mode, np.array(y[:2]), np.zeros(2))
         same(call("flexible", p, "outputs", a=q.tolist(), b=[0.0] * 4), out_list(model, model.outputs(q, np.zeros(4))))
+    for mode, phi in ((Mode.LEFT_SLIDE_NEG, 0.5 * math.pi), (Mode.RIGHT_SLIDE_POS, -0.5 * math.pi)):
+        y = [state[0] * model.h, phi, state[4], 0.0, 0.0, 0.0]
+        same(call("flexible", p, "outputs_of", mode=mode, a=y, ag=0.0), out_list(model, model.outputs_of(mode, y)))
 
 
 @SETTINGS
