@@ -776,3 +776,21 @@ def test_the_generic_monitors_without_kernel_contact_forces_use_the_contact_prob
             g[i] = float(lam[i]) / model.force_scale
         cg, _ = call(kind, p, "bare_all:monitors", mode=mode, a=y, ag=ag)
         close(cg, g, 1e-12 * np.linalg.cond(model.mass_matrix(q)), scale=acc / model.g)
+
+
+def test_part_a_sources_compile_without_warnings(tmp_path):
+    """rk_model.c, rk_sliding.c, rk_rigid.c, rk_flexible.c compile warning-free as strict C99 (the flags of
+    setup.py plus -Wall -Wextra -pedantic -Werror), so that warnings do not accumulate."""
+    import os
+    import shutil
+    import subprocess
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler on this machine")
+    src = os.path.join(os.path.dirname(__file__), "..", "rocking_model", "engine", "src")
+    for name in ("rk_model.c", "rk_sliding.c", "rk_rigid.c", "rk_flexible.c"):
+        out = subprocess.run([cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra",
+                              "-pedantic", "-Werror", "-c", os.path.join(src, name), "-o", str(tmp_path / "x.o")],
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
