@@ -18,48 +18,11 @@ static double py_max(double a, double b)
     return (b > a) ? b : a;
 }
 
-/** M(q)^-1 (contact.inverse_mass = model.inverse_mass_matrix): the kernel's closed form, else the inverse of
- *  the mass matrix by Gauss-Jordan elimination with partial pivoting (np.linalg.inv to round-off). */
+/** M(q)^-1 (contact.inverse_mass = model.inverse_mass_matrix): rk_model_inverse_mass (part A: the kernel's
+ *  closed form, else Gauss-Jordan with partial pivoting, pinned to np.linalg.inv). */
 static void inverse_mass(const rk_model *m, const double *q, double *Minv)
 {
-    int n = m->ops->n_dof, r, c, j;
-    double M[RK_MAX_DOF][2 * RK_MAX_DOF], Mf[RK_MAX_DOF * RK_MAX_DOF];
-    if (m->ops->inverse_mass_matrix != NULL) {
-        m->ops->inverse_mass_matrix(m, q, Minv);
-        return;
-    }
-    m->ops->mass_matrix(m, q, Mf);
-    for (r = 0; r < n; r++)
-        for (c = 0; c < n; c++) {
-            M[r][c] = Mf[r * n + c];
-            M[r][n + c] = (r == c) ? 1.0 : 0.0;
-        }
-    for (c = 0; c < n; c++) {
-        int p = c;
-        double piv;
-        for (r = c + 1; r < n; r++)
-            if (fabs(M[r][c]) > fabs(M[p][c]))
-                p = r;
-        if (p != c)
-            for (j = 0; j < 2 * n; j++) {
-                double t = M[c][j];
-                M[c][j] = M[p][j];
-                M[p][j] = t;
-            }
-        piv = M[c][c];
-        for (j = 0; j < 2 * n; j++)
-            M[c][j] /= piv;
-        for (r = 0; r < n; r++) {
-            double f = M[r][c];
-            if (r == c || f == 0.0)
-                continue;
-            for (j = 0; j < 2 * n; j++)
-                M[r][j] -= f * M[c][j];
-        }
-    }
-    for (r = 0; r < n; r++)
-        for (c = 0; c < n; c++)
-            Minv[r * n + c] = M[r][n + c];
+    rk_model_inverse_mass(m, q, Minv);
 }
 
 /** out = W^T v for W (n_dof x n_contacts, one column per contact). */
