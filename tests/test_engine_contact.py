@@ -615,3 +615,40 @@ def test_contact_functions_on_the_models(kind):
             assert np.max(np.abs(py - np.array(c))) <= 1e-12 * max(1.0, float(np.max(np.abs(py))))
             total += 1
     assert ties <= TIE_SHARE * total
+
+
+def test_sources_compile_without_warnings(tmp_path):
+    """rk_lcp.c, rk_contact.c and py_contact.c compile cleanly with -Wall -Wextra -pedantic -Werror (the
+    engine's flags otherwise), so that warnings do not accumulate."""
+    import shutil
+    import subprocess
+    import sysconfig
+    from pathlib import Path
+    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if cc is None:
+        pytest.skip("no C compiler")
+    engine = Path(__file__).resolve().parent.parent / "rocking_model" / "engine"
+    for source in (engine / "src" / "rk_lcp.c", engine / "src" / "rk_contact.c", engine / "py" / "py_contact.c"):
+        cmd = [cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra", "-pedantic",
+               "-Werror", "-I" + sysconfig.get_paths()["include"], "-c", str(source), "-o", str(tmp_path / "x.o")]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+
+
+def test_lstsq_is_numpy_minimum_norm():
+    """rk_lstsq_square: np.linalg.lstsq(A, b, rcond=1e-12)[0] on square systems of full and deficient rank
+    (the fallback of the singular trials and of project_to_ground)."""
+    rng = np.random.default_rng(500)
+    for _ in range(300):
+        n = int(rng.integers(1, 17))
+        rank = int(rng.integers(0, n + 1)) if rng.random() < 0.7 else n
+        A = rng.normal(size=(n, rank)) @ rng.normal(size=(rank, n)) if rank else np.zeros((n, n))
+        if rng.random() < 0.2 and n >= 2:
+            A[:, 1] = A[:, 0]                                  # identical columns (parallel contact rows)
+        b = rng.normal(size=n)
+        py = np.linalg.lstsq(A, b, rcond=1e-12)[0]
+        c = np.array(_engine.contact_lstsq(A.tolist(), b.tolist()))
+        s = np.linalg.svd(A, compute_uv=False)
+        kept = s[s > 1e-12 * s[0]] if s[0] > 0 else s[:0]
+        kappa = kept[0] / kept[-1] if len(kept) else 1.0
+        assert np.max(np.abs(py - c)) <= 1e-13 * max(1.0, kappa) * max(1.0, float(np.max(np.abs(py))))

@@ -748,6 +748,25 @@ static PyObject *py_inexact_message(PyObject *self, PyObject *args)
     return PyUnicode_FromString(buf);
 }
 
+static PyObject *py_lstsq(PyObject *self, PyObject *args)
+{
+    PyObject *A, *b;
+    double a[256], bb[16], x[16];
+    int r, c;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "OO", &A, &b))
+        return NULL;
+    if (get_matrix(A, "A", a, 16, 16, &r, &c) < 0)
+        return NULL;
+    if (r != c || get_vector(b, "b", bb, 16) != r) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "A must be square (at most 16 x 16) and b match it");
+        return NULL;
+    }
+    rk_lstsq_square(r, a, bb, x);
+    return list_of(x, r);
+}
+
 PyMethodDef rk_py_contact_methods[] = {
     {"contact_solve_lcp", (PyCFunction)(void (*)(void))py_solve_lcp, METH_VARARGS | METH_KEYWORDS,
      "contact_solve_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=None, rtol=1e-9, hint=None, "
@@ -761,6 +780,8 @@ PyMethodDef rk_py_contact_methods[] = {
      "(Minv, W_N, W_T, f, g, a_N, a_T, e_N, e_T, mu) or (kind, params) of a C kernel. name: impact, uplift, "
      "solve_with_friction, project_to_ground, closed_candidates, sliding_delassus, painleve_sticks, next_mode, "
      "solution_sigma, mode_forces (see tests/test_engine_contact.py for the arguments)."},
+    {"contact_lstsq", py_lstsq, METH_VARARGS,
+     "contact_lstsq(A, b) -> list: rk_lstsq_square, np.linalg.lstsq(A, b, rcond=1e-12)[0] of a square A."},
     {"contact_inexact_message", py_inexact_message, METH_VARARGS,
      "contact_inexact_message(active, violation, n_contacts, t, what) -> str: rk_inexact_message."},
     {NULL, NULL, 0, NULL}
