@@ -578,16 +578,17 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         }
         res = narrow_dict(&sol, nd, n);
     } else if (strcmp(name, "solve_with_friction") == 0) {
-        /* (v_free, b_N, b_T, candidates, forced, sliding, count, hint, prefer, lcp_exact, lcp_hint) */
-        PyObject *vf, *bN, *bT, *cand, *forced, *sliding, *hint;
+        /* (v_free, b_N, b_T, candidates, forced, sliding, count, hint, prefer, lcp_exact, lcp_hint
+         *  [, Minv, W_N, W_T]): the model's matrices at q = 0 unless given (Moreau-Jean's effective ones) */
+        PyObject *vf, *bN, *bT, *cand, *forced, *sliding, *hint, *mi = NULL, *wn = NULL, *wt = NULL;
         double va[RK_MAX_DOF], b1[RK_MAX_CONTACTS], b2[RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
         double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], q0[RK_MAX_DOF] = {0};
         int sl[RK_LCP_MAX_CONTACTS], count, prefer, has;
         rk_tolerances tol = RK_DEFAULT_TOLERANCES;
         rk_contact_args a;
         rk_lcp_problem p;
-        if (!PyArg_ParseTuple(rest, "OOOOOOpOidd", &vf, &bN, &bT, &cand, &forced, &sliding, &count, &hint, &prefer,
-                              &tol.lcp_exact, &tol.lcp_hint))
+        if (!PyArg_ParseTuple(rest, "OOOOOOpOidd|OOO", &vf, &bN, &bT, &cand, &forced, &sliding, &count, &hint,
+                              &prefer, &tol.lcp_exact, &tol.lcp_hint, &mi, &wn, &wt))
             goto done;
         rk_contact_args_default(&a);
         memset(&p, 0, sizeof p);
@@ -604,8 +605,19 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         a.count = count;
         a.prefer = prefer;
         a.tolerances = &tol;
-        m.ops->inverse_mass_matrix(&m, q0, Minv);
-        m.ops->contact_jacobians(&m, q0, W_N, W_T);
+        if (mi != NULL && wn != NULL && wt != NULL) {
+            int r1, c1, r2, c2, r3, c3;
+            if (get_matrix(mi, "Minv", Minv, nd, nd, &r1, &c1) < 0 || get_matrix(wn, "W_N", W_N, nd, n, &r2, &c2) < 0
+                || get_matrix(wt, "W_T", W_T, nd, n, &r3, &c3) < 0)
+                goto done;
+            if (r1 != nd || c1 != nd || r2 != nd || c2 != n || r3 != nd || c3 != n) {
+                PyErr_SetString(PyExc_ValueError, "Minv must be n_dof x n_dof, W_N and W_T n_dof x n_contacts");
+                goto done;
+            }
+        } else {
+            rk_model_inverse_mass(&m, q0, Minv);
+            m.ops->contact_jacobians(&m, q0, W_N, W_T);
+        }
         p.n_dof = nd;
         p.n_contacts = n;
         p.Minv = Minv;
