@@ -146,16 +146,16 @@ def test_sticking_narrow_equals_wide():
         check_sticking(rng, n, int(rng.integers(2 * n, 9)), narrow=True)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", range(2))
 def test_sticking_pivoting(seed):
     """7 and 8 contacts on 8 dofs: more than ENUMERATE_MAX free candidates, the principal pivoting (Murty's
     rule, then the descent); many of its problems have several or no solutions (non-P-matrix)."""
     rng = np.random.default_rng(100 + seed)
     ties = 0
-    for _ in range(150):
+    for _ in range(100):
         n = int(rng.integers(7, 9))
         ties += check_sticking(rng, n, 8, n_max_forced=n - 7, all_candidates=True)
-    assert ties <= TIE_SHARE * 150
+    assert ties <= TIE_SHARE * 100
 
 
 def check_friction(rng, n, m, all_sliding=False, narrow=False):
