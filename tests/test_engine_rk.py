@@ -617,3 +617,20 @@ def test_both_forms_of_pythons_sum(tmp_path, compensated):
         if (sys.version_info >= (3, 12)) == bool(compensated):
             assert bits(got) == bits(sum(xs)), xs
     assert differ >= 3
+
+
+@pytest.mark.parametrize("method", [DOP, DP5])
+def test_restart_from_its_own_point_goes_on_bit_identically(method):
+    """EventDriven restarts a stepper at its own (t, y) with the last step size (after a state restore): the
+    next step equals the one the stepper would have taken (FSAL derivative re-evaluated at the stored t_new);
+    the C restart reads the stepper's own arrays (aliasing) safely."""
+    fun = python_rhs("vdp", [2.0], 2)
+    s = METHODS[method](fun, 0.0, [1.0, 0.5], 1e-9, [1e-11, 1e-11], 0.4)
+    for _ in range(4):
+        s.step(math.inf)
+    h = s.h_abs
+    s.step(math.inf)
+    ref = (s.t, list(s.y), s.h_abs)
+    h_c, rec = _engine.rk_restart(method, "vdp", [2.0], 0.0, [1.0, 0.5], 1e-9, [1e-11, 1e-11], 0.4, 4, 0.0, None, h)
+    assert bits(h_c) == bits(h)
+    same((rec["t"], rec["y"], rec["h_abs"]), ref)
