@@ -182,6 +182,10 @@ class Simulator:
         Raises ValueError (bad t_end or ag, or a motion that overflows: the message names the likely
         cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
         exactly as before the call."""
+        if self.engine == "c" and type(ag) in (float, int) and type(t_end) in (float, int) \
+                and self.on_report != "raise":
+            self._advance_c(t_end, ag)
+            return
         t_end = check_real("t_end", t_end)
         integ = self.integrator
         if t_end < integ.t:
@@ -189,6 +193,27 @@ class Simulator:
                              f"[{integ.t:.17g}, inf)")
         gm = self._ground_motion(ag)
         self._guarded(t_end, gm, lambda: integ.advance(t_end, gm, max_steps=self.max_steps))
+
+    def _advance_c(self, t_end, ag) -> None:
+        """`advance` on the compiled engine under a constant ag: one call into C, which checks t_end and ag
+        (the same messages), keeps its own checkpoint (the state is restored on any failure) and checks the
+        outputs; the same errors and reports as `_guarded` (on_report "warn" or "ignore")."""
+        from . import _engine
+
+        integ = self.integrator
+        eng = integ._engine
+        try:
+            eng.advance(t_end, ag, 0.0, self.max_steps)
+        except (_engine.NonFiniteError, np.linalg.LinAlgError) as exc:
+            t_fail = eng.fail_time
+            if isinstance(exc, _engine.NonFiniteError):
+                exc = FloatingPointError(str(exc))
+            raise ValueError(self._diverged(exc, t_end, ConstantMotion(ag), t_fail)) from exc
+        if eng.report_count:
+            integ.reports = [Report(kind, t, msg) for kind, t, msg in eng.reports()]
+            self._check_reports(integ.reports)
+        else:
+            self.last_reports = []
 
     def sample(self, times, ag) -> tuple:
         """Advance through the increasing ``times`` [s] under ``ag`` and return the outputs there:

@@ -278,6 +278,8 @@ def test_the_c_engine_checks_a_loaded_state_itself():
         s[key] = value
         if key == "mode":
             s["closed"] = []
+        if key == "impact_times":
+            s["impacts"] = good["impacts"] + 1
         with pytest.raises(ValueError, match=match):
             eng.set_state(s)
         assert eng.get_state() == good

@@ -271,3 +271,347 @@ def test_bad_problems_raise():
     Minv, W_N, W_T, v, b_N, b_T = random_problem(rng, 6, 8)
     with pytest.raises(ValueError, match="n_contacts = 6"):
         _engine.contact_solve_lcp(*lists(Minv, W_N, W_T, v, b_N, b_T), [0], narrow=True)
+
+
+# ---------------------------------------------------------------------------------------------- contact.py
+from rocking_model import contact  # noqa: E402
+from rocking_model.modes import CLOSED, mode_from_closed  # noqa: E402
+
+
+class ConstantModel:
+    """The contact relation of a model with constant matrices (two contacts, the rocking models' modes): what
+    contact.py reads of a RockingModel. Its C twin is the test model of py/py_contact.c, so that contact.py's
+    port is pinned independently of the kernels (part A)."""
+
+    n_contacts = 2
+
+    def __init__(self, Minv, W_N, W_T, f, g, a_N, a_T, e_N, e_T, mu):
+        self.Minv, self.W_N, self.W_T, self.f, self.g = Minv, W_N, W_T, f, g
+        self.a_N, self.a_T, self.e_N, self.e_T, self.mu = a_N, a_T, e_N, e_T, mu
+
+    def spec(self):
+        return (self.Minv.tolist(), self.W_N.tolist(), self.W_T.tolist(), self.f.tolist(), self.g.tolist(),
+                self.a_N.tolist(), self.a_T.tolist(), self.e_N, self.e_T, self.mu)
+
+    def inverse_mass_matrix(self, q):
+        return self.Minv
+
+    def forces(self, q, v, ag):
+        return self.f
+
+    def gaps(self, q):
+        return self.g
+
+    def contact_jacobians(self, q):
+        return self.W_N, self.W_T
+
+    def contact_drift(self, q, v):
+        return self.a_N, self.a_T
+
+    def mode_of(self, closed, sigma=0):
+        return mode_from_closed(closed, sigma)
+
+    def closed_of(self, mode):
+        return CLOSED[mode]
+
+
+def constant_model(rng, m=4, mu=None):
+    Minv, W_N, W_T, _, _, _ = random_problem(rng, 2, m)
+    e_N = float(rng.uniform(0.0, 1.0))
+    e_T = e_N if rng.random() < 0.5 else 0.0
+    if mu is None:
+        mu = float(rng.choice([0.3, 1.0, math.inf]))
+    g = rng.normal(size=2) * 1e-3 * (rng.random(2) < 0.5)
+    return ConstantModel(Minv, W_N, W_T, rng.normal(size=m), g, rng.normal(size=2), rng.normal(size=2) * 0.1,
+                         e_N, e_T, mu)
+
+
+def parallel_rows(W_T, active):
+    """Whether the tangential rows of the two contacts of ``active`` are parallel (the rigid block at phi = 0):
+    then only the sum of their tangential percussions is unique (lcp.py's module docstring). The sticking
+    problem splits it evenly in both engines; the frictional one with both contacts stuck takes numpy's LU
+    solution of a singular system (an arbitrary split) where the C takes the minimum-norm one."""
+    if W_T is None or len(active) != 2:
+        return False
+    a, b = W_T[:, active[0]], W_T[:, active[1]]
+    return abs(abs(a @ b) - np.linalg.norm(a) * np.linalg.norm(b)) <= 1e-12 * np.linalg.norm(a) * np.linalg.norm(b)
+
+
+def compare_solution(py, c, kappa=1e3, W_T=None):
+    """1 for a tie of exact solutions, 0 for the same one (asserted to round-off)."""
+    states = tuple(int(s) for s in py.states)
+    if tuple(py.active) != c["active"] or states != c["states"]:
+        assert py.violation <= TIE and c["violation"] <= TIE, (py.active, c["active"], states, c["states"])
+        return 1
+    assert py.exact == c["exact"]
+    assert py.painleve == c["painleve"]
+    assert getattr(py, "n_solutions", -1) == c["n_solutions"]
+    s_P = max(float(np.max(np.abs(np.concatenate([py.P_N, py.P_T])))), 1e-300)
+    s_v = max(float(np.max(np.abs(py.v))), 1.0)
+    assert np.max(np.abs(py.v - c["v"])) <= VALUE_RTOL * kappa * s_v
+    assert np.max(np.abs(py.P_N - c["P_N"])) <= VALUE_RTOL * kappa * s_P
+    if parallel_rows(W_T, tuple(py.active)):
+        assert abs(sum(py.P_T) - sum(c["P_T"])) <= VALUE_RTOL * kappa * s_P
+    else:
+        assert np.max(np.abs(py.P_T - c["P_T"])) <= VALUE_RTOL * kappa * s_P
+    return 0
+
+
+def subsets():
+    return [(), (0,), (1,), (0, 1)]
+
+
+def test_impact_on_constant_models():
+    """contact.impact: Newton's law, both tangential laws (e_T = 0, e_T = e_N), mu finite and inf, the Zeno
+    rule's forced contacts, e overrides, prefer."""
+    rng = np.random.default_rng(300)
+    ties = total = 0
+    for _ in range(200):
+        model = constant_model(rng)
+        q = rng.normal(size=4)
+        v = rng.normal(size=4)
+        cand = list(subsets()[int(rng.integers(0, 4))])
+        forced = [i for i in cand if rng.random() < 0.2]
+        prefer = int(rng.choice([-1, 1, 2]))
+        e = None if rng.random() < 0.7 else (float(rng.uniform(0, 1)), float(rng.uniform(0, 1)))
+        py = contact.impact(model, q, v, cand, forced, e_N=None if e is None else e[0],
+                            e_T=None if e is None else e[1], prefer=None if prefer < 0 else prefer)
+        c = _engine.contact_model_call("impact", model.spec(), q.tolist(), v.tolist(), cand, forced, prefer, e)
+        ties += compare_solution(py, c)
+        total += 1
+    assert ties <= TIE_SHARE * total
+
+
+def test_uplift_and_next_mode_on_constant_models():
+    """contact.uplift (slip_tol, counting, prefer) and next_mode (closed candidates, the mode of the solution's
+    active set and sliding direction)."""
+    rng = np.random.default_rng(301)
+    ties = 0
+    for _ in range(200):
+        model = constant_model(rng)
+        q = rng.normal(size=4)
+        v = rng.normal(size=4) * (rng.random() < 0.5)
+        ag = float(rng.normal())
+        cand = list(subsets()[int(rng.integers(1, 4))])
+        forced = [i for i in cand if rng.random() < 0.2]
+        slip = None if rng.random() < 0.4 else float(rng.choice([1e-9, 0.5]))
+        count = bool(rng.random() < 0.5)
+        prefer = int(rng.choice([-1, 1, 2, 3]))
+        py = contact.uplift(model, q, v, ag, cand, forced, slip_tol=slip, count=count,
+                            prefer=None if prefer < 0 else prefer)
+        c = _engine.contact_model_call("uplift", model.spec(), q.tolist(), v.tolist(), ag, cand, forced, slip, count,
+                                       prefer)
+        ties += compare_solution(py, c)
+        # next_mode: a state whose normal velocities are zero at some contacts
+        W_N = model.W_N
+        v0 = v - W_N @ np.linalg.lstsq(W_N.T @ W_N, W_N.T @ v, rcond=None)[0] * (rng.random() < 0.7)
+        gap_tol, v_tol = 1e-3, 1e-9
+        mode, sol = contact.next_mode(model, q, v0, ag, gap_tol, v_tol, prefer=None if prefer < 0 else prefer)
+        c_mode, c_sol = _engine.contact_model_call("next_mode", model.spec(), q.tolist(), v0.tolist(), ag, gap_tol,
+                                                   v_tol, prefer)
+        assert (sol is None) == (c_sol is None)
+        if sol is not None and compare_solution(sol, c_sol):
+            ties += 1
+            continue
+        assert int(mode) == c_mode
+    assert ties <= TIE_SHARE * 200
+
+
+def test_solve_with_friction_on_constant_models():
+    """contact.solve_with_friction: the sticking LCP with mu = inf (hint, user tolerances), its mu -> inf limit
+    where sticking has no exact solution, and Coulomb's problem with sliding contacts, hints and prefer."""
+    rng = np.random.default_rng(302)
+    ties = 0
+    from rocking_model.tolerances import ContactTolerances
+    for _ in range(300):
+        model = constant_model(rng, mu=float(rng.choice([0.5, math.inf, math.inf])))
+        v = rng.normal(size=4)
+        b_N = rng.normal(size=2)
+        b_T = rng.normal(size=2) * (rng.random() < 0.5)
+        cand = list(subsets()[int(rng.integers(0, 4))])
+        forced = [i for i in cand if rng.random() < 0.2]
+        sliding = None if rng.random() < 0.6 else {i: int(rng.choice([-1, 1])) for i in cand if rng.random() < 0.7}
+        count = bool(rng.random() < 0.5)
+        hint = None if rng.random() < 0.5 else [i for i in range(2) if rng.random() < 0.5]
+        prefer = int(rng.choice([-1, -1, 1, 2]))
+        lcp_exact = float(rng.choice([1e-9, 1e-6]))
+        tol = ContactTolerances(lcp_exact=lcp_exact, lcp_hint=1e-12)
+        py = contact.solve_with_friction(model, model.Minv, model.W_N, model.W_T, v, b_N, b_T, cand, forced,
+                                         sliding, count, hint, None if prefer < 0 else prefer, tolerances=tol)
+        c = _engine.contact_model_call("solve_with_friction", model.spec(), v.tolist(), b_N.tolist(), b_T.tolist(),
+                                       cand, forced, sliding, count, hint, prefer, lcp_exact, 1e-12)
+        ties += compare_solution(py, c)
+    assert ties <= TIE_SHARE * 300
+
+
+def test_geometry_and_painleve_on_constant_models():
+    """project_to_ground (one and two corners, the 2 x 2 Cramer rule and its lstsq fallback),
+    closed_candidates, sliding_delassus (mu finite and inf), painleve_sticks, solution_sigma, mode_forces."""
+    rng = np.random.default_rng(303)
+    for k in range(300):
+        m = int(rng.choice([3, 4]))
+        model = constant_model(rng, m=m)
+        if m == 3:
+            # as the rigid block on its base: parallel tangential rows (else the 4 x 4 system of the two closed
+            # contacts on 3 dofs is singular and its solution round-off)
+            model.W_T[:, 1] = model.W_T[:, 0]
+        if k % 10 == 0:
+            model.W_N[:, 1] = model.W_N[:, 0]          # a singular 2 x 2 block: the lstsq fallback
+        q = rng.normal(size=m)
+        spec = model.spec()
+        for corners in ([0], [1], [0, 1]):
+            py = contact.project_to_ground(model, q, corners)
+            c = np.array(_engine.contact_model_call("project_to_ground", spec, q.tolist(), corners))
+            assert np.max(np.abs(py - c)) <= 1e-13 * max(1.0, float(np.max(np.abs(py))))
+        v = rng.normal(size=m) * (rng.random() < 0.5)
+        for gap_tol, v_tol in ((1e-3, 1e-9), (1e-2, 10.0)):
+            assert tuple(contact.closed_candidates(model, q, v, gap_tol, v_tol)) == \
+                _engine.contact_model_call("closed_candidates", spec, q.tolist(), v.tolist(), gap_tol, v_tol)
+        for i in (0, 1):
+            for sigma in (1.0, -1.0):
+                a = contact.sliding_delassus(model, q, i, sigma)
+                ca = _engine.contact_model_call("sliding_delassus", spec, q.tolist(), i, sigma)
+                assert a == ca or abs(a - ca) <= 1e-13 * max(1.0, abs(a))
+        v_minus = rng.normal(size=m)
+        v_plus = v_minus.copy()
+        # v_plus with zero tangential (and normal) velocity at some contacts: a stick after the impact
+        cols = [i for i in (0, 1) if rng.random() < 0.6]
+        if cols:
+            J = np.concatenate([model.W_N[:, cols], model.W_T[:, cols]], axis=1)
+            v_plus = v_minus - J @ np.linalg.lstsq(J, v_minus, rcond=None)[0]
+        for v_tol in (1e-9, 1e-6):
+            py = contact.painleve_sticks(model, q, v_minus, v_plus, [0, 1], v_tol)
+            c = _engine.contact_model_call("painleve_sticks", spec, q.tolist(), v_minus.tolist(), v_plus.tolist(),
+                                           [0, 1], v_tol)
+            assert tuple(py) == c
+        # (the forces of the closed contacts: a solve on the Delassus block, relative error ~ its condition
+        # number times round-off; the rows of the parallel tangential contacts count once)
+        rows = np.concatenate([model.W_N, model.W_T[:, :1] if m == 3 else model.W_T], axis=1)
+        sv = np.linalg.svd(rows.T @ model.Minv @ rows, compute_uv=False)
+        kappa = sv[0] / sv[-1] if sv[-1] > 0 else math.inf
+        for mode in range(10):
+            py = contact.mode_forces(model, mode, q, v, 0.3)
+            c = _engine.contact_model_call("mode_forces", spec, mode, q.tolist(), v.tolist(), 0.3)
+            assert np.max(np.abs(py - c)) <= VALUE_RTOL * max(1.0, kappa / 100.0) * max(1.0, float(np.max(np.abs(py))))
+
+
+def test_solution_sigma():
+    from types import SimpleNamespace
+    for states in [(), (0, 0), (2, 2), (3, 0), (2, 1), (1, 3), (0, 3), (2, 3)]:
+        sol = SimpleNamespace(states=states)
+        assert contact.solution_sigma(sol) == _engine.contact_model_call(
+            "solution_sigma", constant_model(np.random.default_rng(0)).spec(), list(states))
+
+
+def test_inexact_message():
+    from types import SimpleNamespace
+    from rocking_model.integrators.moreau_jean import inexact_message
+    for active, viol, t in [((), 0.5, 0.0), ((0,), 1.234e-5, 1.5), ((0, 1), 3e-9, 12.000000000000002)]:
+        sol = SimpleNamespace(active=active, violation=viol)
+        assert inexact_message(sol, t, "impact LCP") == _engine.contact_inexact_message(active, viol, 2, t,
+                                                                                         "impact LCP")
+
+
+# ---------------------------------------------------------------------------------------------- the models
+from rocking_model.models import MODELS  # noqa: E402
+from rocking_model.modes import Mode  # noqa: E402
+
+
+def kernel_available(kind):
+    try:
+        _engine.contact_model_call("closed_candidates", (kind, real_params(MODELS[kind]())),
+                                   [0.0] * len(MODELS[kind]().dof_names), [0.0] * len(MODELS[kind]().dof_names),
+                                   1e-9, 1e-9)
+    except NotImplementedError:
+        return False
+    return True
+
+
+def real_params(model):
+    return [float(getattr(model, p.name)) for p in type(model).parameters()]
+
+
+def random_model(rng, kind):
+    e_N = float(rng.uniform(0.0, 1.0))
+    law = int(rng.integers(0, 2))
+    mu = float(rng.choice([0.2, 0.6, 1.5, math.inf]))
+    if kind == "rigid":
+        return MODELS[kind](b=float(rng.uniform(0.1, 0.5)), h=float(rng.uniform(0.6, 3.0)),
+                            m=float(rng.uniform(1.0, 100.0)), e_N=e_N, impact_law=law, mu=mu)
+    return MODELS[kind](e_N=e_N, impact_law=law, mu=mu)
+
+
+def random_state(rng, model, mode):
+    """(q, v) of a sticking mode: the corners of the mode on the ground, the others above it."""
+    k = len(model.dofs_of(mode))
+    r = rng.normal(size=k) * 0.01
+    r_dot = rng.normal(size=k) * 0.2
+    i = list(model.dofs_of(mode)).index(model.phi_index) if model.phi_index in model.dofs_of(mode) else None
+    if i is not None:
+        r[i] = float(rng.uniform(0.01, 0.4)) * (1.0 if mode == Mode.LEFT else -1.0)
+    q, v = model.embed(mode, r, r_dot)
+    return q, v
+
+
+KINDS = ["rigid", "flexible"]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_contact_functions_on_the_models(kind):
+    """contact.py on both C kernels (part A) at random states of the sticking modes: impact (rocking and
+    full-contact impacts, both impact laws, mu finite and inf, forced contacts), uplift, next_mode,
+    project_to_ground, closed_candidates, sliding_delassus, painleve_sticks, mode_forces."""
+    if not kernel_available(kind):
+        pytest.skip(f"the C kernel of {kind} is not built (part A)")
+    rng = np.random.default_rng(400 + KINDS.index(kind))
+    ties = total = 0
+    for _ in range(80):
+        model = random_model(rng, kind)
+        spec = (kind, real_params(model))
+        for mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+            q, v = random_state(rng, model, mode)
+            closed = list(model.closed_of(mode))
+            ag = float(rng.normal()) * 3.0
+            # impact: the pre-impact velocity is any velocity (a landing corner approaches)
+            v_minus = rng.normal(size=len(q)) * 0.3
+            forced = [i for i in closed if rng.random() < 0.2]
+            prefer = int(rng.choice([-1, 1, 2]))
+            py = contact.impact(model, q, v_minus, closed, forced, prefer=None if prefer < 0 else prefer)
+            c = _engine.contact_model_call("impact", spec, q.tolist(), v_minus.tolist(), closed, forced, prefer, None)
+            ties += compare_solution(py, c, W_T=model.contact_jacobians(q)[1])
+            # uplift at the consistent state, with and without sliding contacts
+            for slip in (None, 1e-9):
+                count = slip is not None
+                py = contact.uplift(model, q, v, ag, closed, slip_tol=slip, count=count)
+                c = _engine.contact_model_call("uplift", spec, q.tolist(), v.tolist(), ag, closed, [], slip, count, -1)
+                ties += compare_solution(py, c, W_T=model.contact_jacobians(q)[1])
+                total += 1
+            v_rest = v.copy()
+            mode_py, sol = contact.next_mode(model, q, v_rest, ag, 1e-9, 1e-9)
+            mode_c, c_sol = _engine.contact_model_call("next_mode", spec, q.tolist(), v_rest.tolist(), ag, 1e-9, 1e-9,
+                                                       -1)
+            assert (sol is None) == (c_sol is None)
+            if sol is None or not compare_solution(sol, c_sol, W_T=model.contact_jacobians(q)[1]):
+                assert int(mode_py) == mode_c
+            q_off = q + rng.normal(size=len(q)) * 1e-6
+            py = contact.project_to_ground(model, q_off, closed)
+            c = np.array(_engine.contact_model_call("project_to_ground", spec, q_off.tolist(), closed))
+            assert np.max(np.abs(py - c)) <= 1e-13 * max(1.0, float(np.max(np.abs(py))))
+            assert tuple(contact.closed_candidates(model, q, v, 1e-9, 1e-9)) == \
+                _engine.contact_model_call("closed_candidates", spec, q.tolist(), v.tolist(), 1e-9, 1e-9)
+            for i in (0, 1):
+                for sigma in (1.0, -1.0):
+                    a = contact.sliding_delassus(model, q, i, sigma)
+                    ca = _engine.contact_model_call("sliding_delassus", spec, q.tolist(), i, sigma)
+                    assert a == ca or abs(a - ca) <= 1e-13 * max(1.0, abs(a))
+            v_plus = np.array(_engine.contact_model_call("impact", spec, q.tolist(), v_minus.tolist(), closed, [], -1,
+                                                         None)["v"])
+            for v_tol in (1e-9, 1e-6):
+                assert tuple(contact.painleve_sticks(model, q, v_minus, v_plus, closed, v_tol)) == \
+                    _engine.contact_model_call("painleve_sticks", spec, q.tolist(), v_minus.tolist(), v_plus.tolist(),
+                                               closed, v_tol)
+            py = contact.mode_forces(model, mode, q, v, ag)
+            c = _engine.contact_model_call("mode_forces", spec, int(mode), q.tolist(), v.tolist(), ag)
+            assert np.max(np.abs(py - np.array(c))) <= 1e-12 * max(1.0, float(np.max(np.abs(py))))
+            total += 1
+    assert ties <= TIE_SHARE * total

@@ -250,6 +250,7 @@ def test_rigid_sticking_modes_bitwise(kw, state, ag):
         same(call("rigid", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)))
         g, tot = call("rigid", p, "monitors", mode=mode, a=y, ag=ag)
         same(g, fmon(0.0, list(y)))
+        same(call("rigid", p, "monitors_only", mode=mode, a=y, ag=ag), g)
         if ftot is None:
             assert tot is None
         else:
@@ -543,6 +544,7 @@ def test_flexible_sticking_modes_bitwise(kw, state, ag):
         same(call("flexible", p, "rhs", mode=mode, a=y, ag=ag), frhs(0.0, list(y)))
         g, tot = call("flexible", p, "monitors", mode=mode, a=y, ag=ag)
         same(g, fmon(0.0, list(y)))
+        same(call("flexible", p, "monitors_only", mode=mode, a=y, ag=ag), g)
         if ftot is None:
             assert tot is None
         else:
@@ -619,6 +621,19 @@ def test_flexible_classical_impact_velocity(kw, state):
             assert model.impact_rule == 0 and cv is None
         else:
             same(cv, pv)
+        if model.impact_rule == 1:
+            # a rate that opens the other corner's gap, and a sliding mode as the pivot: the Python raises
+            bad = v.copy()
+            bad[3] = -w_minus
+            with pytest.raises(ValueError):
+                model.classical_impact_velocity(q, bad, pivot)
+            with pytest.raises(ValueError):
+                call("flexible", p, "classical_impact_velocity", mode=pivot, a=q.tolist(), b=bad.tolist())
+            slide = Mode.LEFT_SLIDE_POS if pivot == Mode.LEFT else Mode.RIGHT_SLIDE_NEG
+            with pytest.raises(ValueError):
+                model.classical_impact_velocity(q, v, slide)
+            with pytest.raises(ValueError):
+                call("flexible", p, "classical_impact_velocity", mode=slide, a=q.tolist(), b=v.tolist())
 
 
 @SETTINGS
@@ -678,3 +693,52 @@ def test_flexible_initial_value_checks_give_the_python_messages(initial):
         assert str(info.value) == str(exc)
     else:
         call("flexible", values_of(model), "initial_state", a=list(initial))
+
+
+# ------------------------------------------------------------------------------------------ a third model
+def generic_expectations(model, mode, y, ag):
+    """What RockingModel's generic code gives for ``mode`` at y: (rhs, monitors with the cone, totals)."""
+    motion = ConstantMotion(ag)
+    k = len(y) // 2
+    r, rd = np.array(y[:k]), np.array(y[k:])
+    rhs = list(y[k:]) + (RockingModel.reduced_acceleration(model, mode, r, rd, ag).tolist() if k else [])
+    g = RockingModel.mode_functions(model, mode, motion)[1](0.0, list(y))
+    totals = None
+    if CLOSED[mode]:
+        q, v = model.embed(mode, r, rd)
+        totals = sliding.force_totals(model, mode, q, v, ag)
+        if not math.isinf(model.mu):
+            g = g[:-1] + [(model.mu * totals[0] - abs(totals[1])) / model.force_scale, g[-1]]
+    return rhs, g, totals
+
+
+@SETTINGS
+@given(st.sampled_from(["rigid", "flexible"]), rigid_params(), flexible_params(), STATE, FSTATE, AG)
+def test_a_kernel_with_only_the_required_functions_runs_every_mode(kind, rkw, fkw, rstate, fstate, ag):
+    """The any-mode functions on a kernel without the optional closed forms (mode_rhs, mode_monitors,
+    mode_outputs, inverse_mass_matrix) use the generic fallbacks and agree with RockingModel's generic code:
+    adding a model needs only the required kernel functions."""
+    model = RigidBlock(**rkw) if kind == "rigid" else FLEX(**fkw)
+    p = values_of(model)
+    state_of = (lambda mode: rigid_state(model, mode, *rstate)) if kind == "rigid" else \
+        (lambda mode: flexible_state(model, mode, *fstate))
+    w = rstate[1] if kind == "rigid" else fstate[3]
+    acc = model.g + abs(ag) + model.length_scale * w ** 2
+    if kind == "flexible":
+        acc += model.omega ** 2 * model.h * abs(fstate[0]) + model.omega * abs(fstate[2])
+    for mode in STICK:
+        y = state_of(mode)
+        q, _ = model.embed(mode, np.array(y[:len(y) // 2]), np.array(y[len(y) // 2:]))
+        cond = np.linalg.cond(model.mass_matrix(q))
+        rtol = 1e-12 * cond
+        rhs, g, totals = generic_expectations(model, mode, y, ag)
+        close(call(kind, p, "bare:rhs", mode=mode, a=y, ag=ag), rhs, rtol, scale=acc)
+        cg, ctot = call(kind, p, "bare:monitors", mode=mode, a=y, ag=ag)
+        close(cg, g, rtol, scale=acc / model.g)
+        if totals is None:
+            assert ctot is None
+        else:
+            close(ctot, totals, rtol, scale=model.force_scale * acc / model.g)
+        close(call(kind, p, "bare:outputs_of", mode=mode, a=y, ag=0.5), out_list(model, model.outputs_of(mode, y, 0.5)),
+              1e-14, scale=1.0)
+        close(call(kind, p, "bare:inverse_mass", a=q.tolist()), np.linalg.inv(model.mass_matrix(q)), LA_RTOL * cond)

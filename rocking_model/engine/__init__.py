@@ -118,6 +118,7 @@ class CompiledIntegrator(Integrator):
         state = dict(self.__dict__)
         state["_engine"] = self._engine.snapshot()
         state.pop("impact_times", None)
+        state.pop("_last_motion", None)   # may be a lambda's wrapper (not picklable); a new object restarts
         return state
 
     def __setstate__(self, state):
@@ -208,7 +209,16 @@ class CompiledIntegrator(Integrator):
             self._run(lambda: eng.advance(t_end, ag.value, 0.0, max_steps))
         else:
             spec = motion_spec(ag)
-            self._run(lambda: eng.advance_motion(t_end, spec, max_steps))
+            ident = self._identity(ag)
+            self._run(lambda: eng.advance_motion(t_end, spec, max_steps, ident))
+
+    def _identity(self, ag) -> int:
+        """id(ag), the object kept alive while it is the last motion (the Python's closure cache holds it too),
+        so that the event-driven scheme carries its stepper on under the same motion object as the Python."""
+        if ag.constant:
+            return 0
+        self._last_motion = ag
+        return id(ag)
 
     def sample(self, times, ag, max_steps: int | None = None):
         times = np.ascontiguousarray(times, dtype=float)
@@ -219,7 +229,8 @@ class CompiledIntegrator(Integrator):
         impacts = np.empty(n, dtype=np.int64)
         overturned = np.empty(n, dtype=np.intc)
         spec = motion_spec(ag)
-        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned))
+        ident = self._identity(ag)
+        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident))
         out = {name: values[:, j].copy() for j, name in enumerate(names)}
         out["friction_demand"] = values[:, len(names)].copy()
         out["painleve"] = values[:, len(names) + 1].astype(np.int64)

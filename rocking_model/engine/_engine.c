@@ -576,15 +576,16 @@ static PyObject *finish_call(EngineObject *self, motion_holder *h, rk_status st,
 
 static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
-    static char *kwlist[] = {"t_end", "motion", "max_steps", NULL};
+    static char *kwlist[] = {"t_end", "motion", "max_steps", "identity", NULL};
     double t_end;
     PyObject *spec, *ms = Py_None;
     long long max_steps;
+    unsigned long long identity = 0;
     motion_holder h;
     int idx;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "dO|O", kwlist, &t_end, &spec, &ms))
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "dO|OK", kwlist, &t_end, &spec, &ms, &identity))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
@@ -594,6 +595,7 @@ static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObj
         holder_release(&h);
         return NULL;
     }
+    h.m[idx].identity = identity;
     if (h.n_cbs > 0) {
         saved = (rk_core *)PyMem_Malloc(sizeof(rk_core));
         if (saved == NULL) {
@@ -630,8 +632,10 @@ static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssi
 
 static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
-    static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", NULL};
+    static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", "identity",
+                             NULL};
     PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r;
+    unsigned long long identity = 0;
     long long max_steps;
     motion_holder h;
     Py_buffer bm, bv, bi, bo;
@@ -640,8 +644,9 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     int idx, stride;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO", kwlist, &times_obj, &spec, &ms,
-                                                      &modes_obj, &values_obj, &impacts_obj, &over_obj))
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|K", kwlist, &times_obj, &spec, &ms,
+                                                      &modes_obj, &values_obj, &impacts_obj, &over_obj,
+                                                      &identity))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
@@ -655,6 +660,7 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
         holder_release(&h);
         return NULL;
     }
+    h.m[idx].identity = identity;
     stride = rk_engine_n_outputs(self->e) + 2;
     if (writable_buffer(modes_obj, &bm, "modes", (Py_ssize_t)sizeof(int), n + 1) < 0) {
         holder_release(&h);

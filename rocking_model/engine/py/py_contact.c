@@ -353,6 +353,401 @@ static PyObject *py_solve_friction(PyObject *self, PyObject *args, PyObject *kwa
     }
 }
 
+/* ------------------------------------------------------------------------------------------ model level */
+
+/* A test model with constant matrices (two contacts, the rocking models' mode codes), so that the contact.py
+ * functions can be pinned independently of the kernels of part A: d[0..15] Minv, d[16..23] W_N,
+ * d[24..31] W_T (n_dof <= 4), p[0..3] forces, p[4..5] gaps, p[6..7] a_N, p[8..9] a_T. */
+#define TM_DOF_MAX 4
+static int tm_mode_of(const rk_model *m, rk_set closed, int sigma)
+{
+    int mode;
+    (void)m;
+    if (closed == 3u)
+        mode = RK_MODE_FULL;
+    else if (closed == 1u)
+        mode = RK_MODE_LEFT;
+    else if (closed == 2u)
+        mode = RK_MODE_RIGHT;
+    else
+        return RK_MODE_FLIGHT;
+    if (!sigma)
+        return mode;
+    return 4 + 2 * mode + (sigma > 0 ? 0 : 1);
+}
+static rk_set tm_closed_of(const rk_model *m, int mode)
+{
+    static const rk_set closed[10] = {3u, 1u, 2u, 0u, 3u, 3u, 1u, 1u, 2u, 2u};
+    (void)m;
+    return (mode >= 0 && mode < 10) ? closed[mode] : 0u;
+}
+static void tm_inverse_mass(const rk_model *m, const double *q, double *Minv)
+{
+    int n = m->ops->n_dof, i;
+    (void)q;
+    for (i = 0; i < n * n; i++)
+        Minv[i] = m->d[i];
+}
+static void tm_forces(const rk_model *m, const double *q, const double *v, double ag, double *f)
+{
+    int i;
+    (void)q; (void)v; (void)ag;
+    for (i = 0; i < m->ops->n_dof; i++)
+        f[i] = m->p[i];
+}
+static void tm_gaps(const rk_model *m, const double *q, double *g)
+{
+    (void)q;
+    g[0] = m->p[4];
+    g[1] = m->p[5];
+}
+static void tm_jacobians(const rk_model *m, const double *q, double *W_N, double *W_T)
+{
+    int i, n = m->ops->n_dof;
+    (void)q;
+    for (i = 0; i < 2 * n; i++) {
+        W_N[i] = m->d[16 + i];
+        W_T[i] = m->d[24 + i];
+    }
+}
+static void tm_drift(const rk_model *m, const double *q, const double *v, double *a_N, double *a_T)
+{
+    (void)q; (void)v;
+    a_N[0] = m->p[6];
+    a_N[1] = m->p[7];
+    a_T[0] = m->p[8];
+    a_T[1] = m->p[9];
+}
+
+/** data = (Minv, W_N, W_T, f, g, a_N, a_T, e_N, e_T, mu) -> the test model (ops filled, m->ops = ops). */
+static int test_model(PyObject *data, rk_model_ops *ops, rk_model *m)
+{
+    PyObject *Minv, *W_N, *W_T, *f, *g, *a_N, *a_T;
+    double e_N, e_T, mu, buf[64];
+    int r, c, r2, c2, r3, c3, i;
+    if (!PyArg_ParseTuple(data, "OOOOOOOddd", &Minv, &W_N, &W_T, &f, &g, &a_N, &a_T, &e_N, &e_T, &mu))
+        return -1;
+    memset(ops, 0, sizeof *ops);
+    memset(m, 0, sizeof *m);
+    if (get_matrix(Minv, "Minv", buf, TM_DOF_MAX, TM_DOF_MAX, &r, &c) < 0)
+        return -1;
+    if (r != c || r < 1) {
+        PyErr_SetString(PyExc_ValueError, "Minv must be square, 1 to 4 dofs");
+        return -1;
+    }
+    for (i = 0; i < r * r; i++)
+        m->d[i] = buf[i];
+    if (get_matrix(W_N, "W_N", m->d + 16, TM_DOF_MAX, 2, &r2, &c2) < 0
+        || get_matrix(W_T, "W_T", m->d + 24, TM_DOF_MAX, 2, &r3, &c3) < 0)
+        return -1;
+    if (r2 != r || r3 != r || c2 != 2 || c3 != 2) {
+        PyErr_SetString(PyExc_ValueError, "W_N and W_T must be n_dof x 2");
+        return -1;
+    }
+    if (get_vector(f, "f", m->p, TM_DOF_MAX) != r || get_vector(g, "g", m->p + 4, 2) != 2
+        || get_vector(a_N, "a_N", m->p + 6, 2) != 2 || get_vector(a_T, "a_T", m->p + 8, 2) != 2) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "f has n_dof values, g, a_N, a_T two");
+        return -1;
+    }
+    ops->kind = "contact-test";
+    ops->class_name = "ContactTestModel";
+    ops->n_dof = r;
+    ops->n_contacts = 2;
+    ops->n_modes = 10;
+    ops->mode_of = tm_mode_of;
+    ops->closed_of = tm_closed_of;
+    ops->inverse_mass_matrix = tm_inverse_mass;
+    ops->forces = tm_forces;
+    ops->gaps = tm_gaps;
+    ops->contact_jacobians = tm_jacobians;
+    ops->contact_drift = tm_drift;
+    m->ops = ops;
+    m->e_N = e_N;
+    m->e_T = e_T;
+    m->mu = mu;
+    return 0;
+}
+
+/** model = a test-model tuple, or (kind, params) of a kernel of part A. */
+static int get_model(PyObject *spec, rk_model_ops *ops, rk_model *m)
+{
+    const char *kind;
+    PyObject *params;
+    double p[RK_MAX_PARAMS];
+    Py_ssize_t n;
+    const rk_model_ops *found;
+    rk_error err;
+    if (PyTuple_Check(spec) && PyTuple_GET_SIZE(spec) == 10)
+        return test_model(spec, ops, m);
+    if (!PyArg_ParseTuple(spec, "sO", &kind, &params))
+        return -1;
+    n = get_vector(params, "params", p, RK_MAX_PARAMS);
+    if (n < 0)
+        return -1;
+    found = rk_model_find(kind);
+    if (found == NULL) {
+        PyErr_Format(PyExc_NotImplementedError, "no C kernel for model kind %s (part A)", kind);
+        return -1;
+    }
+    if (rk_model_init(m, found, p, (int)n, &err) != RK_OK) {
+        raise_err(&err);
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *py_model_call(PyObject *self, PyObject *args)
+{
+    PyObject *spec, *rest, *res = NULL;
+    const char *name;
+    rk_model_ops ops;
+    rk_model m;
+    rk_error err;
+    rk_lcp_solution sol;
+    int nd, n;
+    (void)self;
+    if (PyTuple_GET_SIZE(args) < 2) {
+        PyErr_SetString(PyExc_TypeError, "contact_model_call(name, model, *args)");
+        return NULL;
+    }
+    name = PyUnicode_AsUTF8(PyTuple_GET_ITEM(args, 0));
+    if (name == NULL)
+        return NULL;
+    spec = PyTuple_GET_ITEM(args, 1);
+    rest = PyTuple_GetSlice(args, 2, PyTuple_GET_SIZE(args));
+    if (rest == NULL)
+        return NULL;
+    if (get_model(spec, &ops, &m) < 0)
+        goto done;
+    nd = m.ops->n_dof;
+    n = m.ops->n_contacts;
+    if (strcmp(name, "impact") == 0) {
+        /* (q, v_minus, candidates, forced, prefer, e) with e None or (e_N, e_T) */
+        PyObject *q, *v, *cand, *forced, *e;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF];
+        rk_contact_args a;
+        int prefer;
+        if (!PyArg_ParseTuple(rest, "OOOOiO", &q, &v, &cand, &forced, &prefer, &e))
+            goto done;
+        rk_contact_args_default(&a);
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd
+            || get_set(forced, "forced", &a.forced, NULL) < 0)
+            goto bad_vec;
+        {
+            rk_set c;
+            if (get_set(cand, "candidates", &c, NULL) < 0)
+                goto done;
+            a.prefer = prefer;
+            if (e != Py_None) {
+                if (!PyArg_ParseTuple(e, "dd", &a.e_N, &a.e_T))
+                    goto done;
+                a.has_e = 1;
+            }
+            if (rk_impact(&m, qa, va, c, &a, &sol, &err) != RK_OK) {
+                raise_err(&err);
+                goto done;
+            }
+        }
+        res = narrow_dict(&sol, nd, n);
+    } else if (strcmp(name, "uplift") == 0) {
+        /* (q, v, ag, candidates, forced, slip_tol or None, count, prefer) */
+        PyObject *q, *v, *cand, *forced, *slip;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag;
+        rk_contact_args a;
+        rk_set c;
+        int count, prefer;
+        if (!PyArg_ParseTuple(rest, "OOdOOOpi", &q, &v, &ag, &cand, &forced, &slip, &count, &prefer))
+            goto done;
+        rk_contact_args_default(&a);
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
+            goto bad_vec;
+        if (get_set(cand, "candidates", &c, NULL) < 0 || get_set(forced, "forced", &a.forced, NULL) < 0)
+            goto done;
+        if (slip != Py_None) {
+            a.has_slip_tol = 1;
+            a.slip_tol = PyFloat_AsDouble(slip);
+            if (PyErr_Occurred())
+                goto done;
+        }
+        a.count = count;
+        a.prefer = prefer;
+        if (rk_uplift(&m, qa, va, ag, c, &a, &sol, &err) != RK_OK) {
+            raise_err(&err);
+            goto done;
+        }
+        res = narrow_dict(&sol, nd, n);
+    } else if (strcmp(name, "solve_with_friction") == 0) {
+        /* (v_free, b_N, b_T, candidates, forced, sliding, count, hint, prefer, lcp_exact, lcp_hint) */
+        PyObject *vf, *bN, *bT, *cand, *forced, *sliding, *hint;
+        double va[RK_MAX_DOF], b1[RK_MAX_CONTACTS], b2[RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
+        double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], q0[RK_MAX_DOF] = {0};
+        int sl[RK_LCP_MAX_CONTACTS], count, prefer, has;
+        rk_tolerances tol = RK_DEFAULT_TOLERANCES;
+        rk_contact_args a;
+        rk_lcp_problem p;
+        if (!PyArg_ParseTuple(rest, "OOOOOOpOidd", &vf, &bN, &bT, &cand, &forced, &sliding, &count, &hint, &prefer,
+                              &tol.lcp_exact, &tol.lcp_hint))
+            goto done;
+        rk_contact_args_default(&a);
+        memset(&p, 0, sizeof p);
+        if (get_vector(vf, "v_free", va, nd) != nd || get_vector(bN, "b_N", b1, n) != n
+            || get_vector(bT, "b_T", b2, n) != n)
+            goto bad_vec;
+        if (get_set(cand, "candidates", &p.candidates, NULL) < 0 || get_set(forced, "forced", &p.forced, NULL) < 0
+            || get_set(hint, "hint", &a.hint, &a.has_hint) < 0)
+            goto done;
+        has = get_sliding(sliding, sl, n);
+        if (has < 0)
+            goto done;
+        a.sliding = has ? sl : NULL;
+        a.count = count;
+        a.prefer = prefer;
+        a.tolerances = &tol;
+        m.ops->inverse_mass_matrix(&m, q0, Minv);
+        m.ops->contact_jacobians(&m, q0, W_N, W_T);
+        p.n_dof = nd;
+        p.n_contacts = n;
+        p.Minv = Minv;
+        p.W_N = W_N;
+        p.W_T = W_T;
+        p.v_free = va;
+        p.b_N = b1;
+        p.b_T = b2;
+        if (rk_solve_with_friction(&m, &p, &a, &sol, &err) != RK_OK) {
+            raise_err(&err);
+            goto done;
+        }
+        res = narrow_dict(&sol, nd, n);
+    } else if (strcmp(name, "project_to_ground") == 0) {
+        PyObject *q, *corners;
+        double qa[RK_MAX_DOF], out[RK_MAX_DOF];
+        rk_set c;
+        if (!PyArg_ParseTuple(rest, "OO", &q, &corners))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd)
+            goto bad_vec;
+        if (get_set(corners, "corners", &c, NULL) < 0)
+            goto done;
+        if (rk_project_to_ground(&m, qa, c, out, &err) != RK_OK) {
+            raise_err(&err);
+            goto done;
+        }
+        res = list_of(out, nd);
+    } else if (strcmp(name, "closed_candidates") == 0) {
+        PyObject *q, *v;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], gap_tol, v_tol;
+        if (!PyArg_ParseTuple(rest, "OOdd", &q, &v, &gap_tol, &v_tol))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
+            goto bad_vec;
+        res = set_tuple_of(rk_closed_candidates(&m, qa, va, gap_tol, v_tol), n);
+    } else if (strcmp(name, "sliding_delassus") == 0) {
+        PyObject *q;
+        double qa[RK_MAX_DOF], sigma;
+        int i;
+        if (!PyArg_ParseTuple(rest, "Oid", &q, &i, &sigma))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd)
+            goto bad_vec;
+        if (i < 0 || i >= n) {
+            PyErr_SetString(PyExc_ValueError, "i is not a contact");
+            goto done;
+        }
+        res = PyFloat_FromDouble(rk_sliding_delassus(&m, qa, i, sigma));
+    } else if (strcmp(name, "painleve_sticks") == 0) {
+        PyObject *q, *v1, *v2, *cand;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], vb[RK_MAX_DOF], v_tol;
+        rk_set c;
+        if (!PyArg_ParseTuple(rest, "OOOOd", &q, &v1, &v2, &cand, &v_tol))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v1, "v_minus", va, nd) != nd
+            || get_vector(v2, "v_plus", vb, nd) != nd)
+            goto bad_vec;
+        if (get_set(cand, "candidates", &c, NULL) < 0)
+            goto done;
+        res = set_tuple_of(rk_painleve_sticks(&m, qa, va, vb, c, v_tol), n);
+    } else if (strcmp(name, "next_mode") == 0) {
+        PyObject *q, *v, *d;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, gap_tol, v_tol;
+        int prefer, mode, has;
+        if (!PyArg_ParseTuple(rest, "OOdddi", &q, &v, &ag, &gap_tol, &v_tol, &prefer))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
+            goto bad_vec;
+        if (rk_next_mode(&m, qa, va, ag, gap_tol, v_tol, prefer, &mode, &sol, &has, &err) != RK_OK) {
+            raise_err(&err);
+            goto done;
+        }
+        if (has) {
+            d = narrow_dict(&sol, nd, n);
+            if (d == NULL)
+                goto done;
+        } else {
+            d = Py_None;
+            Py_INCREF(d);
+        }
+        res = Py_BuildValue("(iN)", mode, d);
+    } else if (strcmp(name, "solution_sigma") == 0) {
+        /* (states) of a frictional solution, or () for a sticking one */
+        PyObject *states;
+        double st[RK_MAX_CONTACTS];
+        Py_ssize_t k = -1;
+        int i;
+        if (!PyArg_ParseTuple(rest, "O", &states))
+            goto done;
+        memset(&sol, 0, sizeof sol);
+        k = get_vector(states, "states", st, RK_MAX_CONTACTS);
+        if (k < 0)
+            goto done;
+        sol.frictional = k > 0;
+        for (i = 0; i < k; i++)
+            sol.states[i] = (int)st[i];
+        res = PyLong_FromLong(rk_solution_sigma(&sol, (int)k));
+    } else if (strcmp(name, "mode_forces") == 0) {
+        PyObject *q, *v;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, lam[RK_MAX_CONTACTS];
+        int mode;
+        if (!PyArg_ParseTuple(rest, "iOOd", &mode, &q, &v, &ag))
+            goto done;
+        if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
+            goto bad_vec;
+        if (rk_mode_forces(&m, mode, qa, va, ag, lam, &err) != RK_OK) {
+            raise_err(&err);
+            goto done;
+        }
+        res = list_of(lam, n);
+    } else {
+        PyErr_Format(PyExc_ValueError, "unknown contact function %s", name);
+    }
+    goto done;
+bad_vec:
+    if (!PyErr_Occurred())
+        PyErr_SetString(PyExc_ValueError, "q and v need n_dof values, per-contact arrays n_contacts");
+done:
+    Py_DECREF(rest);
+    return res;
+}
+
+static PyObject *py_inexact_message(PyObject *self, PyObject *args)
+{
+    PyObject *active;
+    double violation, t;
+    const char *what;
+    int n;
+    rk_lcp_solution sol;
+    char buf[RK_MSG_LEN];
+    (void)self;
+    if (!PyArg_ParseTuple(args, "Odids", &active, &violation, &n, &t, &what))
+        return NULL;
+    memset(&sol, 0, sizeof sol);
+    if (get_set(active, "active", &sol.active, NULL) < 0)
+        return NULL;
+    sol.violation = violation;
+    rk_inexact_message(&sol, n, t, what, buf, sizeof buf);
+    return PyUnicode_FromString(buf);
+}
+
 PyMethodDef rk_py_contact_methods[] = {
     {"contact_solve_lcp", (PyCFunction)(void (*)(void))py_solve_lcp, METH_VARARGS | METH_KEYWORDS,
      "contact_solve_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=None, rtol=1e-9, hint=None, "
@@ -361,5 +756,12 @@ PyMethodDef rk_py_contact_methods[] = {
     {"contact_solve_friction", (PyCFunction)(void (*)(void))py_solve_friction, METH_VARARGS | METH_KEYWORDS,
      "contact_solve_friction(Minv, W_N, W_T, v_free, b_N, b_T, candidates, mu, forced=None, rtol=1e-9, "
      "hint=None, sliding=None, count=False, narrow=False) -> dict: lcp.solve_friction_lcp in C."},
+    {"contact_model_call", py_model_call, METH_VARARGS,
+     "contact_model_call(name, model, *args): a contact.py function in C on a model: model is a test-model tuple "
+     "(Minv, W_N, W_T, f, g, a_N, a_T, e_N, e_T, mu) or (kind, params) of a C kernel. name: impact, uplift, "
+     "solve_with_friction, project_to_ground, closed_candidates, sliding_delassus, painleve_sticks, next_mode, "
+     "solution_sigma, mode_forces (see tests/test_engine_contact.py for the arguments)."},
+    {"contact_inexact_message", py_inexact_message, METH_VARARGS,
+     "contact_inexact_message(active, violation, n_contacts, t, what) -> str: rk_inexact_message."},
     {NULL, NULL, 0, NULL}
 };

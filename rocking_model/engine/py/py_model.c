@@ -148,8 +148,20 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sOs|iOOd", kwlist, &kind, &params_obj, &name, &mode, &a_obj,
                                      &b_obj, &ag))
         return NULL;
+    rk_model_ops bare;
     if (build_model(kind, params_obj, &m) < 0)
         return NULL;
+    if (strncmp(name, "bare:", 5) == 0) {
+        /* a kernel with only the required functions (plus contact_forces and the model's own rules): the
+         * generic fallbacks of rk_model.c, as a third model would get them */
+        bare = *m.ops;
+        bare.inverse_mass_matrix = NULL;
+        bare.mode_rhs = NULL;
+        bare.mode_monitors = NULL;
+        bare.mode_outputs = NULL;
+        m.ops = &bare;
+        name += 5;
+    }
     if (read_list(a_obj, a, N_ALL, &na) < 0 || read_list(b_obj, b, N_ALL, &nb) < 0)
         return NULL;
     n = m.ops->n_dof;
@@ -260,7 +272,12 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         return Py_BuildValue("(iNN)", md, list_of(x1, n), list_of(x2, n));
     }
     if (strcmp(name, "classical_impact_velocity") == 0) {
-        if (m.ops->classical_impact_velocity == NULL || !m.ops->classical_impact_velocity(&m, a, b, mode, x1))
+        int rc = m.ops->classical_impact_velocity == NULL ? 0 : m.ops->classical_impact_velocity(&m, a, b, mode, x1);
+        if (rc < 0) {
+            PyErr_SetString(PyExc_ValueError, "classical_impact_velocity: invalid impact (the Python raises here)");
+            return NULL;
+        }
+        if (rc == 0)
             Py_RETURN_NONE;
         return list_of(x1, n);
     }
@@ -344,6 +361,10 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         if (!has)
             return Py_BuildValue("(NO)", list_of(x1, ng), Py_None);
         return Py_BuildValue("(NN)", list_of(x1, ng), list_of(x2, 2));
+    }
+    if (strcmp(name, "monitors_only") == 0) {   /* rk_mode_monitors without totals (the event functions) */
+        int ng = rk_mode_monitors(&m, mode, a, ag, x1, NULL, NULL);
+        return list_of(x1, ng);
     }
     if (strcmp(name, "outputs_of") == 0) {     /* a = y, ag = shift */
         rk_outputs_of(&m, mode, a, ag, x1);

@@ -710,6 +710,72 @@ static PyObject *py_rk_events_bounce_search(PyObject *self, PyObject *args)
     return Py_BuildValue("(dN)", t, list_of(g, c.n_events));
 }
 
+static PyObject *py_rk_events_parabola_peak(PyObject *self, PyObject *args)
+{
+    double f0, fm, f1, x, value;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "ddd", &f0, &fm, &f1))
+        return NULL;
+    if (!rk_parabola_peak(f0, fm, f1, &x, &value))
+        Py_RETURN_NONE;
+    return Py_BuildValue("(dd)", x, value);
+}
+
+/* brent_max's test function: G_i(t, dense(t)), None below none_below */
+typedef struct brent_ctx {
+    rk_event_ctx *c;
+    int i;
+    double none_below;
+    rk_error *err;
+} brent_ctx;
+
+static rk_status brent_f(void *ctx, double t, double *value, int *has)
+{
+    brent_ctx *b = (brent_ctx *)ctx;
+    double g[RK_MAX_EVENTS];
+    rk_status st = rk_event_eval(b->c, t, g, b->err);
+    if (st != RK_OK)
+        return st;
+    *has = !(g[b->i] < b->none_below);
+    *value = g[b->i];
+    return RK_OK;
+}
+
+/* rk_events_brent_max(setup, i, a, b, x, fx or None, xtol, max_iter, none_below) -> (t, f or None) */
+static PyObject *py_rk_events_brent_max(PyObject *self, PyObject *args)
+{
+    PyObject *setup, *fx_obj;
+    int i, max_iter, has_out;
+    double a, b, x, fx = 0.0, xtol, none_below, t_out, f_out;
+    rk_event_ctx c;
+    rk_error err;
+    brent_ctx bc;
+    test_setup *ts;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "OidddOdid", &setup, &i, &a, &b, &x, &fx_obj, &xtol, &max_iter, &none_below))
+        return NULL;
+    if (fx_obj != Py_None) {
+        fx = PyFloat_AsDouble(fx_obj);
+        if (fx == -1.0 && PyErr_Occurred())
+            return NULL;
+    }
+    if ((ts = event_setup(setup, &c)) == NULL)
+        return NULL;
+    bc.c = &c;
+    bc.i = i;
+    bc.none_below = none_below;
+    bc.err = &err;
+    if (rk_brent_max(brent_f, &bc, a, b, x, fx, fx_obj != Py_None, xtol, max_iter, &t_out, &f_out, &has_out,
+                     &err) != RK_OK) {
+        PyMem_Free(ts);
+        return raise_rk(&err);
+    }
+    PyMem_Free(ts);
+    if (!has_out)
+        return Py_BuildValue("(dO)", t_out, Py_None);
+    return Py_BuildValue("(dd)", t_out, f_out);
+}
+
 PyMethodDef rk_py_rk_methods[] = {
     {"rk_tableau", py_rk_tableau, METH_VARARGS,
      "rk_tableau(method) -> dict: the generated tableau (nonzero terms of A, B, E, D as (indices, values), C)."},
@@ -732,5 +798,10 @@ PyMethodDef rk_py_rk_methods[] = {
      "rk_events_dip_search(setup, armed, g_prev, g_new, n) -> (hits, ta, tb, ga, gb, used_dense)."},
     {"rk_events_bounce_search", py_rk_events_bounce_search, METH_VARARGS,
      "rk_events_bounce_search(setup, i, t0, t1, level) -> None or (t, g)."},
+    {"rk_events_parabola_peak", py_rk_events_parabola_peak, METH_VARARGS,
+     "rk_events_parabola_peak(f0, fm, f1) -> None or (x, value)."},
+    {"rk_events_brent_max", py_rk_events_brent_max, METH_VARARGS,
+     "rk_events_brent_max(setup, i, a, b, x, fx, xtol, max_iter, none_below) -> (t, value or None): brent_max "
+     "of G_i(t, dense(t)), None where it is below none_below."},
     {NULL, NULL, 0, NULL}
 };

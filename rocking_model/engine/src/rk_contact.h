@@ -152,6 +152,16 @@ int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts);
 rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double *lam,
                          rk_error *err);
 
+/** Added by part B: integrators/moreau_jean.inexact_message, the text of an "inexact_contact" report (shared by
+ *  the event-driven scheme and Moreau-Jean): "the <what> at t = <t> s has no exact solution (least violation
+ *  <.3g>, closed contacts <tuple>): kept the least-violating one; a corner may sink or lift against the
+ *  contact law". n_contacts bounds the contacts listed. */
+void rk_inexact_message(const rk_lcp_solution *sol, int n_contacts, double t, const char *what, char *buf,
+                        size_t n);
+/** Added by part B: np.linalg.lstsq(A, b, rcond=1e-12)[0] for a square A (n x n, row-major, n <= 16): the
+ *  minimum-norm least-squares solution (singular values <= 1e-12 * the largest dropped). */
+void rk_lstsq_square(int n, const double *A, const double *b, double *x);
+
 #ifdef __cplusplus
 }
 #endif

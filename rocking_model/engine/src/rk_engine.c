@@ -1,7 +1,7 @@
 /* rk_engine.c -- the public API of rk_engine.h (part E): create / free, advance and sample with their
  * internal checkpoint (Simulator._guarded), the outputs on demand (cached by a state token), the plain-data
  * state, the checkpoint slot, snapshots, the impact logs (rk_log_*) and the helpers both schemes share
- * (the checks of integrators/state.py, the inexact-contact message, note_demand).
+ * (the checks of integrators/state.py, note_demand).
  *
  * Dispatch on options.scheme: rk_ed_* (rk_ed.c, part D) or rk_mj_* (rk_mj.c). */
 #include "rk_internal.h"
@@ -22,8 +22,6 @@
 #define RK_AG_MAX 1000.0
 /** rows of storage an unbounded log starts with (it doubles on an impact that needs it) */
 #define RK_LOG_START_ROWS 64
-/** [rad] pi/2 as the Python computes it (0.5 * math.pi) */
-#define RK_HALF_PI (0.5 * 3.14159265358979323846)
 /** impact_log keeps min(1000, impact_log_size) rows (EventDriven.__init__) */
 #define RK_IMPACT_LOG_ROWS 1000
 
@@ -228,29 +226,6 @@ rk_status rk_check_configuration(const rk_model *m, const char *key, const doubl
                            "too large for the model", key, names);
     }
     return RK_OK;
-}
-
-void rk_inexact_message(char *buf, size_t size, const rk_lcp_solution *sol, int n_contacts, double t,
-                        const char *what)
-{
-    char active[64];
-    size_t len = 0;
-    int i, count = 0;
-    active[0] = '(';
-    len = 1;
-    for (i = 0; i < n_contacts; i++) {
-        if (RK_IN(sol->active, i)) {
-            int k = snprintf(active + len, sizeof(active) - len, "%s%d", count ? ", " : "", i);
-            if (k > 0 && (size_t)k < sizeof(active) - len)
-                len += (size_t)k;
-            count++;
-        }
-    }
-    /* a Python tuple: (0,) for one element */
-    snprintf(active + len, sizeof(active) - len, "%s)", count == 1 ? "," : "");
-    snprintf(buf, size, "the %s at t = %.17g s has no exact solution (least violation %.3g, closed contacts %s): "
-             "kept the least-violating one; a corner may sink or lift against the contact law", what, t,
-             sol->violation, active);
 }
 
 void rk_note_demand(double *demand, double mu, double lam_N, double lam_T, double floor)

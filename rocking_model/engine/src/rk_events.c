@@ -1,6 +1,6 @@
 /* rk_events.c -- event location on the dense output of a step (part C): port of
  * rocking_model/integrators/events.py (locate, earliest_root, first_negative, may_dip, dip_search,
- * bounce_search), statement by statement, with the same comparisons (strict / non-strict) and the same
+ * bounce_search, parabola_peak, brent_max), statement by statement, with the same comparisons (strict / non-strict) and the same
  * tie-breaking, so that the C finds the same times and indices as the Python (tests/test_engine_rk.py).
  *
  * The event functions are evaluated as the Python does: G(t, dense(t)) with dense the interpolant of the
@@ -261,5 +261,99 @@ rk_status rk_bounce_search(rk_event_ctx *c, int i, double t0, double t1, double 
         }
         /* (below level: closer to the start) */
     }
+    return RK_OK;
+}
+
+int rk_parabola_peak(double f0, double fm, double f1, double *x, double *value)
+{
+    double c = 2.0 * (f0 + f1) - 4.0 * fm, b, xv;
+    if (c >= 0.0)
+        return 0;
+    b = f1 - f0 - c;
+    xv = -b / (2.0 * c);
+    if (!(0.0 < xv && xv < 1.0))
+        return 0;
+    *x = xv;
+    *value = f0 + (b + c * xv) * xv;
+    return 1;
+}
+
+/* Brent's golden-section fraction (events._CGOLD) */
+#define RK_CGOLD 0.3819660112501051
+
+rk_status rk_brent_max(rk_scalar_fn f, void *ctx, double a, double b, double x, double fx, int has_fx, double xtol,
+                       int max_iter, double *t_out, double *f_out, int *has_out, rk_error *err)
+{
+    /* minimises g = -f; None is +inf */
+    double gx = has_fx ? -fx : INFINITY;
+    double w = x, v = x, gw = gx, gv = gx, d = 0.0, e = 0.0;
+    int it;
+    rk_error_clear(err);
+    for (it = 0; it < max_iter; it++) {
+        double xm = 0.5 * (a + b), tol2 = 2.0 * xtol, u, fu, gu;
+        int golden = 1, has_u = 0;
+        rk_status st;
+        if (fabs(x - xm) <= tol2 - 0.5 * (b - a))
+            break;
+        if (fabs(e) > xtol) {
+            double r = (x - w) * (gx - gv);
+            double q = (x - v) * (gx - gw);
+            double p = (x - v) * q - (x - w) * r, e_old;
+            q = 2.0 * (q - r);
+            if (q > 0.0)
+                p = -p;
+            q = fabs(q);
+            e_old = e;
+            e = d;
+            if (q != 0.0 && fabs(p) < fabs(0.5 * q * e_old) && q * (a - x) < p && p < q * (b - x)) {
+                d = p / q;
+                golden = 0;
+                if ((x + d) - a < tol2 || b - (x + d) < tol2)
+                    d = (xm >= x) ? xtol : -xtol;
+            }
+        }
+        if (golden) {
+            e = (x >= xm) ? (a - x) : (b - x);
+            d = RK_CGOLD * e;
+        }
+        u = (fabs(d) >= xtol) ? x + d : x + ((d >= 0.0) ? xtol : -xtol);
+        fu = 0.0;
+        st = f(ctx, u, &fu, &has_u);
+        if (st != RK_OK) {
+            if (err != NULL && err->status == st && err->message[0] != '\0')
+                return st;
+            return rk_fail(err, st, "events.brent_max: the function failed (%s) at t = %.17g s", rk_status_name(st), u);
+        }
+        gu = has_u ? -fu : INFINITY;
+        if (gu <= gx) {
+            if (u >= x)
+                a = x;
+            else
+                b = x;
+            v = w;
+            gv = gw;
+            w = x;
+            gw = gx;
+            x = u;
+            gx = gu;
+        } else {
+            if (u < x)
+                a = u;
+            else
+                b = u;
+            if (gu <= gw || w == x) {
+                v = w;
+                gv = gw;
+                w = u;
+                gw = gu;
+            } else if (gu <= gv || v == x || v == w) {
+                v = u;
+                gv = gu;
+            }
+        }
+    }
+    *t_out = x;
+    *has_out = gx != INFINITY;
+    *f_out = *has_out ? -gx : 0.0;
     return RK_OK;
 }

@@ -561,14 +561,17 @@ static int flexible_classical_impact_velocity(const rk_model *m, const double *q
     double a0, ratio, w_plus;
     if ((int)m->p[P_RULE] == 0)
         return 0;
+    /* where the Python's _inputs raise ValueError: -1 and a NaN velocity (a caller that only tests for
+     * non-zero then stops on the non-finite state instead of going on with a wrong one) */
+    v_plus[0] = v_plus[1] = v_plus[2] = v_plus[3] = NAN;
     if (mode != RK_MODE_LEFT && mode != RK_MODE_RIGHT)
-        return -1;          /* check_choice("pivot", ...) raises */
+        return -1;          /* check_choice("pivot", ...): a sliding mode is not a pivot */
     if (!isfinite(u) || !isfinite(u_dot) || !isfinite(phi_dot_minus))
-        return -1;          /* check_real raises */
+        return -1;          /* check_real */
     s_o = (double)rk_pivot_sign(mode);
     s_n = -s_o;
     if (!(s_n * phi_dot_minus < 0.0))
-        return -1;          /* phi_dot_minus does not close the gap of the other corner: ValueError */
+        return -1;          /* phi_dot_minus does not close the gap of the other corner */
     a0 = J0 + mt * u * u;
     ratio = (a0 - Mt * b * b) / (a0 + Mt * b * b - 2.0 * s_n * b * D * u);
     w_plus = ratio * phi_dot_minus;

@@ -126,7 +126,7 @@ struct rk_engine {
 };
 
 /* ------------------------------------------------------------------------------------------ shared helpers (E)
- * rk_engine.c: the checks of a loaded state (integrators/state.py) and the inexact-contact report text, used
+ * rk_engine.c: the checks of a loaded state (integrators/state.py) and note_demand, used
  * by both schemes' set_state / reports. */
 /** state.check_times: times[0..n-1] at most ``impacts`` of them, non-decreasing, not after t (up to
  *  round-off); RK_ERR_VALUE naming field ``key`` otherwise. */
@@ -140,9 +140,6 @@ rk_status rk_check_configuration(const rk_model *m, const char *key, const doubl
  *  around a call with a Python callback motion). */
 void rk_engine_save(rk_engine *e, rk_core *slot);
 void rk_engine_load(rk_engine *e, const rk_core *slot);
-/** moreau_jean.inexact_message: the text of an "inexact_contact" report of the LCP ``what`` at t. */
-void rk_inexact_message(char *buf, size_t size, const rk_lcp_solution *sol, int n_contacts, double t,
-                        const char *what);
 /** Integrator.note_demand on a friction_demand field: raise *demand to |lam_T| / lam_N (at most mu) when
  *  lam_N > floor [N]. */
 void rk_note_demand(double *demand, double mu, double lam_N, double lam_T, double floor);

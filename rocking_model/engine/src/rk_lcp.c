@@ -839,3 +839,13 @@ int rk_lcp_painleve(const rk_lcp_solution *sol)
         slides |= sol->states[i] == RK_SLIDE_POS || sol->states[i] == RK_SLIDE_NEG;
     return sol->has_sliding || slides;
 }
+
+void rk_lstsq_square(int n, const double *A, const double *b, double *x)
+{
+    double M[UMAX][UMAX];
+    int i, j;
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++)
+            M[i][j] = A[i * n + j];
+    lstsq(n, M, b, x);
+}

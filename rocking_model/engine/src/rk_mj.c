@@ -178,6 +178,25 @@ static rk_status ag_at(rk_motion *ag, double t, double *out, rk_error *err)
     return RK_OK;
 }
 
+/** The ValueError flexible_impact._inputs raises where the classical rule does not apply (A's kernel returns
+ *  -1): a pivot that is not LEFT / RIGHT (a sliding mode), a non-finite input, or a rate that does not close
+ *  the other corner. The Python's text (Mode reprs as Python prints them). */
+static rk_status classical_refusal(const rk_model *model, int mode, const double *v, rk_error *err)
+{
+    static const char *const names[] = {"FULL", "LEFT", "RIGHT", "FLIGHT", "FULL_SLIDE_POS", "FULL_SLIDE_NEG",
+                                        "LEFT_SLIDE_POS", "LEFT_SLIDE_NEG", "RIGHT_SLIDE_POS", "RIGHT_SLIDE_NEG"};
+    double phi_dot = v[model->ops->phi_index];
+    if (mode != RK_MODE_LEFT && mode != RK_MODE_RIGHT)
+        return rk_fail(err, RK_ERR_VALUE, "pivot = <Mode.%s: %d> is not supported; allowed values: <Mode.LEFT: 1>, "
+                       "<Mode.RIGHT: 2>, 'left', 'right'", (mode >= 0 && mode < 10) ? names[mode] : "?", mode);
+    if (!isfinite(phi_dot))
+        return rk_fail(err, RK_ERR_VALUE, "phi_dot_minus = %s is not finite; allowed range (-inf, inf)",
+                       isnan(phi_dot) ? "nan" : phi_dot > 0 ? "inf" : "-inf");
+    return rk_fail(err, RK_ERR_VALUE, "phi_dot_minus = %g does not close the gap of the other corner when rocking "
+                   "on the %s corner; allowed range %s", phi_dot, mode == RK_MODE_LEFT ? "left" : "right",
+                   mode == RK_MODE_LEFT ? "(-inf, 0)" : "(0, inf)");
+}
+
 /** MoreauJean._step. */
 static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_error *err)
 {
@@ -239,7 +258,10 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_er
             /* an impact rule of the model (the classical rule): replace the pre-impact velocity by the rule's
              * post-impact one; the step's LCP then keeps the contacts closed */
             double v_rule[RK_MAX_DOF];
-            if (ops->classical_impact_velocity(model, q, v, s->mode, v_rule)) {
+            int rule = ops->classical_impact_velocity(model, q, v, s->mode, v_rule);
+            if (rule < 0)
+                return classical_refusal(model, s->mode, v, err);
+            if (rule) {
                 for (i = 0; i < n; i++) {
                     v_free[i] = v_rule[i] + (v_free[i] - s->v[i]);
                     v[i] = v_rule[i];
@@ -296,7 +318,7 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_er
             return st;
         if (!sol.exact) {
             char msg[RK_MSG_LEN];
-            rk_inexact_message(msg, sizeof(msg), &sol, nc, t + dt, "step LCP");
+            rk_inexact_message(&sol, nc, t + dt, "step LCP", msg, sizeof(msg));
             rk_report_add(&e->reports, RK_REPORT_INEXACT_CONTACT, t + dt, "%s", msg);
         }
         memcpy(v_new, sol.v, (size_t)n * sizeof(double));

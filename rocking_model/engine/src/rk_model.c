@@ -597,14 +597,16 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
     }
     {
         rk_set closed = m->ops->closed_of(m, mode);
-        stick_monitors(m, mode, y, ag, g, closed ? tot : NULL);
+        int cone = closed && !isinf(m->mu);
+        /* the totals only where someone reads them: the caller, or the friction cone */
+        stick_monitors(m, mode, y, ag, g, closed && (totals != NULL || cone) ? tot : NULL);
         if (has_totals != NULL)
             *has_totals = closed != 0u;
         if (closed && totals != NULL) {
             totals[0] = tot[0];
             totals[1] = tot[1];
         }
-        if (isinf(m->mu) || !closed)
+        if (!cone)
             return nc + 1;
         /* the friction cone before the overturning margin: positive while the corners stick */
         g[nc + 1] = g[nc];

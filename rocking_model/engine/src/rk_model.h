@@ -136,7 +136,9 @@ typedef struct rk_model_ops {
                                rk_error *err);
     /** optional (NULL: none): the classical impact rule (FlexibleOscillator.classical_impact_velocity with
      *  impact_rule = 1): writes v_plus and returns 1 when the rule replaces the impact LCP at an impact of
-     *  the open contact of the rocking ``mode``; returns 0 when the LCP decides. */
+     *  the open contact of the rocking ``mode``; returns 0 when the LCP decides. (Part A: returns -1 and NaN
+     *  velocities where the Python raises ValueError: ``mode`` not LEFT/RIGHT (e.g. a sliding mode), a
+     *  non-finite input, or phi_dot that does not close the other corner's gap.) */
     int (*classical_impact_velocity)(const rk_model *m, const double *q, const double *v_minus, int mode,
                                      double *v_plus);
     /** optional (NULL: ""): RockingModel.work_note, what drives the cost of a step (the flexible column's

@@ -46,6 +46,12 @@ struct rk_motion {
     int (*fn_continuous)(void *ctx, double tb);
     void *ctx;
     int constant;                       /**< 1: the Python's ``ag.constant`` (CONSTANT, SCALED of constant) */
+    /** (added by part E) the identity of the caller's motion object across calls: 0 = a new motion at every
+     *  call; otherwise equal values mean the same GroundMotion object (the extension passes id(gm), the object
+     *  kept alive meanwhile). The event-driven scheme keys its stepper's rhs on it as the Python's closure cache
+     *  keys on id(ag): the same object in two advances carries the live stepper on (FSAL, h_abs). Set to 0 by
+     *  the constructors. */
+    unsigned long long identity;
 };
 
 /** Constructors (fill every field; no allocation). */

@@ -329,7 +329,15 @@ static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, 
             e5 = e5 + p * p;
             e3 = e3 + q * q;
         }
-        err = (e5 == 0.0 && e3 == 0.0) ? 0.0 : fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n);
+        if (e5 == 0.0 && e3 == 0.0) {
+            err = 0.0;
+        } else {
+            double den = sqrt((e5 + 0.01 * e3) * n);
+            /* den == 0.0 only when e5 == 0.0 and 0.01 e3 underflows (estimates near 1e-154 of the scale): the
+             * Python raises ZeroDivisionError there; the estimate is zero, so the step is accepted (err = 0.0,
+             * the value the Python's formula gives whenever it does not divide by zero) */
+            err = (den == 0.0) ? 0.0 : fabs(h) * e5 / den;
+        }
     } else {
         /* |h| sqrt(sum p_j^2 / n) */
         double acc = 0.0;

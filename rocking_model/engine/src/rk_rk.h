@@ -83,7 +83,9 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err);
 /** ExplicitRK.hermite_mid: cubic Hermite estimate of y at the middle of the last step (no evaluation). */
 void rk_hermite_mid(const rk_stepper *s, double *y_mid);
 /** DenseOutput(t): y at t in [t_old, t] of the last step (exact end values at t == s->t; builds the
- *  interpolant on first use, which may evaluate the rhs: hence non-const and a status). */
+ *  interpolant on first use, which may evaluate the rhs: hence non-const and a status). Always the LAST step
+ *  of the stepper (a Python DenseOutput object keeps its own step after further steps; the C does not), and
+ *  DOP853's extra stages call s->fun / s->ctx as bound at the time of the call. */
 rk_status rk_dense_eval(rk_stepper *s, double t, double *y, rk_error *err);
 
 /* ------------------------------------------------------------------------------------------ events.py */
@@ -98,7 +100,9 @@ typedef struct rk_event_ctx {
 /** G(t, dense(t)) into g. */
 rk_status rk_event_eval(rk_event_ctx *c, double t, double *g, rk_error *err);
 /** events.locate on function i shifted up by ``shift``: regula falsi with Anderson-Bjorck on a bracket with
- *  ga > 0 >= gb; *t_out = a time with g <= 0 within xtol of the root. */
+ *  ga > 0 >= gb; *t_out = a time with g <= 0 within xtol of the root. ga and gb are values of the SHIFTED
+ *  function (the Python's locate(gi, a, ga_i[i] + shift, b, gb[i] + shift, xtol)); shift is added to every
+ *  evaluation G(t, dense(t))[i]. */
 rk_status rk_locate(rk_event_ctx *c, int i, double shift, double a, double ga, double b, double gb, double xtol,
                     double *t_out, rk_error *err);
 /** events.earliest_root over the functions ``ids`` (n_ids of them), shifts per function, starts: per function
@@ -123,6 +127,19 @@ rk_status rk_dip_search(rk_event_ctx *c, const int *armed, const double *g_prev,
 /** events.bounce_search: *found 1 with (t, g[n_events]) where function i is above level. */
 rk_status rk_bounce_search(rk_event_ctx *c, int i, double t0, double t1, double level, int *found, double *t,
                            double *g, rk_error *err);
+
+/* added by part C (events.py's peak search, used by EventDriven._demand_peak) */
+/** events.parabola_peak: 1 with (*x, *value) of the vertex of the parabola through (0, f0), (1/2, fm), (1, f1)
+ *  when it is a maximum inside (0, 1); 0 (None) otherwise. */
+int rk_parabola_peak(double f0, double fm, double f1, double *x, double *value);
+/** A scalar function of time for rk_brent_max: *value, or *has = 0 (the Python's None: no value, below
+ *  everything). */
+typedef rk_status (*rk_scalar_fn)(void *ctx, double t, double *value, int *has);
+/** events.brent_max: Brent's method for the largest value of f on [a, b] from an inner point x with value fx
+ *  (has_fx 0: None), abscissa to about xtol, at most max_iter evaluations (the Python's default: 60). Writes
+ *  the best point (*t_out, *f_out; *has_out 0 when no point had a value). */
+rk_status rk_brent_max(rk_scalar_fn f, void *ctx, double a, double b, double x, double fx, int has_fx, double xtol,
+                       int max_iter, double *t_out, double *f_out, int *has_out, rk_error *err);
 
 #ifdef __cplusplus
 }
