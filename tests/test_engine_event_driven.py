@@ -175,6 +175,28 @@ def test_record_zoh_and_exact():
 
 
 @needs_engine
+@pytest.mark.parametrize("kw", [dict(b=0.25, h=1.0), dict(b=0.4, h=2.0, mu=0.5)], ids=["mu_inf", "mu_0.5"])
+def test_bundled_record_simulate(kw):
+    """`simulate` on the bundled record (examples/records/synthetic_2017.AT2, 30 s at 10 ms: some 320 and 390
+    impacts): the whole record in one `sample` call; the same contact codes and impacts at every output,
+    phi within 1e-12 rad (the 319 impacts of the mu = inf block carry round-off of the impact LCP: 7e-13 rad
+    measured)."""
+    from pathlib import Path
+
+    from rocking_model import simulate
+    from rocking_model.records import read_record
+    rec = read_record(Path(__file__).resolve().parents[1] / "examples" / "records" / "synthetic_2017.AT2")
+    block = RigidBlock(**kw)
+    rp = simulate(block, (rec.t, rec.ag), t_end=float(rec.t[-1]), output_interval=0.01, engine="python")
+    rc = simulate(block, (rec.t, rec.ag), t_end=float(rec.t[-1]), output_interval=0.01, engine="c")
+    assert np.array_equal(np.asarray(rp["contact"]), np.asarray(rc["contact"]))
+    assert np.array_equal(np.asarray(rp["impacts"]), np.asarray(rc["impacts"]))
+    assert np.asarray(rp["impacts"])[-1] > 200
+    assert np.max(np.abs(np.asarray(rp["phi"]) - np.asarray(rc["phi"]))) <= PHI_TOL
+    assert np.allclose(np.asarray(rc["friction_demand"]), np.asarray(rp["friction_demand"]), rtol=1e-10, atol=0)
+
+
+@needs_engine
 def test_linear_motion_steps():
     """First-order hold per step (fmi2SetRealInputDerivatives): a LinearMotion per advance."""
     block = RigidBlock(b=0.2, h=1.0)
@@ -271,6 +293,10 @@ def test_work_limit_refused_state_kept():
     # the same message up to its end (the C message buffer holds 511 characters)
     assert str(ep.value)[:400] == str(ec.value)[:400]
     _assert_same(py, c, "after refusal")
+    for t in (0.6, 0.7, 0.8):                 # and both go on identically (the C restored its live stepper)
+        py.advance(t, pulse)
+        c.advance(t, pulse)
+        _assert_same(py, c, f"after refusal t = {t}")
 
 
 @needs_engine
