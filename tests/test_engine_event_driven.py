@@ -355,26 +355,48 @@ except ImportError:                                                 # pragma: no
     given = None
 
 
+def _hypothesis_scene(model, phi0, A, f, method, tol, times=(0.5, 1.0, 2.0)):
+    pulse = SinePulse(A * G, 2.0 * math.pi * f)
+    py, c = _pair(model, tolerance=tol, phi_0=phi0, max_steps=None, method=method)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for t in times:
+            try:
+                py.advance(t, pulse)
+            except ValueError as exc:
+                # a documented limit of the model (the classical rule at a sliding pivot): the same refusal
+                with pytest.raises(ValueError) as ec:
+                    c.advance(t, pulse)
+                assert str(ec.value) == str(exc)
+                return py, c
+            c.advance(t, pulse)
+    if bool(py.integrator.overturned) != bool(c.integrator.overturned):
+        pytest.skip("an overturning boundary (round-off decides)")
+    # the same motion to the scheme's tolerance: an error of order tol per step, impacts amplify round-off
+    # (chatter); 1e-6 rad is 1e-5 of the rocking amplitudes of these scenes
+    op, oc = py.outputs(), c.outputs()
+    assert abs(oc["phi"] - op["phi"]) <= 1e-6, (op["phi"], oc["phi"])
+    return py, c
+
+
 if given is not None:
     @needs_engine
-    @settings(max_examples=25, deadline=None, derandomize=True,
+    @settings(max_examples=40, deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow])
     @given(b=st.floats(0.1, 0.5), h=st.floats(0.8, 2.0), e_N=st.floats(0.3, 1.0),
            mu=st.sampled_from([math.inf, 0.3, 0.8]), law=st.sampled_from([0, 1]),
-           phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0))
-    def test_hypothesis_scenes_within_tolerance(b, h, e_N, mu, law, phi0, A, f):
+           phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0),
+           method=st.sampled_from(["DOP853", "DOPRI5"]), tol=st.sampled_from([1e-6, 1e-8, 1e-10]))
+    def test_hypothesis_rigid_within_tolerance(b, h, e_N, mu, law, phi0, A, f, method, tol):
         block = RigidBlock(b=b, h=h, e_N=e_N, mu=mu, impact_law=law)
-        alpha = math.atan2(b, h)
-        phi0 = phi0 * alpha
-        pulse = SinePulse(A * G, 2.0 * math.pi * f)
-        tol = 1e-8
-        py, c = _pair(block, tolerance=tol, phi_0=phi0, max_steps=None)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for t in (0.5, 1.0, 2.0):
-                py.advance(t, pulse)
-                c.advance(t, pulse)
-        op, oc = py.outputs(), c.outputs()
-        if bool(py.integrator.overturned) != bool(c.integrator.overturned):
-            pytest.skip("an overturning boundary (round-off decides)")
-        assert abs(oc["phi"] - op["phi"]) <= 1e-5 * max(1.0, abs(op["phi"])) + 1e3 * tol * alpha
+        _hypothesis_scene(block, phi0 * math.atan2(b, h), A, f, method, tol)
+
+    @needs_engine
+    @settings(max_examples=12, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(EI=st.floats(4.5, 5.3), e_N=st.floats(0.3, 1.0), mu=st.sampled_from([math.inf, 0.3, 0.8]),
+           law=st.sampled_from([0, 1]), rule=st.sampled_from([0, 1]), phi0=st.floats(-0.1, 0.1),
+           A=st.floats(0.0, 0.5), f=st.floats(0.5, 3.0))
+    def test_hypothesis_flexible_within_tolerance(EI, e_N, mu, law, rule, phi0, A, f):
+        osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, mu=mu, impact_law=law, impact_rule=rule)
+        _hypothesis_scene(osc, phi0 * math.atan2(osc.b, osc.h), A, f, "DOP853", 1e-8, times=(0.5, 1.0))
