@@ -155,6 +155,21 @@ def test_overturning():
 
 
 @needs_engine
+def test_overturning_sample_rows():
+    """`sample` through an overturning: the rows after it read contact code 10 (OVERTURNED), the pose at rest."""
+    pulse = SinePulse(0.45 * G, 2.0 * math.pi * 2.0)
+    py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=None)
+    times = list(np.arange(1, 401) * 0.01)
+    mp, vp, ip, op = py.sample(times, pulse)
+    mc, vc, ic, oc = c.sample(times, pulse)
+    assert list(mc) == list(mp) and list(ic) == list(ip) and list(oc) == list(op)
+    assert list(mc).count(10) > 10 and bool(oc[-1])
+    assert np.max(np.abs(np.asarray(vc["phi"]) - np.asarray(vp["phi"]))) <= PHI_TOL
+    assert np.all(np.asarray(vc["phi_dot"])[np.asarray(oc, dtype=bool)] == 0.0)
+    _assert_same(py, c, "end")
+
+
+@needs_engine
 def test_record_zoh_and_exact():
     """A synthetic record (the benchmark's generator, 8 s at 10 ms): co-simulation steps with ag held (the
     FMU path: a constant input per step, the live stepper carried over) and the record as one SampledMotion."""
