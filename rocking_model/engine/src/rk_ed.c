@@ -207,6 +207,20 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
     return RK_OK;
 }
 
+/** G(t, y) and, when lam is not NULL, the totals at the same (t, y) in one kernel call */
+static rk_status ed_G_totals(ed_fn *f, double t, const double *y, double *g, double *lam)
+{
+    double a;
+    int has = 0;
+    rk_status st = ed_ag(f, t, &a);
+    if (st != RK_OK)
+        return st;
+    if (lam != NULL)
+        lam[0] = lam[1] = NAN;
+    rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, lam != NULL ? &has : NULL);
+    return RK_OK;
+}
+
 /** Copy a callback's failure into err (the status st came back from a call that ran the callbacks) */
 static rk_status ed_pass(ed_fn *f, rk_status st, rk_error *err)
 {
@@ -952,12 +966,11 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *
         }
         if ((double)s->n_steps > s->work_end)
             return ed_work_limit(e, err);
-        ED_TRYF(&f, ed_G(&f, s->stepper.t, s->stepper.y, g_new));
-        /* the demand at the step's end */
-        if (has_totals) {
-            ED_TRYF(&f, ed_totals(&f, s->stepper.t, s->stepper.y, lam));
+        /* G and the demand at the step's end, from one evaluation (the kernels share their work between the
+         * two, as the Python's closures do; part A pins the event functions with totals to those without) */
+        ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, g_new, has_totals ? lam : NULL));
+        if (has_totals)
             d_new = ed_ratio(s, lam);
-        }
         for (i = 0; i < ev.n; i++)
             ev.has_start[i] = 0;
         if (first) {
