@@ -53,6 +53,9 @@ SOLVER_PARAMETERS = (
 DT_MIN_REL = 1e-6
 
 
+#: the types of a number that `Simulator.advance` passes to the compiled engine as is
+_NUMBERS = (float, int)
+
 #: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
 #: event-driven, the base's offset; states of version 1 are refused by their version)
 STATE_VERSION = 2
@@ -182,9 +185,17 @@ class Simulator:
         Raises ValueError (bad t_end or ag, or a motion that overflows: the message names the likely
         cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
         exactly as before the call."""
-        if self.engine == "c" and type(ag) in (float, int) and type(t_end) in (float, int) \
-                and self.on_report != "raise":
-            self._advance_c(t_end, ag)
+        if self.engine == "c" and type(ag) in _NUMBERS and type(t_end) in _NUMBERS and self.on_report != "raise":
+            # the lean path: one call into C (checks, checkpoint, outputs check in C)
+            eng = self.integrator._engine
+            try:
+                eng.advance(t_end, ag, 0.0, self.max_steps)
+            except BaseException as exc:
+                self._c_failed(exc, t_end, ag)
+            if eng.report_count:
+                self._c_reports(eng)
+            else:
+                self.last_reports = []
             return
         t_end = check_real("t_end", t_end)
         integ = self.integrator
@@ -194,26 +205,21 @@ class Simulator:
         gm = self._ground_motion(ag)
         self._guarded(t_end, gm, lambda: integ.advance(t_end, gm, max_steps=self.max_steps))
 
-    def _advance_c(self, t_end, ag) -> None:
-        """`advance` on the compiled engine under a constant ag: one call into C, which checks t_end and ag
-        (the same messages), keeps its own checkpoint (the state is restored on any failure) and checks the
-        outputs; the same errors and reports as `_guarded` (on_report "warn" or "ignore")."""
+    def _c_failed(self, exc, t_end, ag) -> None:
+        """The errors of the lean path as `_guarded` raises them (the engine has restored its state)."""
         from . import _engine
 
-        integ = self.integrator
-        eng = integ._engine
-        try:
-            eng.advance(t_end, ag, 0.0, self.max_steps)
-        except (_engine.NonFiniteError, np.linalg.LinAlgError) as exc:
-            t_fail = eng.fail_time
+        if isinstance(exc, (_engine.NonFiniteError, np.linalg.LinAlgError)):
             if isinstance(exc, _engine.NonFiniteError):
                 exc = FloatingPointError(str(exc))
-            raise ValueError(self._diverged(exc, t_end, ConstantMotion(ag), t_fail)) from exc
-        if eng.report_count:
-            integ.reports = [Report(kind, t, msg) for kind, t, msg in eng.reports()]
-            self._check_reports(integ.reports)
-        else:
-            self.last_reports = []
+            raise ValueError(self._diverged(exc, t_end, ConstantMotion(ag), self.integrator._engine.fail_time)) \
+                from exc
+        raise exc
+
+    def _c_reports(self, eng) -> None:
+        integ = self.integrator
+        integ.reports = [Report(kind, t, msg) for kind, t, msg in eng.reports()]
+        self._check_reports(integ.reports)
 
     def sample(self, times, ag) -> tuple:
         """Advance through the increasing ``times`` [s] under ``ag`` and return the outputs there:
@@ -304,6 +310,8 @@ class Simulator:
         Once overturned the outputs are those of the pose reached at |phi| = pi/2 at rest: every velocity 0,
         energy the potential (and strain) energy of that pose relative to rest; they no longer change."""
         integ = self.integrator
+        if self.engine == "c":
+            return integ._engine.output_dict()    # computed on demand by the engine (cached by its state)
         cached = self._out
         if cached is not None and cached[0] is getattr(integ, self._token):
             out = dict(cached[1])         # computed (and checked finite) at the end of the last advance

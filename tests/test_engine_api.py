@@ -364,3 +364,57 @@ def test_compiled_integrator_is_an_integrator():
     from rocking_model.integrators.base import Integrator
 
     assert issubclass(CompiledIntegrator, Integrator)
+
+
+# ---------------------------------------------------------------------------------------------- callbacks
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_python_motions_run_as_callbacks_with_the_same_results(scheme):
+    gm = RickerPulse(4.0, 8.0)
+    fm = lambda t: 3.0 * math.sin(6.0 * t)  # noqa: E731
+    for ag in (gm, fm):
+        py, c = _scene("python", scheme, on_report="ignore"), _scene("c", scheme, on_report="ignore")
+        for t in np.arange(0.1, 1.0, 0.1):
+            py.advance(float(t), ag)
+            c.advance(float(t), ag)
+        _close_states(py.get_state(), c.get_state(), tol=1e-11)
+
+
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_a_callback_that_fails_mid_advance_leaves_the_state_and_raises_its_error(scheme):
+    def bad(t):
+        if t > 0.35:
+            raise ZeroDivisionError("boom")
+        return 1.0
+
+    msgs = []
+    for engine in ("python", "c"):
+        sim = _scene(engine, scheme)
+        sim.advance(0.2, 1.0)
+        before = sim.get_state()
+        with pytest.raises(ValueError) as info:
+            sim.advance(0.6, bad)
+        assert sim.get_state() == before
+        msgs.append(str(info.value))
+    assert msgs[0] == msgs[1]
+
+
+@needs_ed
+def test_event_driven_checkpoint_snapshot_and_pickle():
+    c = _scene("c", "event_driven")
+    _run(c, 0.0, 0.5, ag=lambda t: 1.0)
+    eng = c.integrator._engine
+    s0, snap = eng.get_state(), eng.snapshot()
+    eng.checkpoint()
+    eng.advance(1.5, 0.5)
+    s1 = eng.get_state()
+    eng.rollback()
+    assert eng.get_state() == s0
+    eng.advance(1.5, 0.5)
+    assert eng.get_state() == s1
+    eng.restore(snap)
+    c2 = pickle.loads(pickle.dumps(c))
+    eng.advance(1.5, 0.5)
+    c2.integrator._engine.advance(1.5, 0.5)
+    assert eng.get_state() == s1 == c2.integrator._engine.get_state()

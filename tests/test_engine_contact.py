@@ -146,16 +146,16 @@ def test_sticking_narrow_equals_wide():
         check_sticking(rng, n, int(rng.integers(2 * n, 9)), narrow=True)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", range(2))
 def test_sticking_pivoting(seed):
     """7 and 8 contacts on 8 dofs: more than ENUMERATE_MAX free candidates, the principal pivoting (Murty's
     rule, then the descent); many of its problems have several or no solutions (non-P-matrix)."""
     rng = np.random.default_rng(100 + seed)
     ties = 0
-    for _ in range(150):
+    for _ in range(100):
         n = int(rng.integers(7, 9))
         ties += check_sticking(rng, n, 8, n_max_forced=n - 7, all_candidates=True)
-    assert ties <= TIE_SHARE * 150
+    assert ties <= TIE_SHARE * 100
 
 
 def check_friction(rng, n, m, all_sliding=False, narrow=False):
@@ -615,3 +615,176 @@ def test_contact_functions_on_the_models(kind):
             assert np.max(np.abs(py - np.array(c))) <= 1e-12 * max(1.0, float(np.max(np.abs(py))))
             total += 1
     assert ties <= TIE_SHARE * total
+
+
+def test_sources_compile_without_warnings(tmp_path):
+    """rk_lcp.c, rk_contact.c and py_contact.c compile cleanly with -Wall -Wextra -pedantic -Werror (the
+    engine's flags otherwise), so that warnings do not accumulate."""
+    import shutil
+    import subprocess
+    import sysconfig
+    from pathlib import Path
+    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if cc is None:
+        pytest.skip("no C compiler")
+    engine = Path(__file__).resolve().parent.parent / "rocking_model" / "engine"
+    for source in (engine / "src" / "rk_lcp.c", engine / "src" / "rk_contact.c", engine / "py" / "py_contact.c"):
+        cmd = [cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra", "-pedantic",
+               "-Werror", "-I" + sysconfig.get_paths()["include"], "-c", str(source), "-o", str(tmp_path / "x.o")]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+
+
+def test_lstsq_is_numpy_minimum_norm():
+    """rk_lstsq_square: np.linalg.lstsq(A, b, rcond=1e-12)[0] on square systems of full and deficient rank
+    (the fallback of the singular trials and of project_to_ground)."""
+    rng = np.random.default_rng(500)
+    for _ in range(300):
+        n = int(rng.integers(1, 17))
+        rank = int(rng.integers(0, n + 1)) if rng.random() < 0.7 else n
+        A = rng.normal(size=(n, rank)) @ rng.normal(size=(rank, n)) if rank else np.zeros((n, n))
+        if rng.random() < 0.2 and n >= 2:
+            A[:, 1] = A[:, 0]                                  # identical columns (parallel contact rows)
+        b = rng.normal(size=n)
+        py = np.linalg.lstsq(A, b, rcond=1e-12)[0]
+        c = np.array(_engine.contact_lstsq(A.tolist(), b.tolist()))
+        s = np.linalg.svd(A, compute_uv=False)
+        kept = s[s > 1e-12 * s[0]] if s[0] > 0 else s[:0]
+        kappa = kept[0] / kept[-1] if len(kept) else 1.0
+        assert np.max(np.abs(py - c)) <= 1e-13 * max(1.0, kappa) * max(1.0, float(np.max(np.abs(py))))
+
+
+# ---------------------------------------------------------------------------------------------- visited states
+class ContactSpy:
+    """Wraps the contact.py functions the integrators call: each call also runs the C function on the same
+    arguments and compares (the Python result is returned, so the run is the Python's)."""
+
+    def __init__(self, kind, model):
+        self.kind, self.model = kind, model
+        self.spec = (kind, real_params(model))
+        self.calls = {}
+        self.ties = 0
+
+    def note(self, name):
+        self.calls[name] = self.calls.get(name, 0) + 1
+
+    def compare(self, py, c, q):
+        self.ties += compare_solution(py, c, W_T=self.model.contact_jacobians(q)[1])
+
+    def impact(self, model, q, v_minus, candidates, forced=(), e_N=None, e_T=None, prefer=None):
+        py = contact.impact(model, q, v_minus, candidates, forced, e_N, e_T, prefer)
+        e = None if e_N is None and e_T is None else (model.e_N if e_N is None else e_N,
+                                                      model.e_T if e_T is None else e_T)
+        c = _engine.contact_model_call("impact", self.spec, list(map(float, q)), list(map(float, v_minus)),
+                                       [int(i) for i in candidates], [int(i) for i in forced],
+                                       -1 if prefer is None else int(prefer), e)
+        self.compare(py, c, q)
+        self.note("impact")
+        return py
+
+    def next_mode(self, model, q, v, ag, gap_tol, v_tol, prefer=None):
+        mode, sol = contact.next_mode(model, q, v, ag, gap_tol, v_tol, prefer)
+        c_mode, c_sol = _engine.contact_model_call("next_mode", self.spec, list(map(float, q)), list(map(float, v)),
+                                                   float(ag), gap_tol, v_tol, -1 if prefer is None else int(prefer))
+        assert (sol is None) == (c_sol is None)
+        if sol is None or not compare_solution(sol, c_sol, W_T=model.contact_jacobians(q)[1]):
+            assert int(mode) == c_mode
+        self.note("next_mode")
+        return mode, sol
+
+    def painleve_sticks(self, model, q, v_minus, v_plus, candidates, v_tol):
+        py = contact.painleve_sticks(model, q, v_minus, v_plus, candidates, v_tol)
+        c = _engine.contact_model_call("painleve_sticks", self.spec, list(map(float, q)), list(map(float, v_minus)),
+                                       list(map(float, v_plus)), [int(i) for i in candidates], v_tol)
+        assert tuple(py) == c
+        self.note("painleve_sticks")
+        return py
+
+    def project_to_ground(self, model, q, corners):
+        py = contact.project_to_ground(model, q, corners)
+        c = np.array(_engine.contact_model_call("project_to_ground", self.spec, list(map(float, q)),
+                                                sorted(int(i) for i in corners)))
+        assert np.max(np.abs(py - c)) <= 1e-13 * max(1.0, float(np.max(np.abs(py))))
+        self.note("project_to_ground")
+        return py
+
+    def closed_candidates(self, model, q, v, gap_tol, v_tol):
+        py = contact.closed_candidates(model, q, v, gap_tol, v_tol)
+        assert tuple(py) == _engine.contact_model_call("closed_candidates", self.spec, list(map(float, q)),
+                                                       list(map(float, v)), gap_tol, v_tol)
+        self.note("closed_candidates")
+        return py
+
+    def solve_with_friction(self, model, Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=(), sliding=None,
+                            count=False, hint=None, prefer=None, tolerances=None):
+        from rocking_model.tolerances import DEFAULT_TOLERANCES
+        tol = tolerances or DEFAULT_TOLERANCES
+        py = contact.solve_with_friction(model, Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced, sliding, count,
+                                         hint, prefer, tol)
+        c = _engine.contact_model_call("solve_with_friction", self.spec, list(map(float, v_free)),
+                                       list(map(float, b_N)), list(map(float, b_T)), [int(i) for i in candidates],
+                                       [int(i) for i in forced], sliding, count,
+                                       None if hint is None else [int(i) for i in hint],
+                                       -1 if prefer is None else int(prefer), tol.lcp_exact, tol.lcp_hint,
+                                       np.asarray(Minv).tolist(), np.asarray(W_N).tolist(), np.asarray(W_T).tolist())
+        self.ties += compare_solution(py, c, W_T=np.asarray(W_T))
+        self.note("solve_with_friction")
+        return py
+
+
+SCENES = {
+    # kind, model keywords, scheme, pulse amplitude [g], pulse frequency [Hz], t_end [s]
+    "rigid free rocking and a pulse, mu = inf": ("rigid", {"e_N": 0.9}, "event_driven", 0.5, 2.0, 3.0),
+    "rigid pulse with sliding, mu = 0.3": ("rigid", {"mu": 0.3, "e_N": 0.8}, "event_driven", 0.6, 3.0, 2.0),
+    "rigid energy-consistent impacts, mu = 1.5": ("rigid", {"mu": 1.5, "impact_law": 1, "e_N": 0.9}, "event_driven",
+                                                 0.4, 1.5, 3.0),
+    "flexible pulse": ("flexible", {"e_N": 0.95}, "event_driven", 0.8, 1.0, 4.0),
+    "rigid Moreau-Jean, mu = 0.4": ("rigid", {"mu": 0.4}, "moreau_jean", 0.6, 2.0, 1.0),
+}
+
+
+@pytest.mark.parametrize("scene", sorted(SCENES))
+def test_contact_problems_of_python_runs(scene, monkeypatch):
+    """Every contact problem a Python run meets (impacts, Zeno closures, uplifts, Painleve counts,
+    projections, Moreau-Jean step LCPs) is solved alike by the C: the states that decide the scenes."""
+    from rocking_model import simulate
+    from rocking_model.ground_motion import SinePulse
+    from rocking_model.integrators import event_driven, moreau_jean
+    kind, kw, scheme, amp, freq, t_end = SCENES[scene]
+    if not kernel_available(kind):
+        pytest.skip(f"the C kernel of {kind} is not built (part A)")
+    model = MODELS[kind](**kw)
+    spy = ContactSpy(kind, model)
+    for name in ("impact", "next_mode", "painleve_sticks", "project_to_ground", "closed_candidates"):
+        monkeypatch.setattr(event_driven, name, getattr(spy, name))
+    for name in ("project_to_ground", "solve_with_friction"):
+        monkeypatch.setattr(moreau_jean, name, getattr(spy, name))
+    simulate(model, SinePulse(amp * 9.81, 2.0 * math.pi * freq), t_end=t_end, scheme=scheme, output_interval=0.01)
+    main = "solve_with_friction" if scheme == "moreau_jean" else "impact"
+    assert spy.calls.get(main, 0) >= 10, spy.calls
+    assert spy.ties <= TIE_SHARE * sum(spy.calls.values())
+
+
+@pytest.mark.parametrize("mu, U_N, gap", [(2.0, -1e-6, 1e-9), (1.45, -1e-6, 1e-15), (math.inf, -1e-6, 1e-9),
+                                          (1.2, -0.05, 1e-9)])
+def test_contact_problems_of_painleve_landings(mu, U_N, gap, monkeypatch):
+    """The landing of a sliding corner in Painleve's configuration (tests/test_zeno_painleve.py's scene: b = 0.2,
+    h = 1, phi = -0.59, 1 m/s towards -x): the impacts without collision, the Painleve counts and the uplifts
+    with several or no solutions, solved alike by the C."""
+    from rocking_model import Simulator
+    from rocking_model.integrators import event_driven
+    if not kernel_available("rigid"):
+        pytest.skip("the C kernel of rigid is not built (part A)")
+    b, h, phi_p, g = 0.2, 1.0, -0.59, 9.81
+    model = MODELS["rigid"](b=b, h=h, mu=mu)
+    spy = ContactSpy("rigid", model)
+    for name in ("impact", "next_mode", "painleve_sticks", "project_to_ground", "closed_candidates"):
+        monkeypatch.setattr(event_driven, name, getattr(spy, name))
+    sim = Simulator(model, "event_driven", phi_0=phi_p)
+    state = sim.get_state()
+    state.update(mode=int(Mode.FLIGHT), y=[0.0, h * math.cos(phi_p) - b * math.sin(phi_p) + gap, phi_p, -1.0, U_N,
+                                           0.0])
+    sim.set_state(state)
+    sim.advance(0.3, 0.0)
+    assert spy.calls.get("next_mode", 0) >= 1 and spy.calls.get("painleve_sticks", 0) + spy.calls.get("impact", 0) >= 1
+    assert spy.ties == 0

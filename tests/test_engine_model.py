@@ -283,6 +283,9 @@ def test_rigid_overturned_outputs(kw, state, ag):
         q, _ = model.embed(mode, np.array([phi]), np.array([0.0]))
         same(call("rigid", p, "outputs", a=q.tolist(), b=[0.0, 0.0, 0.0]),
              out_list(model, model.outputs(q, np.zeros(3))))
+    for mode, phi in ((Mode.LEFT_SLIDE_POS, 0.5 * math.pi), (Mode.RIGHT_SLIDE_NEG, -0.5 * math.pi)):
+        y = [phi, state[2], 0.0, 0.0]           # a sliding mode's pose: the base offset kept, at rest
+        same(call("rigid", p, "outputs_of", mode=mode, a=y, ag=0.0), out_list(model, model.outputs_of(mode, y)))
 
 
 @SETTINGS
@@ -602,6 +605,9 @@ def test_flexible_overturned_outputs(kw, state, ag):
              out_list(model, model.outputs_of(mode, y, state[4])))
         q, _ = model.embed(mode, np.array(y[:2]), np.zeros(2))
         same(call("flexible", p, "outputs", a=q.tolist(), b=[0.0] * 4), out_list(model, model.outputs(q, np.zeros(4))))
+    for mode, phi in ((Mode.LEFT_SLIDE_NEG, 0.5 * math.pi), (Mode.RIGHT_SLIDE_POS, -0.5 * math.pi)):
+        y = [state[0] * model.h, phi, state[4], 0.0, 0.0, 0.0]
+        same(call("flexible", p, "outputs_of", mode=mode, a=y, ag=0.0), out_list(model, model.outputs_of(mode, y)))
 
 
 @SETTINGS
@@ -742,3 +748,49 @@ def test_a_kernel_with_only_the_required_functions_runs_every_mode(kind, rkw, fk
         close(call(kind, p, "bare:outputs_of", mode=mode, a=y, ag=0.5), out_list(model, model.outputs_of(mode, y, 0.5)),
               1e-14, scale=1.0)
         close(call(kind, p, "bare:inverse_mass", a=q.tolist()), np.linalg.inv(model.mass_matrix(q)), LA_RTOL * cond)
+
+
+@SETTINGS
+@given(st.sampled_from(["rigid", "flexible"]), rigid_params(), flexible_params(), STATE, FSTATE, AG)
+def test_the_generic_monitors_without_kernel_contact_forces_use_the_contact_problem(kind, rkw, fkw, rstate, fstate,
+                                                                                     ag):
+    """Without a kernel contact_forces the generic monitors take the closed corners' forces from
+    contact.mode_forces (part B's rk_mode_forces): RockingModel.contact_forces' default."""
+    from rocking_model.contact import mode_forces
+
+    model = RigidBlock(**rkw) if kind == "rigid" else FLEX(**fkw)
+    p = values_of(model)
+    state_of = (lambda mode: rigid_state(model, mode, *rstate)) if kind == "rigid" else \
+        (lambda mode: flexible_state(model, mode, *fstate))
+    w = rstate[1] if kind == "rigid" else fstate[3]
+    acc = model.g + abs(ag) + model.length_scale * w ** 2
+    if kind == "flexible":
+        acc += model.omega ** 2 * model.h * abs(fstate[0]) + model.omega * abs(fstate[2])
+    for mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+        y = state_of(mode)
+        k = len(y) // 2
+        q, v = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
+        lam = mode_forces(model, mode, q, v, ag)
+        _, g, _ = generic_expectations(model, mode, y, ag)
+        for i in CLOSED[mode]:
+            g[i] = float(lam[i]) / model.force_scale
+        cg, _ = call(kind, p, "bare_all:monitors", mode=mode, a=y, ag=ag)
+        close(cg, g, 1e-12 * np.linalg.cond(model.mass_matrix(q)), scale=acc / model.g)
+
+
+def test_part_a_sources_compile_without_warnings(tmp_path):
+    """rk_model.c, rk_sliding.c, rk_rigid.c, rk_flexible.c compile warning-free as strict C99 (the flags of
+    setup.py plus -Wall -Wextra -pedantic -Werror), so that warnings do not accumulate."""
+    import os
+    import shutil
+    import subprocess
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler on this machine")
+    src = os.path.join(os.path.dirname(__file__), "..", "rocking_model", "engine", "src")
+    for name in ("rk_model.c", "rk_sliding.c", "rk_rigid.c", "rk_flexible.c"):
+        out = subprocess.run([cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra",
+                              "-pedantic", "-Werror", "-c", os.path.join(src, name), "-o", str(tmp_path / "x.o")],
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr

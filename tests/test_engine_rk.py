@@ -617,3 +617,52 @@ def test_both_forms_of_pythons_sum(tmp_path, compensated):
         if (sys.version_info >= (3, 12)) == bool(compensated):
             assert bits(got) == bits(sum(xs)), xs
     assert differ >= 3
+
+
+@pytest.mark.parametrize("method", [DOP, DP5])
+def test_restart_from_its_own_point_goes_on_bit_identically(method):
+    """EventDriven restarts a stepper at its own (t, y) with the last step size (after a state restore): the
+    next step equals the one the stepper would have taken (FSAL derivative re-evaluated at the stored t_new);
+    the C restart reads the stepper's own arrays (aliasing) safely."""
+    fun = python_rhs("vdp", [2.0], 2)
+    s = METHODS[method](fun, 0.0, [1.0, 0.5], 1e-9, [1e-11, 1e-11], 0.4)
+    for _ in range(4):
+        s.step(math.inf)
+    h = s.h_abs
+    s.step(math.inf)
+    ref = (s.t, list(s.y), s.h_abs)
+    h_c, rec = _engine.rk_restart(method, "vdp", [2.0], 0.0, [1.0, 0.5], 1e-9, [1e-11, 1e-11], 0.4, 4, 0.0, None, h)
+    assert bits(h_c) == bits(h)
+    same((rec["t"], rec["y"], rec["h_abs"]), ref)
+
+
+def test_python_repr_of_floats_in_the_overflow_message(tmp_path):
+    """The state in the FloatingPointError text is Python's list repr: the C's py_repr equals repr(float) on
+    every kind of value (shortest round trip, fixed / exponent switch at 1e-4 and 1e16, -0.0, inf, nan)."""
+    import os
+    import random
+    import shutil
+    import subprocess
+    cc = shutil.which("gcc") or shutil.which("cc") or shutil.which("clang")
+    src = os.path.join(os.path.dirname(_engine.__file__), "engine", "src")
+    if cc is None or not os.path.exists(os.path.join(src, "rk_tableaux.h")):
+        pytest.skip("no C compiler or no generated header next to the sources")
+    prog = tmp_path / "repr.c"
+    prog.write_text('#include <stdio.h>\n#include <stdlib.h>\n#include "rk_rk.c"\n'
+                    'int main(int argc, char **argv) { char buf[64]; int i;\n'
+                    '  for (i = 1; i < argc; i++) { py_repr(strtod(argv[i], NULL), buf, sizeof buf); puts(buf); }\n'
+                    '  return 0; }\n')
+    exe = tmp_path / "repr"
+    res = subprocess.run([cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-I", src, str(prog),
+                          os.path.join(src, "rk_common.c"), "-lm", "-o", str(exe)], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 0, res.stderr
+    rng = random.Random(11)
+    values = [0.0, -0.0, 1.0, -1.5, 0.1, 1e-4, 9.999e-5, 1e-5, 1e15, 1e16, 9999999999999998.0, 1.2345e16, 123.0,
+              5e-324, 1.7976931348623157e308, math.inf, -math.inf, math.nan, 2.0 ** 60, 1 / 3, 100.0, 1e22, 1e-7]
+    values += [rng.uniform(-1, 1) * 10.0 ** rng.randint(-30, 30) for _ in range(300)]
+    values += [float(rng.randint(-10 ** 6, 10 ** 6)) for _ in range(20)]
+    out = subprocess.run([str(exe)] + [v.hex() if math.isfinite(v) else repr(v) for v in values],
+                         capture_output=True, text=True, timeout=60).stdout.split("\n")
+    for v, got in zip(values, out):
+        assert got == repr(v), (v, got)

@@ -8,6 +8,8 @@ FMUs run the C engine unchanged; `motion_spec` turns a `GroundMotion` into the p
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..ground_motion import (CheckedMotion, ConstantMotion, GroundMotion, LinearMotion, SampledMotion, ScaledMotion,
@@ -51,24 +53,48 @@ def motion_spec(gm: GroundMotion) -> tuple:
     return ("callback", gm, constant, float(getattr(gm, "value", 0.0)) if constant else 0.0)
 
 
-class _Log:
-    """What the Simulator reads of a `BoundedLog`: tail() and maxlen (the engine holds the log)."""
+#: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
+_SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", "v_tol", "v_zeno", "event_tol",
+             "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
 
-    def __init__(self, integ):
+
+class _Log:
+    """What the Simulator and the tests read of a `BoundedLog` (tail(), maxlen, len, iteration, indexing): the
+    rows the engine holds (impact_times, or impact_log as (t, v_minus, v_plus) rows)."""
+
+    def __init__(self, integ, rows: bool = False):
         self._integ = integ
+        self._rows = rows
 
     @property
     def maxlen(self):
-        return self._integ._options.impact_log_size
+        n = self._integ._options.impact_log_size
+        return n if n is None or not self._rows else min(1000, n)
 
     def tail(self) -> list:
-        return self._integ._engine.impact_times
+        eng = self._integ._engine
+        if not self._rows:
+            return eng.impact_times
+        flat = eng.get_state()["impact_log"]
+        n = self._integ.model.n_dof
+        w = 1 + 2 * n
+        return [(flat[i], np.array(flat[i + 1:i + 1 + n]), np.array(flat[i + 1 + n:i + w]))
+                for i in range(0, len(flat), w)]
 
     def __len__(self):
         return len(self.tail())
 
     def __iter__(self):
         return iter(self.tail())
+
+    def __getitem__(self, i):
+        return self.tail()[i]
+
+    def __eq__(self, other):
+        return self.tail() == list(other)
+
+    def __repr__(self):
+        return repr(self.tail())
 
 
 class CompiledIntegrator(Integrator):
@@ -95,12 +121,24 @@ class CompiledIntegrator(Integrator):
         self._t_fail = None
         self.reports = []
         self.impact_times = _Log(self)
+        if scheme == "event_driven":
+            self.impact_log = _Log(self, rows=True)
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
         # the Python scheme's own checks of its options first (the same messages), then the engine's
-        SCHEMES[scheme].from_options(model, mode, q, v, t0, options)
-        return cls(model, scheme, mode, q, v, t0, options)
+        ref = SCHEMES[scheme].from_options(model, mode, q, v, t0, options)
+        integ = cls(model, scheme, mode, q, v, t0, options)
+        integ._settings = {name: getattr(ref, name) for name in _SETTINGS if name in ref.__dict__}
+        return integ
+
+    def __getattr__(self, name):
+        # the scheme's settings (dt_max, theta, tolerance, method, the scaled tolerances ...), as the Python
+        # scheme computed them from the same options; never its state (that is the engine's)
+        settings = self.__dict__.get("_settings")
+        if settings is not None and name in settings:
+            return settings[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _engine_args(self):
         model = self.model
@@ -118,6 +156,7 @@ class CompiledIntegrator(Integrator):
         state = dict(self.__dict__)
         state["_engine"] = self._engine.snapshot()
         state.pop("impact_times", None)
+        state.pop("impact_log", None)
         state.pop("_last_motion", None)   # may be a lambda's wrapper (not picklable); a new object restarts
         return state
 
@@ -129,8 +168,30 @@ class CompiledIntegrator(Integrator):
         self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
         self._engine.restore(snap)
         self.impact_times = _Log(self)
+        if self.name == "event_driven":
+            self.impact_log = _Log(self, rows=True)
 
     # ------------------------------------------------------------------ attributes
+    @property
+    def q(self):
+        return self.state()[0]
+
+    @property
+    def v(self):
+        return self.state()[1]
+
+    @property
+    def y(self) -> list:
+        return self._engine.get_state()["y"]
+
+    @property
+    def k(self) -> int:
+        return len(self.y) // 2
+
+    @property
+    def shift(self) -> float:
+        return self._engine.get_state()["shift"]
+
     @property
     def t(self) -> float:
         return self._engine.t if self._t_fail is None else self._t_fail
@@ -191,12 +252,15 @@ class CompiledIntegrator(Integrator):
     def _run(self, call):
         from .. import _engine
 
+        self._t_fail = None
         try:
             call()
         except _engine.NonFiniteError as exc:
             self._t_fail = self._engine.fail_time
             raise FloatingPointError(str(exc)) from None
-        except np.linalg.LinAlgError:
+        except BaseException:
+            # the engine is restored; ``t`` says where the scheme had got to (Simulator._diverged's "at t = ...",
+            # as the Python integrator's t before its rollback) until the Simulator rolls back
             self._t_fail = self._engine.fail_time
             raise
         finally:
@@ -246,6 +310,9 @@ class CompiledIntegrator(Integrator):
 
     def get_state(self) -> dict:
         state = self._engine.get_state()
+        h = state.get("h")
+        if h is not None and h != h:
+            state["h"] = math.nan     # the Python's object: equal states compare equal (nan is nan)
         return {key: state[key] for key in self.STATE_KEYS}
 
     def set_state(self, state) -> None:

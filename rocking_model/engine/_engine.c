@@ -353,6 +353,8 @@ static int parse_motion(motion_holder *h, PyObject *spec, int depth)
 typedef struct EngineObject {
     PyObject_HEAD
     rk_engine *e;
+    PyObject *keys;     /* the keys of output_dict(): the output names, contact, impacts, overturned,
+                           friction_demand, painleve (made once) */
 } EngineObject;
 
 static int read_options(PyObject *kw, rk_options *o);
@@ -457,6 +459,23 @@ static int engine_init(EngineObject *self, PyObject *args, PyObject *kwargs)
     }
     rk_engine_free(self->e);
     self->e = e;
+    {
+        static const char *const extra[] = {"contact", "impacts", "overturned", "friction_demand", "painleve"};
+        int n = rk_engine_n_outputs(e), i;
+        PyObject *keys = PyTuple_New(n + 5);
+        if (keys == NULL)
+            return -1;
+        for (i = 0; i < n + 5; i++) {
+            PyObject *k = PyUnicode_InternFromString(i < n ? rk_engine_output_name(e, i) : extra[i - n]);
+            if (k == NULL) {
+                Py_DECREF(keys);
+                return -1;
+            }
+            PyTuple_SET_ITEM(keys, i, k);
+        }
+        Py_XDECREF(self->keys);
+        self->keys = keys;
+    }
     return 0;
 }
 
@@ -502,6 +521,8 @@ static void engine_dealloc(EngineObject *self)
     freefunc tp_free = (freefunc)PyType_GetSlot(type, Py_tp_free);
     rk_engine_free(self->e);
     self->e = NULL;
+    Py_XDECREF(self->keys);
+    self->keys = NULL;
     tp_free(self);
     Py_DECREF(type);      /* a heap type: each instance holds a reference */
 }
@@ -751,6 +772,40 @@ static PyObject *engine_outputs(EngineObject *self, PyObject *unused)
         return NULL;
     rk_engine_outputs(self->e, out);
     return doubles_tuple(out, rk_engine_n_outputs(self->e));
+}
+
+/** output_dict(): Simulator.outputs() in one call: the model's outputs, contact, impacts, overturned,
+ *  friction_demand, painleve. */
+static PyObject *engine_output_dict(EngineObject *self, PyObject *unused)
+{
+    double out[RK_MAX_OUTPUTS];
+    PyObject *d, *vals[RK_MAX_OUTPUTS + 5];
+    int n, i, ok = 1;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_n_outputs(self->e);
+    rk_engine_outputs(self->e, out);
+    d = PyDict_New();
+    if (d == NULL)
+        return NULL;
+    for (i = 0; i < n; i++)
+        vals[i] = PyFloat_FromDouble(out[i]);
+    vals[n] = PyLong_FromLong(rk_engine_contact_code(self->e));
+    vals[n + 1] = PyLong_FromLongLong(rk_engine_impacts(self->e));
+    vals[n + 2] = PyBool_FromLong(rk_engine_overturned(self->e));
+    vals[n + 3] = PyFloat_FromDouble(rk_engine_friction_demand(self->e));
+    vals[n + 4] = PyLong_FromLongLong(rk_engine_painleve(self->e));
+    for (i = 0; i < n + 5; i++) {
+        if (vals[i] == NULL || PyDict_SetItem(d, PyTuple_GET_ITEM(self->keys, i), vals[i]) < 0)
+            ok = 0;
+        Py_XDECREF(vals[i]);
+    }
+    if (!ok) {
+        Py_DECREF(d);
+        return NULL;
+    }
+    return d;
 }
 
 static PyObject *engine_contacts(EngineObject *self, PyObject *unused)
@@ -1169,6 +1224,9 @@ static PyMethodDef engine_methods[] = {
      "sample(times, motion, max_steps, modes, values, impacts, overturned): Integrator.sample into the given "
      "arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1)."},
     {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
+    {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
+     "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "
+     "painleve."},
     {"contacts", (PyCFunction)engine_contacts, METH_NOARGS, "contacts() -> tuple of ContactState codes."},
     {"full_state", (PyCFunction)engine_full_state, METH_NOARGS, "full_state() -> (q, v) lists."},
     {"get_state", (PyCFunction)engine_get_state, METH_NOARGS, "get_state() -> dict of the scheme's STATE_KEYS."},

@@ -578,16 +578,17 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         }
         res = narrow_dict(&sol, nd, n);
     } else if (strcmp(name, "solve_with_friction") == 0) {
-        /* (v_free, b_N, b_T, candidates, forced, sliding, count, hint, prefer, lcp_exact, lcp_hint) */
-        PyObject *vf, *bN, *bT, *cand, *forced, *sliding, *hint;
+        /* (v_free, b_N, b_T, candidates, forced, sliding, count, hint, prefer, lcp_exact, lcp_hint
+         *  [, Minv, W_N, W_T]): the model's matrices at q = 0 unless given (Moreau-Jean's effective ones) */
+        PyObject *vf, *bN, *bT, *cand, *forced, *sliding, *hint, *mi = NULL, *wn = NULL, *wt = NULL;
         double va[RK_MAX_DOF], b1[RK_MAX_CONTACTS], b2[RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
         double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], q0[RK_MAX_DOF] = {0};
         int sl[RK_LCP_MAX_CONTACTS], count, prefer, has;
         rk_tolerances tol = RK_DEFAULT_TOLERANCES;
         rk_contact_args a;
         rk_lcp_problem p;
-        if (!PyArg_ParseTuple(rest, "OOOOOOpOidd", &vf, &bN, &bT, &cand, &forced, &sliding, &count, &hint, &prefer,
-                              &tol.lcp_exact, &tol.lcp_hint))
+        if (!PyArg_ParseTuple(rest, "OOOOOOpOidd|OOO", &vf, &bN, &bT, &cand, &forced, &sliding, &count, &hint,
+                              &prefer, &tol.lcp_exact, &tol.lcp_hint, &mi, &wn, &wt))
             goto done;
         rk_contact_args_default(&a);
         memset(&p, 0, sizeof p);
@@ -604,8 +605,19 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         a.count = count;
         a.prefer = prefer;
         a.tolerances = &tol;
-        m.ops->inverse_mass_matrix(&m, q0, Minv);
-        m.ops->contact_jacobians(&m, q0, W_N, W_T);
+        if (mi != NULL && wn != NULL && wt != NULL) {
+            int r1, c1, r2, c2, r3, c3;
+            if (get_matrix(mi, "Minv", Minv, nd, nd, &r1, &c1) < 0 || get_matrix(wn, "W_N", W_N, nd, n, &r2, &c2) < 0
+                || get_matrix(wt, "W_T", W_T, nd, n, &r3, &c3) < 0)
+                goto done;
+            if (r1 != nd || c1 != nd || r2 != nd || c2 != n || r3 != nd || c3 != n) {
+                PyErr_SetString(PyExc_ValueError, "Minv must be n_dof x n_dof, W_N and W_T n_dof x n_contacts");
+                goto done;
+            }
+        } else {
+            rk_model_inverse_mass(&m, q0, Minv);
+            m.ops->contact_jacobians(&m, q0, W_N, W_T);
+        }
         p.n_dof = nd;
         p.n_contacts = n;
         p.Minv = Minv;
@@ -748,6 +760,25 @@ static PyObject *py_inexact_message(PyObject *self, PyObject *args)
     return PyUnicode_FromString(buf);
 }
 
+static PyObject *py_lstsq(PyObject *self, PyObject *args)
+{
+    PyObject *A, *b;
+    double a[256], bb[16], x[16];
+    int r, c;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "OO", &A, &b))
+        return NULL;
+    if (get_matrix(A, "A", a, 16, 16, &r, &c) < 0)
+        return NULL;
+    if (r != c || get_vector(b, "b", bb, 16) != r) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "A must be square (at most 16 x 16) and b match it");
+        return NULL;
+    }
+    rk_lstsq_square(r, a, bb, x);
+    return list_of(x, r);
+}
+
 PyMethodDef rk_py_contact_methods[] = {
     {"contact_solve_lcp", (PyCFunction)(void (*)(void))py_solve_lcp, METH_VARARGS | METH_KEYWORDS,
      "contact_solve_lcp(Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=None, rtol=1e-9, hint=None, "
@@ -761,6 +792,8 @@ PyMethodDef rk_py_contact_methods[] = {
      "(Minv, W_N, W_T, f, g, a_N, a_T, e_N, e_T, mu) or (kind, params) of a C kernel. name: impact, uplift, "
      "solve_with_friction, project_to_ground, closed_candidates, sliding_delassus, painleve_sticks, next_mode, "
      "solution_sigma, mode_forces (see tests/test_engine_contact.py for the arguments)."},
+    {"contact_lstsq", py_lstsq, METH_VARARGS,
+     "contact_lstsq(A, b) -> list: rk_lstsq_square, np.linalg.lstsq(A, b, rcond=1e-12)[0] of a square A."},
     {"contact_inexact_message", py_inexact_message, METH_VARARGS,
      "contact_inexact_message(active, violation, n_contacts, t, what) -> str: rk_inexact_message."},
     {NULL, NULL, 0, NULL}

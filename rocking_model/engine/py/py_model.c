@@ -151,7 +151,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     rk_model_ops bare;
     if (build_model(kind, params_obj, &m) < 0)
         return NULL;
-    if (strncmp(name, "bare:", 5) == 0) {
+    if (strncmp(name, "bare:", 5) == 0 || strncmp(name, "bare_all:", 9) == 0) {
         /* a kernel with only the required functions (plus contact_forces and the model's own rules): the
          * generic fallbacks of rk_model.c, as a third model would get them */
         bare = *m.ops;
@@ -159,6 +159,10 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         bare.mode_rhs = NULL;
         bare.mode_monitors = NULL;
         bare.mode_outputs = NULL;
+        if (name[4] == '_') {
+            bare.contact_forces = NULL;     /* the generic contact forces too (contact.mode_forces, part B) */
+            name += 4;
+        }
         m.ops = &bare;
         name += 5;
     }

@@ -424,7 +424,7 @@ static PyObject *py_rk_restart(PyObject *self, PyObject *args)
     if (!PyArg_ParseTuple(args, "isOdOdOdidOO", &method, &problem, &params, &t0, &y0, &rtol, &atol, &max_step,
                           &n_before, &t_r, &yr_obj, &first))
         return NULL;
-    if (get_doubles(yr_obj, "y_r", y_r, RK_MAX_Y, &n) < 0)
+    if (yr_obj != Py_None && get_doubles(yr_obj, "y_r", y_r, RK_MAX_Y, &n) < 0)
         return NULL;
     if (first != Py_None) {
         first_step = PyFloat_AsDouble(first);
@@ -436,7 +436,7 @@ static PyObject *py_rk_restart(PyObject *self, PyObject *args)
         return PyErr_NoMemory();
     if (make_stepper(ts, method, problem, params, t0, y0, rtol, atol, max_step, Py_None) < 0)
         goto fail;
-    if (n != ts->st.n) {
+    if (yr_obj != Py_None && n != ts->st.n) {
         PyErr_SetString(PyExc_ValueError, "y_r and y0 differ in size");
         goto fail;
     }
@@ -445,7 +445,10 @@ static PyObject *py_rk_restart(PyObject *self, PyObject *args)
             raise_rk(&err);
             goto fail;
         }
-    if (rk_stepper_restart(&ts->st, test_rhs, &ts->pb, t_r, y_r, first_step, &err) != RK_OK
+    /* y_r None: restart from the stepper's own point (t, y), passing its own arrays (aliasing) */
+    if (yr_obj == Py_None)
+        t_r = ts->st.t;
+    if (rk_stepper_restart(&ts->st, test_rhs, &ts->pb, t_r, yr_obj == Py_None ? ts->st.y : y_r, first_step, &err) != RK_OK
         || (h_after = ts->st.h_abs, rk_step(&ts->st, INFINITY, &err)) != RK_OK) {
         raise_rk(&err);
         goto fail;
@@ -785,7 +788,7 @@ PyMethodDef rk_py_rk_methods[] = {
      "dense, mid}], 'error'?}: steps to each bound in turn on a built-in test problem."},
     {"rk_restart", py_rk_restart, METH_VARARGS,
      "rk_restart(method, problem, params, t0, y0, rtol, atol, max_step, n_before, t_r, y_r, first_step) -> "
-     "(h_abs after the restart, record of the next step)."},
+     "(h_abs after the restart, record of the next step); y_r None: from the stepper's own (t, y) (t_r ignored)."},
     {"rk_events_eval", py_rk_events_eval, METH_VARARGS, "rk_events_eval(setup, t) -> G(t, dense(t))."},
     {"rk_events_locate", py_rk_events_locate, METH_VARARGS,
      "rk_events_locate(setup, i, shift, a, ga, b, gb, xtol) -> t (events.locate on G_i + shift)."},

@@ -163,7 +163,8 @@ rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, r
     m->ops->contact_jacobians(m, q, W_N, W_T);
     columns_dot(nd, n, W_N, v_minus, U_minus);
     for (i = 0; i < n; i++) {
-        b_N[i] = e * (U_minus[i] < 0.0 ? U_minus[i] : 0.0);   /* np.minimum(U_minus, 0.0) */
+        /* np.minimum(U_minus, 0.0): NaN propagates */
+        b_N[i] = e * ((U_minus[i] < 0.0 || isnan(U_minus[i])) ? U_minus[i] : 0.0);
         if (RK_IN(a->forced, i))
             b_N[i] = 0.0;
     }

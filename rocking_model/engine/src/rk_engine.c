@@ -648,6 +648,7 @@ rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope
     rk_motion m;
     int linear = slope != 0.0 || (flags & RK_ADVANCE_LINEAR) != 0u;
     rk_error_clear(&e->error);
+    e->fail_t = rk_engine_time(e);
     if (check_t_end(e, t_end) != RK_OK || check_input(e, t_end, ag0, slope, linear) != RK_OK)
         return e->error.status;
     if (linear)
@@ -660,6 +661,7 @@ rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope
 rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, long long max_steps)
 {
     rk_error_clear(&e->error);
+    e->fail_t = rk_engine_time(e);
     if (ag == NULL)
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
     if (check_t_end(e, t_end) != RK_OK)
@@ -688,6 +690,7 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, lon
     long long i;
     double t = rk_engine_time(e);
     rk_error_clear(&e->error);
+    e->fail_t = t;
     if (ag == NULL)
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
     if (n_times < 1)

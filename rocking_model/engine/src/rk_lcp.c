@@ -24,6 +24,8 @@
 #define LSTSQ_RCOND 1e-12
 /** sweeps of the one-sided Jacobi SVD before it stops (it converges in far fewer on 16 x 16 matrices) */
 #define JACOBI_SWEEPS 80
+/** [1] two columns count as orthogonal when their cosine is below this (a few ulps: the Jacobi sweeps stop) */
+#define JACOBI_TOL 1e-15
 /** most state combinations of the frictional enumeration (4^FRICTION_ENUMERATE_MAX) */
 #define MAX_COMBOS 256
 
@@ -131,13 +133,17 @@ static int solve_lu(int n, double A[][UMAX], const double *b, double *x)
  *  singular values <= rcond * the largest dropped. One-sided Jacobi SVD (Hestenes): A V = U Sigma. */
 static void lstsq(int n, double A[][UMAX], const double *b, double *x)
 {
-    double U[UMAX][UMAX], V[UMAX][UMAX], sig[UMAX], smax = 0.0;
+    double U[UMAX][UMAX], V[UMAX][UMAX], sig[UMAX], smax = 0.0, total = 0.0, floor;
     int i, j, k, sweep;
     for (i = 0; i < n; i++)
         for (j = 0; j < n; j++) {
             U[i][j] = A[i][j];
             V[i][j] = (i == j) ? 1.0 : 0.0;
+            total += A[i][j] * A[i][j];
         }
+    /* a column whose squared norm is below this is zero to round-off: rotating it against the others only
+     * turns round-off (and would not converge) */
+    floor = JACOBI_TOL * JACOBI_TOL * total;
     for (sweep = 0; sweep < JACOBI_SWEEPS; sweep++) {
         int rotated = 0;
         for (j = 0; j < n - 1; j++)
@@ -148,7 +154,8 @@ static void lstsq(int n, double A[][UMAX], const double *b, double *x)
                     beta += U[i][k] * U[i][k];
                     gamma += U[i][j] * U[i][k];
                 }
-                if (gamma == 0.0 || !(fabs(gamma) > 1e-16 * sqrt(alpha * beta)))
+                if (gamma == 0.0 || !(alpha > floor && beta > floor)
+                    || !(fabs(gamma) > JACOBI_TOL * sqrt(alpha * beta)))
                     continue;
                 rotated = 1;
                 zeta = (beta - alpha) / (2.0 * gamma);

@@ -8,6 +8,7 @@
  * checks and messages (Param.check / check_real / check_choice), repr() of a float, math.hypot, the modes of
  * the two-corner models. */
 #include "rk_model.h"
+#include "rk_contact.h"
 
 #include <float.h>
 #include <math.h>
@@ -575,7 +576,9 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         double base[RK_MAX_EVENTS], F = m->force_scale, V = sqrt(m->g * m->length_scale), tau_sum = 0.0;
         double inv_mu = isinf(m->mu) ? 0.0 : 1.0 / m->mu;
         rk_slide_embed(m, mode, y, y + k, q, v);
-        rk_slide_motion(m, mode, q, v, ag, a, tau);
+        if (rk_slide_motion(m, mode, q, v, ag, a, tau) != RK_OK)
+            for (i = 0; i < RK_MAX_CONTACTS; i++)
+                tau[i] = NAN;       /* numpy's lstsq failed too: non-finite event functions stop the driver */
         for (i = 0; i < k - 1; i++) {
             ys[i] = y[i];
             ys[k - 1 + i] = y[k + i];
@@ -769,11 +772,15 @@ void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, dou
     k = m->ops->mode_dofs(m, mode, idx);
     m->ops->embed(m, mode, y, y + k, q, v);
     if (closed) {
-        if (m->ops->contact_forces != NULL)
+        if (m->ops->contact_forces != NULL) {
             m->ops->contact_forces(m, mode, q, v, ag, lam);
-        else
-            for (i = 0; i < nc; i++)
-                lam[i] = NAN;       /* TODO(part A): rk_mode_forces of part B once merged */
+        } else {
+            /* RockingModel.contact_forces: contact.mode_forces, the contact LCP with the closed set forced */
+            rk_error err;
+            if (rk_mode_forces(m, mode, q, v, ag, lam, &err) != RK_OK)
+                for (i = 0; i < nc; i++)
+                    lam[i] = NAN;   /* where numpy raises: the driver sees non-finite event functions */
+        }
     }
     m->ops->gaps(m, q, gap);
     phi = q[m->ops->phi_index];

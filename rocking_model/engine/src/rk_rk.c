@@ -212,27 +212,32 @@ rk_status rk_stepper_init(rk_stepper *s, const rk_tableau *tab, rk_rhs_fn fun, v
     if (n < 0 || n > RK_MAX_Y)
         return rk_fail(err, RK_ERR_VALUE, "%s: the state size n = %d is out of range; allowed range [0, %d]",
                        tab->name, n, RK_MAX_Y);
-    memset(s, 0, sizeof *s);
+    {
+        /* y0, atol, f0 may point into *s (a re-init from its own state): copied before the reset */
+        double y0c[RK_MAX_Y], atolc[RK_MAX_Y], f0c[RK_MAX_Y];
+        for (j = 0; j < n; j++) {
+            y0c[j] = y0[j];
+            atolc[j] = atol[j];
+            f0c[j] = f0 != NULL ? f0[j] : 0.0;
+        }
+        memset(s, 0, sizeof *s);
+        for (j = 0; j < n; j++) {
+            s->y[j] = y0c[j];
+            s->atol[j] = atolc[j];
+            s->f[j] = f0c[j];
+        }
+    }
     s->tab = tab;
     s->fun = fun;
     s->ctx = ctx;
     s->t = t0;
     s->n = n;
-    for (j = 0; j < n; j++) {
-        s->y[j] = y0[j];
-        s->atol[j] = atol[j];
-    }
     s->rtol = rtol;
     s->max_step = max_step;
-    if (n > 0) {
-        if (f0 != NULL) {
-            for (j = 0; j < n; j++)
-                s->f[j] = f0[j];
-        } else {
-            st = call_rhs(s, s->t, s->y, s->f, err);
-            if (st != RK_OK)
-                return st;
-        }
+    if (n > 0 && f0 == NULL) {
+        st = call_rhs(s, s->t, s->y, s->f, err);
+        if (st != RK_OK)
+            return st;
     }
     s->n_K = 0;
     s->dense_ready = 0;
@@ -268,7 +273,7 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
         st = call_rhs(s, t0, y0, f, err);
         if (st != RK_OK)
             return st;
-        memcpy(s->y, y0, sizeof(double) * (size_t)n);
+        memmove(s->y, y0, sizeof(double) * (size_t)n);       /* y0 may be s->y itself */
         memcpy(s->f, f, sizeof(double) * (size_t)n);
     }
     s->t = t0;
@@ -431,7 +436,11 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
     s->t = t_new;
     memcpy(s->y, y_new, sizeof(double) * (size_t)n);
     memcpy(s->f, K[tab->n_stages - 1], sizeof(double) * (size_t)n);
-    memcpy(s->K, K, sizeof(double) * RK_MAX_Y * (size_t)tab->n_stages);
+    {
+        int st_i;
+        for (st_i = 0; st_i < tab->n_stages; st_i++)
+            memcpy(s->K[st_i], K[st_i], sizeof(double) * (size_t)n);
+    }
     s->n_K = tab->n_stages;
     s->dense_ready = 0;
     s->n_steps += 1;
