@@ -56,35 +56,40 @@ def _pair(model, **kw):
             Simulator(model, "event_driven", engine="c", **kw))
 
 
-def _assert_same(py, c, where=""):
+def _assert_same(py, c, where="", slack=1.0):
+    """The same state: t, mode, impacts, n_steps (with slack == 1), painleve, friction_demand; phi to PHI_TOL
+    and the other outputs to OUT_RTOL of their scale, the impact times to T_TOL, each tolerance times slack
+    (a scene whose contact solves differ by an ulp between numpy and C, which its dynamics amplify)."""
     ip, ic = py.integrator, c.integrator
     assert ic.t == ip.t, where
     assert int(ic.mode) == int(ip.mode), (where, int(ip.mode), int(ic.mode))
     assert bool(ic.overturned) == bool(ip.overturned), where
     assert ic.impacts == ip.impacts, (where, ip.impacts, ic.impacts)
-    assert ic.n_steps == ip.n_steps, (where, ip.n_steps, ic.n_steps)
+    if slack == 1.0:
+        assert ic.n_steps == ip.n_steps, (where, ip.n_steps, ic.n_steps)
+    else:
+        assert abs(ic.n_steps - ip.n_steps) <= 0.02 * ip.n_steps + 2, (where, ip.n_steps, ic.n_steps)
     assert ic.painleve == ip.painleve, where
-    assert ic.friction_demand == pytest.approx(ip.friction_demand, rel=1e-10, abs=1e-14), where
+    assert ic.friction_demand == pytest.approx(ip.friction_demand, rel=1e-10 * slack, abs=1e-14), where
     op, oc = py.outputs(), c.outputs()
     assert set(op) == set(oc)
-    assert abs(oc["phi"] - op["phi"]) <= PHI_TOL, (where, op["phi"], oc["phi"])
+    assert abs(oc["phi"] - op["phi"]) <= PHI_TOL * slack, (where, op["phi"], oc["phi"])
     for name in op:
-        assert abs(oc[name] - op[name]) <= OUT_RTOL * max(1.0, abs(op[name])) * 1e3, (where, name, op[name],
-                                                                                     oc[name])
+        assert abs(oc[name] - op[name]) <= OUT_RTOL * 1e3 * slack * max(1.0, abs(op[name])), (where, name,
+                                                                                             op[name], oc[name])
     tp, tc = list(py.impact_times), list(c.impact_times)
     assert len(tp) == len(tc), where
-    assert np.allclose(tc, tp, rtol=0.0, atol=T_TOL), where
+    assert np.allclose(tc, tp, rtol=0.0, atol=T_TOL * slack), where
 
 
-def _run_steps(model, times, ag, **kw):
+def _run_steps(model, times, ag, slack=1.0, **kw):
     """Both engines through the same advances, compared after each; returns the pair."""
     py, c = _pair(model, **kw)
     _assert_same(py, c, "start")
     for t in times:
-        motion = ag(t) if callable(ag) and not hasattr(ag, "next_breakpoint") else ag
-        py.advance(float(t), motion)
-        c.advance(float(t), motion)
-        _assert_same(py, c, f"t = {t}")
+        py.advance(float(t), ag)
+        c.advance(float(t), ag)
+        _assert_same(py, c, f"t = {t}", slack)
     return py, c
 
 
@@ -150,6 +155,21 @@ def test_overturning():
 
 
 @needs_engine
+def test_overturning_sample_rows():
+    """`sample` through an overturning: the rows after it read contact code 10 (OVERTURNED), the pose at rest."""
+    pulse = SinePulse(0.45 * G, 2.0 * math.pi * 2.0)
+    py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=None)
+    times = list(np.arange(1, 401) * 0.01)
+    mp, vp, ip, op = py.sample(times, pulse)
+    mc, vc, ic, oc = c.sample(times, pulse)
+    assert list(mc) == list(mp) and list(ic) == list(ip) and list(oc) == list(op)
+    assert list(mc).count(10) > 10 and bool(oc[-1])
+    assert np.max(np.abs(np.asarray(vc["phi"]) - np.asarray(vp["phi"]))) <= PHI_TOL
+    assert np.all(np.asarray(vc["phi_dot"])[np.asarray(oc, dtype=bool)] == 0.0)
+    _assert_same(py, c, "end")
+
+
+@needs_engine
 def test_record_zoh_and_exact():
     """A synthetic record (the benchmark's generator, 8 s at 10 ms): co-simulation steps with ag held (the
     FMU path: a constant input per step, the live stepper carried over) and the record as one SampledMotion."""
@@ -170,13 +190,35 @@ def test_record_zoh_and_exact():
 
 
 @needs_engine
+@pytest.mark.parametrize("kw", [dict(b=0.25, h=1.0), dict(b=0.4, h=2.0, mu=0.5)], ids=["mu_inf", "mu_0.5"])
+def test_bundled_record_simulate(kw):
+    """`simulate` on the bundled record (examples/records/synthetic_2017.AT2, 30 s at 10 ms: some 320 and 390
+    impacts): the whole record in one `sample` call; the same contact codes and impacts at every output,
+    phi within 1e-12 rad (the 319 impacts of the mu = inf block carry round-off of the impact LCP: 7e-13 rad
+    measured)."""
+    from pathlib import Path
+
+    from rocking_model import simulate
+    from rocking_model.records import read_record
+    rec = read_record(Path(__file__).resolve().parents[1] / "examples" / "records" / "synthetic_2017.AT2")
+    block = RigidBlock(**kw)
+    rp = simulate(block, (rec.t, rec.ag), t_end=float(rec.t[-1]), output_interval=0.01, engine="python")
+    rc = simulate(block, (rec.t, rec.ag), t_end=float(rec.t[-1]), output_interval=0.01, engine="c")
+    assert np.array_equal(np.asarray(rp["contact"]), np.asarray(rc["contact"]))
+    assert np.array_equal(np.asarray(rp["impacts"]), np.asarray(rc["impacts"]))
+    assert np.asarray(rp["impacts"])[-1] > 200
+    assert np.max(np.abs(np.asarray(rp["phi"]) - np.asarray(rc["phi"]))) <= PHI_TOL
+    assert np.allclose(np.asarray(rc["friction_demand"]), np.asarray(rp["friction_demand"]), rtol=1e-10, atol=0)
+
+
+@needs_engine
 def test_linear_motion_steps():
     """First-order hold per step (fmi2SetRealInputDerivatives): a LinearMotion per advance."""
     block = RigidBlock(b=0.2, h=1.0)
     py, c = _pair(block)
     for k in range(1, 101):
         t0 = (k - 1) * 0.02
-        m = LinearMotion(3.0 * math.sin(5.0 * t0), 15.0 * math.cos(5.0 * t0), t0)
+        m = LinearMotion(3.0 * math.sin(5.0 * t0), 15.0 * math.cos(5.0 * t0), t0, t0, k * 0.02)
         py.advance(k * 0.02, m)
         c.advance(k * 0.02, m)
         _assert_same(py, c, f"t = {k * 0.02}")
@@ -184,10 +226,41 @@ def test_linear_motion_steps():
 
 @needs_engine
 def test_flexible_free_and_pulse():
+    """The flexible oscillator (EI = 9.45e4 N m2, omega/p = 5), free and under the benchmark pulse. Its impact
+    LCP's velocities differ by an ulp between numpy's products and the C loops (1e-16 m/s, part B pins them at
+    1e-13 relative), which the column's vibration carries on: the same impacts and modes, the state within
+    1e-9 (a step count may differ by one after a while)."""
     osc = FlexibleOscillator(EI=9.45e4)
-    _run_steps(osc, np.arange(1, 41) * 0.05, 0.0, phi_0=0.05)
+    py, c = _run_steps(osc, np.arange(1, 41) * 0.05, 0.0, slack=1e3, phi_0=0.05)
+    assert py.integrator.impacts >= 3
     pulse = SinePulse(0.25 * G, 2.0 * math.pi * 1.5)
-    py, c = _run_steps(osc, np.arange(1, 41) * 0.05, pulse)
+    py, c = _run_steps(osc, np.arange(1, 41) * 0.05, pulse, slack=1e3)
+
+
+@needs_engine
+@pytest.mark.parametrize("EI", [9.45e4, 9.45e5, 9.45e6], ids=["soft", "default", "stiff"])
+def test_flexible_pulse_simulate(EI):
+    """The benchmark's flexible pulse (0.25 g at 1.5 Hz) through `simulate` (one sample call), omega/p from 5
+    to 50: the same contact codes and impacts at every output, phi and u within 1e-7 (measured 3e-14, 8e-10,
+    1.3e-8: the impact LCP's ulps carried by the column's vibration, more of it the stiffer the column)."""
+    from rocking_model import simulate
+    osc = FlexibleOscillator(EI=EI)
+    pulse = SinePulse(0.25 * G, 2.0 * math.pi * 1.5)
+    rp = simulate(osc, pulse, t_end=4.0, output_interval=0.01, engine="python")
+    rc = simulate(osc, pulse, t_end=4.0, output_interval=0.01, engine="c")
+    assert np.array_equal(np.asarray(rp["contact"]), np.asarray(rc["contact"]))
+    assert np.array_equal(np.asarray(rp["impacts"]), np.asarray(rc["impacts"]))
+    assert np.asarray(rp["impacts"])[-1] >= 4
+    for name in ("phi", "u"):
+        assert np.max(np.abs(np.asarray(rp[name]) - np.asarray(rc[name]))) <= 1e-7, name
+
+
+@needs_engine
+def test_flexible_until_first_impact_bit_identical():
+    """Before its first impact (no contact solve yet) the flexible oscillator's rocking is bit-identical."""
+    osc = FlexibleOscillator(EI=9.45e4)
+    py, c = _run_steps(osc, np.arange(1, 6) * 0.05, 0.0, phi_0=0.05)
+    assert py.get_state()["y"] == c.get_state()["y"] and py.integrator.impacts == 0
 
 
 @needs_engine
@@ -240,9 +313,10 @@ def test_state_moves_between_engines():
 @needs_engine
 def test_work_limit_refused_state_kept():
     pulse = SinePulse(0.40 * G, 2.0 * math.pi * 2.0)
-    py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=3)
-    py.advance(0.2, pulse)
-    c.advance(0.2, pulse)
+    py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=70)
+    for t in (0.1, 0.2, 0.3, 0.4, 0.5):        # (each advance within the budget: an uplift, an impact)
+        py.advance(t, pulse)
+        c.advance(t, pulse)
     before = c.get_state()
     with pytest.raises(WorkLimitError) as ep:
         py.advance(3.0, pulse)
@@ -252,6 +326,10 @@ def test_work_limit_refused_state_kept():
     # the same message up to its end (the C message buffer holds 511 characters)
     assert str(ep.value)[:400] == str(ec.value)[:400]
     _assert_same(py, c, "after refusal")
+    for t in (0.6, 0.7, 0.8):                 # and both go on identically (the C restored its live stepper)
+        py.advance(t, pulse)
+        c.advance(t, pulse)
+        _assert_same(py, c, f"after refusal t = {t}")
 
 
 @needs_engine
@@ -310,26 +388,48 @@ except ImportError:                                                 # pragma: no
     given = None
 
 
+def _hypothesis_scene(model, phi0, A, f, method, tol, times=(0.5, 1.0, 2.0)):
+    pulse = SinePulse(A * G, 2.0 * math.pi * f)
+    py, c = _pair(model, tolerance=tol, phi_0=phi0, max_steps=None, method=method)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for t in times:
+            try:
+                py.advance(t, pulse)
+            except ValueError as exc:
+                # a documented limit of the model (the classical rule at a sliding pivot): the same refusal
+                with pytest.raises(ValueError) as ec:
+                    c.advance(t, pulse)
+                assert str(ec.value) == str(exc)
+                return py, c
+            c.advance(t, pulse)
+    if bool(py.integrator.overturned) != bool(c.integrator.overturned):
+        pytest.skip("an overturning boundary (round-off decides)")
+    # the same motion to the scheme's tolerance: an error of order tol per step, impacts amplify round-off
+    # (chatter); 1e-6 rad is 1e-5 of the rocking amplitudes of these scenes
+    op, oc = py.outputs(), c.outputs()
+    assert abs(oc["phi"] - op["phi"]) <= 1e-6, (op["phi"], oc["phi"])
+    return py, c
+
+
 if given is not None:
     @needs_engine
-    @settings(max_examples=25, deadline=None, derandomize=True,
+    @settings(max_examples=40, deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow])
     @given(b=st.floats(0.1, 0.5), h=st.floats(0.8, 2.0), e_N=st.floats(0.3, 1.0),
            mu=st.sampled_from([math.inf, 0.3, 0.8]), law=st.sampled_from([0, 1]),
-           phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0))
-    def test_hypothesis_scenes_within_tolerance(b, h, e_N, mu, law, phi0, A, f):
+           phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0),
+           method=st.sampled_from(["DOP853", "DOPRI5"]), tol=st.sampled_from([1e-6, 1e-8, 1e-10]))
+    def test_hypothesis_rigid_within_tolerance(b, h, e_N, mu, law, phi0, A, f, method, tol):
         block = RigidBlock(b=b, h=h, e_N=e_N, mu=mu, impact_law=law)
-        alpha = math.atan2(b, h)
-        phi0 = phi0 * alpha
-        pulse = SinePulse(A * G, 2.0 * math.pi * f)
-        tol = 1e-8
-        py, c = _pair(block, tolerance=tol, phi_0=phi0, max_steps=None)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for t in (0.5, 1.0, 2.0):
-                py.advance(t, pulse)
-                c.advance(t, pulse)
-        op, oc = py.outputs(), c.outputs()
-        if bool(py.integrator.overturned) != bool(c.integrator.overturned):
-            pytest.skip("an overturning boundary (round-off decides)")
-        assert abs(oc["phi"] - op["phi"]) <= 1e-5 * max(1.0, abs(op["phi"])) + 1e3 * tol * alpha
+        _hypothesis_scene(block, phi0 * math.atan2(b, h), A, f, method, tol)
+
+    @needs_engine
+    @settings(max_examples=12, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(EI=st.floats(4.5, 5.3), e_N=st.floats(0.3, 1.0), mu=st.sampled_from([math.inf, 0.3, 0.8]),
+           law=st.sampled_from([0, 1]), rule=st.sampled_from([0, 1]), phi0=st.floats(-0.1, 0.1),
+           A=st.floats(0.0, 0.5), f=st.floats(0.5, 3.0))
+    def test_hypothesis_flexible_within_tolerance(EI, e_N, mu, law, rule, phi0, A, f):
+        osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, mu=mu, impact_law=law, impact_rule=rule)
+        _hypothesis_scene(osc, phi0 * math.atan2(osc.b, osc.h), A, f, "DOP853", 1e-8, times=(0.5, 1.0))

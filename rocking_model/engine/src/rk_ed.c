@@ -29,8 +29,7 @@
 /** [1] event_driven.DEMAND_STEP_GATE: a step whose ends need less than this fraction of the largest demand so
  *  far is not searched */
 #define ED_DEMAND_STEP_GATE 0.5
-/** Brent's golden-section fraction (events._CGOLD) and iteration cap (brent_max's max_iter) */
-#define ED_CGOLD 0.3819660112501051
+/** brent_max's max_iter (the Python's default) */
 #define ED_BRENT_MAX_ITER 60
 /** [1] check_times: an impact time may exceed t by this relative round-off */
 #define ED_TIMES_RTOL 1e-12
@@ -92,22 +91,32 @@ static double ed_ratio(const rk_ed_state *s, const double *lam)
     return lam[0] > s->force_floor ? fabs(lam[1]) / lam[0] : NAN;
 }
 
-/** moreau_jean.inexact_message, the text of an "inexact_contact" report */
+/** report an "inexact_contact" (moreau_jean.inexact_message: part B's rk_inexact_message, shared with
+ *  Moreau-Jean) */
 static void ed_report_inexact(rk_engine *e, const rk_lcp_solution *sol, double t, const char *what)
 {
-    char set[64];
-    int i, n = 0, len;
-    len = snprintf(set, sizeof set, "(");
-    for (i = 0; i < e->model.ops->n_contacts; i++) {
-        if (RK_IN(sol->active, i)) {
-            len += snprintf(set + len, sizeof set - (size_t)len, n ? ", %d" : "%d", i);
-            n++;
-        }
-    }
-    snprintf(set + len, sizeof set - (size_t)len, n == 1 ? ",)" : ")");
-    rk_report_add(&e->reports, RK_REPORT_INEXACT_CONTACT, t, "the %s at t = %.17g s has no exact solution (least "
-                  "violation %.3g, closed contacts %s): kept the least-violating one; a corner may sink or lift "
-                  "against the contact law", what, t, sol->violation, set);
+    char msg[RK_MSG_LEN];
+    rk_inexact_message(sol, e->model.ops->n_contacts, t, what, msg, sizeof msg);
+    rk_report_add(&e->reports, RK_REPORT_INEXACT_CONTACT, t, "%s", msg);
+}
+
+/** The ValueError flexible_impact._inputs raises where the classical rule does not apply (the kernel returns
+ *  -1): a pivot that is not LEFT / RIGHT (a sliding mode), a non-finite rate, or a rate that does not close the
+ *  other corner (the Python's text, as rk_mj.c writes it). */
+static rk_status ed_classical_refusal(const rk_model *m, int mode, const double *v, rk_error *err)
+{
+    static const char *const NAMES[] = {"FULL", "LEFT", "RIGHT", "FLIGHT", "FULL_SLIDE_POS", "FULL_SLIDE_NEG",
+                                        "LEFT_SLIDE_POS", "LEFT_SLIDE_NEG", "RIGHT_SLIDE_POS", "RIGHT_SLIDE_NEG"};
+    double phi_dot = v[m->ops->phi_index];
+    if (mode != RK_MODE_LEFT && mode != RK_MODE_RIGHT)
+        return rk_fail(err, RK_ERR_VALUE, "pivot = <Mode.%s: %d> is not supported; allowed values: <Mode.LEFT: 1>, "
+                       "<Mode.RIGHT: 2>, 'left', 'right'", (mode >= 0 && mode < 10) ? NAMES[mode] : "?", mode);
+    if (!isfinite(phi_dot))
+        return rk_fail(err, RK_ERR_VALUE, "phi_dot_minus = %s is not finite; allowed range (-inf, inf)",
+                       isnan(phi_dot) ? "nan" : phi_dot > 0 ? "inf" : "-inf");
+    return rk_fail(err, RK_ERR_VALUE, "phi_dot_minus = %g does not close the gap of the other corner when rocking "
+                   "on the %s corner; allowed range %s", phi_dot, mode == RK_MODE_LEFT ? "left" : "right",
+                   mode == RK_MODE_LEFT ? "(-inf, 0)" : "(0, inf)");
 }
 
 /* ------------------------------------------------------------------------------------------ the mode's functions
@@ -195,6 +204,20 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
         return st;
     lam[0] = lam[1] = NAN;
     rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, &has);
+    return RK_OK;
+}
+
+/** G(t, y) and, when lam is not NULL, the totals at the same (t, y) in one kernel call */
+static rk_status ed_G_totals(ed_fn *f, double t, const double *y, double *g, double *lam)
+{
+    double a;
+    int has = 0;
+    rk_status st = ed_ag(f, t, &a);
+    if (st != RK_OK)
+        return st;
+    if (lam != NULL)
+        lam[0] = lam[1] = NAN;
+    rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, lam != NULL ? &has : NULL);
     return RK_OK;
 }
 
@@ -604,7 +627,10 @@ static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, do
     if (ed_popcount(closed_before) == 1 && ed_popcount(cand) == nc && nc == 2
         && m->ops->classical_impact_velocity != NULL) {
         /* an impact rule of the model (the classical rule) replaces the impact LCP at a rocking impact */
-        if (m->ops->classical_impact_velocity(m, q, v, s->mode, v_plus)) {
+        int rule = m->ops->classical_impact_velocity(m, q, v, s->mode, v_plus);
+        if (rule < 0)
+            return ed_classical_refusal(m, s->mode, v, err);
+        if (rule) {
             ED_TRY(ed_record_impact(e, t, v, v_plus, err));
             ed_count_painleve(e, q, v, v_plus, cand);
             return ed_enter(e, q, v_plus, ag_t, t, -1, err);
@@ -688,20 +714,6 @@ static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error 
 
 /* ------------------------------------------------------------------------------------------ demand peak */
 
-/** events.parabola_peak: 1 with (x, value) of the vertex when it is a maximum inside (0, 1) */
-static int ed_parabola_peak(double f0, double fm, double f1, double *x, double *value)
-{
-    double c = 2.0 * (f0 + f1) - 4.0 * fm, b;
-    if (c >= 0.0)
-        return 0;
-    b = f1 - f0 - c;
-    *x = -b / (2.0 * c);
-    if (!(0.0 < *x && *x < 1.0))
-        return 0;
-    *value = f0 + (b + c * *x) * *x;
-    return 1;
-}
-
 /** the demand ratio on the dense output of the last step (NAN: None) */
 static rk_status ed_demand_at(rk_engine *e, ed_fn *f, double t, double *d, rk_error *err)
 {
@@ -712,71 +724,13 @@ static rk_status ed_demand_at(rk_engine *e, ed_fn *f, double t, double *d, rk_er
     return RK_OK;
 }
 
-/** events.brent_max on the demand (None <-> NAN); writes the best value (NAN: None) */
-static rk_status ed_brent_max(rk_engine *e, ed_fn *f, double a, double b, double x, double fx, double xtol,
-                              double *best, rk_error *err)
+/** the demand as an rk_scalar_fn for rk_brent_max (the Python's ``demand(t)`` closure) */
+static rk_status ed_demand_fn(void *ctx, double t, double *value, int *has)
 {
-    double gx = !isnan(fx) ? -fx : INFINITY;
-    double w = x, v = x, gw = gx, gv = gx, d = 0.0, ee = 0.0;
-    int it;
-    for (it = 0; it < ED_BRENT_MAX_ITER; it++) {
-        double xm = 0.5 * (a + b), tol2 = 2.0 * xtol, u, fu, gu;
-        int golden = 1;
-        if (fabs(x - xm) <= tol2 - 0.5 * (b - a))
-            break;
-        if (fabs(ee) > xtol) {
-            double r = (x - w) * (gx - gv);
-            double q = (x - v) * (gx - gw);
-            double p = (x - v) * q - (x - w) * r, e_old;
-            q = 2.0 * (q - r);
-            if (q > 0.0)
-                p = -p;
-            q = fabs(q);
-            e_old = ee;
-            ee = d;
-            if (q != 0.0 && fabs(p) < fabs(0.5 * q * e_old) && q * (a - x) < p && p < q * (b - x)) {
-                d = p / q;
-                golden = 0;
-                if ((x + d) - a < tol2 || b - (x + d) < tol2)
-                    d = xm >= x ? xtol : -xtol;
-            }
-        }
-        if (golden) {
-            ee = x >= xm ? (a - x) : (b - x);
-            d = ED_CGOLD * ee;
-        }
-        u = fabs(d) >= xtol ? x + d : x + (d >= 0.0 ? xtol : -xtol);
-        ED_TRY(ed_demand_at(e, f, u, &fu, err));
-        gu = !isnan(fu) ? -fu : INFINITY;
-        if (gu <= gx) {
-            if (u >= x)
-                a = x;
-            else
-                b = x;
-            v = w;
-            gv = gw;
-            w = x;
-            gw = gx;
-            x = u;
-            gx = gu;
-        } else {
-            if (u < x)
-                a = u;
-            else
-                b = u;
-            if (gu <= gw || w == x) {
-                v = w;
-                gv = gw;
-                w = u;
-                gw = gu;
-            } else if (gu <= gv || v == x || v == w) {
-                v = u;
-                gv = gu;
-            }
-        }
-    }
-    *best = gx != INFINITY ? -gx : NAN;
-    return RK_OK;
+    ed_fn *f = (ed_fn *)ctx;
+    rk_status st = ed_demand_at(f->e, f, t, value, &f->err);
+    *has = st == RK_OK && !isnan(*value);
+    return st;
 }
 
 /** `_demand_peak`: raise friction_demand to the peak of the demand inside [t0, t1] (ends d0, d1 noted);
@@ -785,7 +739,8 @@ static rk_status ed_demand_peak(rk_engine *e, ed_fn *f, double t0, double d0, do
                                 rk_error *err)
 {
     rk_ed_state *s = ED(e);
-    double tm, y_mid[RK_MAX_Y], lam[2], dm, vx, vv, tv, dv, xtol, best;
+    double tm, y_mid[RK_MAX_Y], lam[2], dm, vx, vv, tv, dv, xtol, best, tb;
+    int has = 0;
     if (isnan(d0) || isnan(d1) || !(t1 > t0) || (d0 > d1 ? d0 : d1) < ED_DEMAND_STEP_GATE * s->friction_demand)
         return RK_OK;
     tm = 0.5 * (t0 + t1);
@@ -797,15 +752,17 @@ static rk_status ed_demand_peak(rk_engine *e, ed_fn *f, double t0, double d0, do
     dm = ed_ratio(s, lam);
     if (isnan(dm))
         return RK_OK;
-    if (!ed_parabola_peak(d0, dm, d1, &vx, &vv) || vv < (1.0 - ED_DEMAND_PEAK_MARGIN) * s->friction_demand)
+    if (!rk_parabola_peak(d0, dm, d1, &vx, &vv) || vv < (1.0 - ED_DEMAND_PEAK_MARGIN) * s->friction_demand)
         return RK_OK;
     tv = t0 + vx * (t1 - t0);
     xtol = sqrt(s->tolerance) * (t1 - t0);
     if (4.0 * ed_ulp(fmax(fabs(t1), 1.0)) > xtol)      /* max(a, b): b only when larger */
         xtol = 4.0 * ed_ulp(fmax(fabs(t1), 1.0));
     ED_TRY(ed_demand_at(e, f, tv, &dv, err));
-    ED_TRY(ed_brent_max(e, f, t0, t1, tv, dv, xtol, &best, err));
-    ed_note_ratio(e, best);
+    ED_TRYF(f, rk_brent_max(ed_demand_fn, f, t0, t1, tv, dv, !isnan(dv), xtol, ED_BRENT_MAX_ITER, &tb, &best,
+                            &has, err));
+    if (has)
+        ed_note_ratio(e, best);
     return RK_OK;
 }
 
@@ -1009,12 +966,11 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *
         }
         if ((double)s->n_steps > s->work_end)
             return ed_work_limit(e, err);
-        ED_TRYF(&f, ed_G(&f, s->stepper.t, s->stepper.y, g_new));
-        /* the demand at the step's end */
-        if (has_totals) {
-            ED_TRYF(&f, ed_totals(&f, s->stepper.t, s->stepper.y, lam));
+        /* G and the demand at the step's end, from one evaluation (the kernels share their work between the
+         * two, as the Python's closures do; part A pins the event functions with totals to those without) */
+        ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, g_new, has_totals ? lam : NULL));
+        if (has_totals)
             d_new = ed_ratio(s, lam);
-        }
         for (i = 0; i < ev.n; i++)
             ev.has_start[i] = 0;
         if (first) {
@@ -1313,44 +1269,3 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
     e->core.token++;
     return RK_OK;
 }
-
-/* ------------------------------------------------------------------------------------------ pending part B
- * Weak stand-ins for the contact.py functions of part B (rk_contact.c) that the driver calls, so that the
- * module links before part B lands: rk_impact and rk_next_mode say what is missing (RK_ERR_NOT_IMPLEMENTED);
- * the two set-valued ones are only reached after one of those has failed (the advance is then refused and
- * rolled back: no wrong result is ever seen). Part B's strong definitions replace them. */
-#if defined(__GNUC__)
-#define ED_PENDING __attribute__((weak))
-
-ED_PENDING rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, rk_set candidates,
-                               const rk_contact_args *a, rk_lcp_solution *out, rk_error *err)
-{
-    (void)m; (void)q; (void)v_minus; (void)candidates; (void)a; (void)out;
-    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.impact of the C engine is not implemented yet (issue 21, "
-                   "part B); use engine=\"python\"");
-}
-
-ED_PENDING rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double gap_tol,
-                                  double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
-                                  rk_error *err)
-{
-    (void)m; (void)q; (void)v; (void)ag; (void)gap_tol; (void)v_tol; (void)prefer; (void)mode; (void)sol;
-    (void)has_solution;
-    return rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "contact.next_mode of the C engine is not implemented yet (issue "
-                   "21, part B); use engine=\"python\"");
-}
-
-ED_PENDING rk_set rk_closed_candidates(const rk_model *m, const double *q, const double *v, double gap_tol,
-                                       double v_tol)
-{
-    (void)m; (void)q; (void)v; (void)gap_tol; (void)v_tol;
-    return 0;
-}
-
-ED_PENDING rk_set rk_painleve_sticks(const rk_model *m, const double *q, const double *v_minus,
-                                     const double *v_plus, rk_set candidates, double v_tol)
-{
-    (void)m; (void)q; (void)v_minus; (void)v_plus; (void)candidates; (void)v_tol;
-    return 0;
-}
-#endif
