@@ -400,8 +400,8 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     ground_motion: number, callable ag(t), (t, ag) arrays (linear interpolation) or GroundMotion.
     hold: "exact" integrates the ground motion as given; "zoh" holds ag(t_k) constant over each output
         interval, as a co-simulation master (fmpy) does with the FMU.
-    Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, max_steps, t0, phi_0,
-    ...); the work budget max_steps applies to each output interval.
+    Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, max_steps, t0, engine,
+    phi_0, ...); the work budget max_steps applies to each output interval.
     """
     gm = checked_motion(as_ground_motion(ground_motion))
     hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})

@@ -445,3 +445,22 @@ def test_engines_run_in_threads_without_the_gil_and_agree_with_a_sequential_run(
     for th in threads:
         th.join(60.0)
     assert out == sequential
+
+
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_the_fmu_path_first_order_hold_equals_a_linear_motion(scheme):
+    """Engine.advance(t_end, ag0, slope) is LinearMotion(ag0, slope, t_ref = t) (and linear=True with slope 0,
+    the FMU's zero-rate input); slope 0 without it is ConstantMotion."""
+    py = _scene("python", scheme, on_report="ignore")
+    c = _scene("c", scheme, on_report="ignore")
+    eng = c.integrator._engine
+    for k in range(1, 40):
+        t0, t1 = (k - 1) * 0.02, k * 0.02
+        a, rate = 3.0 * math.sin(5.0 * t0), 15.0 * math.cos(5.0 * t0)
+        if k % 3 == 0:
+            rate = 0.0
+        py.advance(t1, LinearMotion(a, rate, t0, t0, t1) if k % 5 else ConstantMotion(a))
+        eng.advance(t1, a, rate if k % 5 else 0.0, None, False, bool(k % 5))
+    _close_states(py.get_state(), c.get_state(), tol=1e-12)
+    assert py.integrator.n_steps == c.integrator.n_steps
