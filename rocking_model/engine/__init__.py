@@ -120,9 +120,18 @@ class CompiledIntegrator(Integrator):
         self._names = self._engine.output_names
         self._t_fail = None
         self.reports = []
-        self.impact_times = _Log(self)
-        if scheme == "event_driven":
-            self.impact_log = _Log(self, rows=True)
+
+    # the logs as views made on demand (no reference cycle: the engine and its log storage are freed as soon as
+    # the integrator is, not at the next cyclic garbage collection)
+    @property
+    def impact_times(self) -> "_Log":
+        return _Log(self)
+
+    @property
+    def impact_log(self) -> "_Log":
+        if self.name != "event_driven":
+            raise AttributeError("impact_log: the moreau_jean scheme keeps impact_times only")
+        return _Log(self, rows=True)
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
@@ -155,8 +164,6 @@ class CompiledIntegrator(Integrator):
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_engine"] = self._engine.snapshot()
-        state.pop("impact_times", None)
-        state.pop("impact_log", None)
         state.pop("_last_motion", None)   # may be a lambda's wrapper (not picklable); a new object restarts
         return state
 
@@ -167,9 +174,6 @@ class CompiledIntegrator(Integrator):
         self.__dict__.update(state)
         self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
         self._engine.restore(snap)
-        self.impact_times = _Log(self)
-        if self.name == "event_driven":
-            self.impact_log = _Log(self, rows=True)
 
     # ------------------------------------------------------------------ attributes
     @property
