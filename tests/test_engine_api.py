@@ -464,3 +464,23 @@ def test_the_fmu_path_first_order_hold_equals_a_linear_motion(scheme):
         eng.advance(t1, a, rate if k % 5 else 0.0, None, False, bool(k % 5))
     _close_states(py.get_state(), c.get_state(), tol=1e-12)
     assert py.integrator.n_steps == c.integrator.n_steps
+
+
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_an_engine_is_freed_with_its_simulator_without_the_cyclic_collector(scheme):
+    """No reference cycle holds an engine (and its impact-log ring) alive after its simulator is gone: memory
+    stays flat over many short runs (ensembles) without waiting for the cyclic garbage collector."""
+    import gc
+    import weakref
+
+    gc.disable()
+    try:
+        sim = _scene("c", scheme)
+        sim.advance(0.3, lambda t: 0.5)
+        len(sim.impact_times)
+        ref = weakref.ref(sim.integrator)
+        del sim
+        assert ref() is None
+    finally:
+        gc.enable()
