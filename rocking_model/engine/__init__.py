@@ -106,7 +106,12 @@ class CompiledIntegrator(Integrator):
     engine = "c"
 
     def __init__(self, model, scheme: str, mode, q, v, t0: float, options):
-        from .. import _engine
+        try:
+            from .. import _engine
+        except ImportError as exc:
+            raise ImportError("engine='c' needs the compiled extension rocking_model._engine, which is not built "
+                              f"({exc}); `pip install .` builds it (a C compiler is required), or use "
+                              "engine='python'") from exc
 
         ref_cls = SCHEMES[scheme]
         self.name, self.code, self.summary = ref_cls.name, ref_cls.code, ref_cls.summary
