@@ -102,6 +102,9 @@ class Simulator:
     `get_state` / `set_state` save and load the state as a flat dict of plain values.
     """
 
+    #: "python" or "c" (set by __init__; the class default reads simulators pickled before the engine switch)
+    engine = "python"
+
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,

@@ -418,3 +418,30 @@ def test_event_driven_checkpoint_snapshot_and_pickle():
     eng.advance(1.5, 0.5)
     c2.integrator._engine.advance(1.5, 0.5)
     assert eng.get_state() == s1 == c2.integrator._engine.get_state()
+
+
+@needs_mj
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_engines_run_in_threads_without_the_gil_and_agree_with_a_sequential_run(scheme):
+    """No global state: engines advanced concurrently (the GIL released inside C) give the sequential results."""
+    import threading
+
+    rec = SampledMotion(RECORD_T, RECORD_AG)
+    phis = [0.02 * k for k in range(1, 5)]
+
+    def run(phi):
+        sim = Simulator(RigidBlock(b=0.25, h=1.0, e_N=0.8), scheme, engine="c", phi_0=phi, on_report="ignore")
+        sim.advance(RECORD_T[-1], rec)
+        return sim.get_state()
+
+    sequential = [run(p) for p in phis]
+    out = [None] * len(phis)
+
+    def worker(i):
+        out[i] = run(phis[i])
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(len(phis))]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join(60.0)
+    assert out == sequential

@@ -56,6 +56,9 @@ static int read_doubles(PyObject *seq, const char *name, double *out, int cap, i
 /** NonFiniteError: the motion overflowed (RK_ERR_NONFINITE): a ValueError; the Python layer turns it into the
  *  Simulator's "the motion is not finite ..." message. Created at module init. */
 static PyObject *NonFiniteError = NULL;
+/** The package this module belongs to ("rocking_model", or the FMU's bundled copy "rocking_model_<digest>"):
+ *  its validation.WorkLimitError is the class the package's callers catch. Set at module init. */
+static PyObject *PackageName = NULL;
 
 /** Raise the Python exception of a C status (DESIGN.md "Error handling"). */
 static PyObject *raise_status(rk_status status, const char *message)
@@ -66,11 +69,17 @@ static PyObject *raise_status(rk_status status, const char *message)
     case RK_ERR_NONFINITE: type = NonFiniteError != NULL ? NonFiniteError : PyExc_ValueError; break;
     case RK_ERR_NOT_IMPLEMENTED: type = PyExc_NotImplementedError; break;
     case RK_ERR_MEMORY: type = PyExc_MemoryError; break;
-    case RK_ERR_WORK_LIMIT:
-        mod = PyImport_ImportModule("rocking_model.validation");
+    case RK_ERR_WORK_LIMIT: {
+        PyObject *name = PackageName != NULL ? PyUnicode_FromFormat("%U.validation", PackageName)
+                                             : PyUnicode_FromString("rocking_model.validation");
+        if (name == NULL)
+            return NULL;
+        mod = PyImport_Import(name);
+        Py_DECREF(name);
         if (mod != NULL)
             type = PyObject_GetAttrString(mod, "WorkLimitError");
         break;
+    }
     case RK_ERR_SOLVER:
         mod = PyImport_ImportModule("numpy.linalg");
         if (mod != NULL)
@@ -1446,6 +1455,22 @@ PyMODINIT_FUNC PyInit__engine(void)
         PyObject *type = PyType_FromSpec(&engine_spec);
         if (type == NULL || PyModule_AddObject(m, "Engine", type) < 0) {
             Py_XDECREF(type);
+            Py_DECREF(m);
+            return NULL;
+        }
+    }
+    {   /* the package of this module: "rocking_model" or the FMU's bundled copy */
+        PyObject *full = PyModule_GetNameObject(m);
+        if (full == NULL) {
+            Py_DECREF(m);
+            return NULL;
+        }
+        {
+            Py_ssize_t dot = PyUnicode_FindChar(full, '.', 0, PyUnicode_GetLength(full), -1);
+            PackageName = dot > 0 ? PyUnicode_Substring(full, 0, dot) : PyUnicode_FromString("rocking_model");
+        }
+        Py_DECREF(full);
+        if (PackageName == NULL) {
             Py_DECREF(m);
             return NULL;
         }
