@@ -476,3 +476,21 @@ if given is not None:
     def test_hypothesis_flexible_within_tolerance(EI, e_N, mu, law, rule, phi0, A, f):
         osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, mu=mu, impact_law=law, impact_rule=rule)
         _hypothesis_scene(osc, phi0 * math.atan2(osc.b, osc.h), A, f, "DOP853", 1e-8, times=(0.5, 1.0))
+
+
+# ---------------------------------------------------------------------------------------------- build
+def test_part_d_source_compiles_without_warnings(tmp_path):
+    """rk_ed.c compiles warning-free as strict C99 (the flags of setup.py plus -Wall -Wextra -pedantic -Werror
+    -Wshadow), so that warnings do not accumulate (needs no other part: it compiles against the headers)."""
+    import os
+    import shutil
+    import subprocess
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler on this machine")
+    src = os.path.join(os.path.dirname(__file__), "..", "rocking_model", "engine", "src", "rk_ed.c")
+    out = subprocess.run([cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra",
+                          "-pedantic", "-Wshadow", "-Werror", "-c", src, "-o", str(tmp_path / "rk_ed.o")],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
