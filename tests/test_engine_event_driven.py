@@ -494,3 +494,22 @@ def test_part_d_source_compiles_without_warnings(tmp_path):
                           "-pedantic", "-Wshadow", "-Werror", "-c", src, "-o", str(tmp_path / "rk_ed.o")],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
+
+
+@needs_engine
+def test_max_events_refusal():
+    """EventDriven.max_events (not a Simulator option: the Engine's and the integrator's own): more events in
+    one advance are refused with the Python's message, the engine left as it was."""
+    from rocking_model import _engine
+    from rocking_model.integrators.event_driven import EventDriven
+    blk = RigidBlock(b=0.2, h=1.0, e_N=0.9)
+    mode, q, v = blk.initial_state(phi_0=0.12)
+    py = EventDriven(blk, mode, q, v, 0.0, max_events=5)
+    with pytest.raises(WorkLimitError) as ep:
+        py.advance(4.0, ConstantMotion(0.0))
+    params = [float(getattr(blk, p.name)) for p in type(blk).parameters()]
+    eng = _engine.Engine("RigidBlock", params, [0.12, 0.0], scheme="event_driven", max_events=5)
+    with pytest.raises(WorkLimitError) as ec:
+        eng.advance(4.0, 0.0)
+    assert str(ec.value) == str(ep.value)
+    assert eng.t == 0.0 and eng.impacts == 0 and eng.n_steps == 0
