@@ -67,6 +67,10 @@ def _assert_same(py, c, where="", slack=1.0):
     assert ic.impacts == ip.impacts, (where, ip.impacts, ic.impacts)
     if slack == 1.0:
         assert ic.n_steps == ip.n_steps, (where, ip.n_steps, ic.n_steps)
+        # the last step size (the next segment's first step): its error estimate is a difference of nearly
+        # equal values, so round-off of the state moves it by some 1e-8 relative
+        hp, hc = py.get_state()["h"], c.get_state()["h"]
+        assert (math.isnan(hp) and math.isnan(hc)) or hc == pytest.approx(hp, rel=1e-5), (where, hp, hc)
     else:
         assert abs(ic.n_steps - ip.n_steps) <= 0.02 * ip.n_steps + 2, (where, ip.n_steps, ic.n_steps)
     assert ic.painleve == ip.painleve, where
