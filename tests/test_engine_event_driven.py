@@ -433,6 +433,29 @@ def test_painleve_while_sliding(mu):
     assert pair[0].integrator.painleve == (1 if mu > 1.357 else 0)
 
 
+@needs_engine
+def test_painleve_mu_inf_before_overturning():
+    """mu = inf: the benchmark's pulse_above block (b = 0.2, h = 1, e_N = 0) near overturning, phi = -1.43 rad,
+    loaded from a state of the Python (the zoh run at t = 3.18 s). The pivot's uplift has no sticking solution:
+    it slides in the mu -> inf limit (mode 8), its slip stops where the uplift LCP has no solution at all
+    (Painleve: the impulse of `_decide`, counted), then flight. The same up to there (after it a grazing
+    landing 5.6 us later is a decision boundary, which round-off of the sliding mode's solve decides)."""
+    state = {"version": 2, "scheme": "event_driven", "model": "RigidBlock", "n_dof": 3, "t": 3.18, "mode": 2,
+             "y": [-1.4349048334848935, -3.1166646301332213], "impacts": 1, "overturned": False, "n_steps": 319,
+             "h": 0.05128871090087639, "impact_times": [0.4571041315736521],
+             "impact_log": [0.4571041315736521, 0.521408896152859, -0.1042817792305718, -0.521408896152859,
+                            0.4913276136825018, 0.09826552273650035, -0.4913276136825018],
+             "shift": 0.0, "friction_demand": 661.8547679410653, "painleve": 0}
+    pair = _pair(RigidBlock(b=0.2, h=1.0, e_N=0.0))
+    for sim in pair:
+        sim.set_state(dict(state))
+    for t in (3.18155,):                     # 3.4 us after the slip stops, 2.2 us before the landing
+        for sim in pair:
+            sim.advance(t, 0.0)
+        _assert_same(*pair, f"t = {t}")
+    assert pair[0].integrator.painleve == 1 and int(pair[0].integrator.mode) == 3
+
+
 # ---------------------------------------------------------------------------------------------- hypothesis
 try:
     from hypothesis import HealthCheck, given, settings
