@@ -67,6 +67,10 @@ def _assert_same(py, c, where="", slack=1.0):
     assert ic.impacts == ip.impacts, (where, ip.impacts, ic.impacts)
     if slack == 1.0:
         assert ic.n_steps == ip.n_steps, (where, ip.n_steps, ic.n_steps)
+        # the last step size (the next segment's first step): its error estimate is a difference of nearly
+        # equal values, so round-off of the state moves it by some 1e-8 relative
+        hp, hc = py.get_state()["h"], c.get_state()["h"]
+        assert (math.isnan(hp) and math.isnan(hc)) or hc == pytest.approx(hp, rel=1e-5), (where, hp, hc)
     else:
         assert abs(ic.n_steps - ip.n_steps) <= 0.02 * ip.n_steps + 2, (where, ip.n_steps, ic.n_steps)
     assert ic.painleve == ip.painleve, where
@@ -256,6 +260,49 @@ def test_flexible_pulse_simulate(EI):
 
 
 @needs_engine
+def test_flexible_grazing_landing(monkeypatch):
+    """A flexible scene with a grazing landing (a corner found below the ground beyond round-off, put back by
+    project_to_ground and closed plastically: `_impact`'s grazing branch, counted on the Python side): the
+    same impacts, steps and modes, phi within 1e-12 (measured 5e-14)."""
+    from rocking_model.integrators import event_driven as ed
+    calls = []
+    original = ed.project_to_ground
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+    monkeypatch.setattr(ed, "project_to_ground", counted)
+    osc = FlexibleOscillator(EI=63347.36993106864, e_N=0.5048513194142725, impact_law=1, impact_rule=0)
+    pulse = SinePulse(0.1703421602175968 * G, 2.0 * math.pi * 1.0952058652672085)
+    py, c = _run_steps(osc, [0.5, 1.0, 1.5, 2.0], pulse, slack=100.0, phi_0=-0.012634136845703187,
+                       max_steps=None)
+    assert calls and py.integrator.impacts >= 20
+    assert py.integrator.n_steps == c.integrator.n_steps
+
+
+@needs_engine
+def test_sample_rows_at_rest_and_after_overturning():
+    """`sample` rows where nothing moves (full contact under a constant input: the stateless path) and a
+    second `sample` call after overturning (the frozen state)."""
+    py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=None)
+    times = [0.1, 0.2, 0.2, 0.35, 0.5]
+    for a in (0.5, 1.0):
+        mp, vp, ip, op = py.sample([t + (a - 0.5) for t in times], a)
+        mc, vc, ic, oc = c.sample([t + (a - 0.5) for t in times], a)
+        assert list(mc) == list(mp) and list(ic) == list(ip)
+        for name in vp:
+            assert np.array_equal(np.asarray(vc[name]), np.asarray(vp[name])), name
+    pulse = SinePulse(0.45 * G, 2.0 * math.pi * 2.0, 1.0)
+    for sim in (py, c):
+        sim.advance(5.0, pulse)
+    assert py.integrator.overturned
+    mp, vp, ip, op = py.sample([5.5, 6.0], pulse)
+    mc, vc, ic, oc = c.sample([5.5, 6.0], pulse)
+    assert list(mc) == list(mp) == [10, 10, 10] and list(oc) == list(op)
+    assert np.max(np.abs(np.asarray(vc["phi"]) - np.asarray(vp["phi"]))) <= PHI_TOL
+
+
+@needs_engine
 def test_flexible_until_first_impact_bit_identical():
     """Before its first impact (no contact solve yet) the flexible oscillator's rocking is bit-identical."""
     osc = FlexibleOscillator(EI=9.45e4)
@@ -323,8 +370,7 @@ def test_work_limit_refused_state_kept():
     with pytest.raises(WorkLimitError) as ec:
         c.advance(3.0, pulse)
     assert c.get_state() == before
-    # the same message up to its end (the C message buffer holds 511 characters)
-    assert str(ep.value)[:400] == str(ec.value)[:400]
+    assert str(ec.value) == str(ep.value)
     _assert_same(py, c, "after refusal")
     for t in (0.6, 0.7, 0.8):                 # and both go on identically (the C restored its live stepper)
         py.advance(t, pulse)
@@ -333,10 +379,29 @@ def test_work_limit_refused_state_kept():
 
 
 @needs_engine
+def test_work_limit_message_flexible():
+    """The flexible oscillator's refusal names its omega (work_note): the Python's text, cut at the C's message
+    buffer (RK_MSG_LEN = 512 bytes: 511 characters of the Python's 530)."""
+    pair = _pair(FlexibleOscillator(), max_steps=5, phi_0=0.1)
+    msgs = []
+    for sim in pair:
+        with pytest.raises(WorkLimitError) as exc:
+            sim.advance(3.0, 0.0)
+        msgs.append(str(exc.value))
+    assert "omega" in msgs[0] and msgs[0].startswith(msgs[1]) and len(msgs[1]) >= min(len(msgs[0]), 511)
+
+
+@needs_engine
 def test_reports_match():
-    """A loose tolerance with a tiny dt_max: no failed steps; the same (empty or not) reports."""
-    py, c = _run_steps(RigidBlock(b=0.2, h=1.0, mu=0.2), [0.5, 1.0], SinePulse(0.6 * G, 6.0))
-    assert _reports(py) == _reports(c)
+    """Failed steps reported alike: at t0 = 1e14 s the smallest step (10 ulp of t) is 0.156 s, so DOP853 at
+    tolerance 1e-12 accepts steps with their error above the tolerance: the same reports (kind, time, text) in
+    the same order, and the same motion (a report is not an error)."""
+    py, c = _run_steps(RigidBlock(b=0.2, h=1.0), [1e14 + 1.0, 1e14 + 2.0], 0.0, t0=1e14, phi_0=0.1,
+                       tolerance=1e-12)
+    rp = [(r.kind, r.t, r.message) for r in py.last_reports]
+    rc = [(r.kind, r.t, r.message) for r in c.last_reports]
+    assert len(rp) > 3 and rp == rc
+    assert all(kind == "failed_step" for kind, _, _ in rp)
 
 
 #: Painleve's configuration of test_zeno_painleve.py: b = 0.2, h = 1, phi = -0.59 (critical mu 1.357)
@@ -378,6 +443,29 @@ def test_painleve_while_sliding(mu):
             sim.advance(t, 0.0)
         _assert_same(*pair, f"t = {t}")
     assert pair[0].integrator.painleve == (1 if mu > 1.357 else 0)
+
+
+@needs_engine
+def test_painleve_mu_inf_before_overturning():
+    """mu = inf: the benchmark's pulse_above block (b = 0.2, h = 1, e_N = 0) near overturning, phi = -1.43 rad,
+    loaded from a state of the Python (the zoh run at t = 3.18 s). The pivot's uplift has no sticking solution:
+    it slides in the mu -> inf limit (mode 8), its slip stops where the uplift LCP has no solution at all
+    (Painleve: the impulse of `_decide`, counted), then flight. The same up to there (after it a grazing
+    landing 5.6 us later is a decision boundary, which round-off of the sliding mode's solve decides)."""
+    state = {"version": 2, "scheme": "event_driven", "model": "RigidBlock", "n_dof": 3, "t": 3.18, "mode": 2,
+             "y": [-1.4349048334848935, -3.1166646301332213], "impacts": 1, "overturned": False, "n_steps": 319,
+             "h": 0.05128871090087639, "impact_times": [0.4571041315736521],
+             "impact_log": [0.4571041315736521, 0.521408896152859, -0.1042817792305718, -0.521408896152859,
+                            0.4913276136825018, 0.09826552273650035, -0.4913276136825018],
+             "shift": 0.0, "friction_demand": 661.8547679410653, "painleve": 0}
+    pair = _pair(RigidBlock(b=0.2, h=1.0, e_N=0.0))
+    for sim in pair:
+        sim.set_state(dict(state))
+    for t in (3.18155,):                     # 3.4 us after the slip stops, 2.2 us before the landing
+        for sim in pair:
+            sim.advance(t, 0.0)
+        _assert_same(*pair, f"t = {t}")
+    assert pair[0].integrator.painleve == 1 and int(pair[0].integrator.mode) == 3
 
 
 # ---------------------------------------------------------------------------------------------- hypothesis
@@ -433,3 +521,40 @@ if given is not None:
     def test_hypothesis_flexible_within_tolerance(EI, e_N, mu, law, rule, phi0, A, f):
         osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, mu=mu, impact_law=law, impact_rule=rule)
         _hypothesis_scene(osc, phi0 * math.atan2(osc.b, osc.h), A, f, "DOP853", 1e-8, times=(0.5, 1.0))
+
+
+# ---------------------------------------------------------------------------------------------- build
+def test_part_d_source_compiles_without_warnings(tmp_path):
+    """rk_ed.c compiles warning-free as strict C99 (the flags of setup.py plus -Wall -Wextra -pedantic -Werror
+    -Wshadow), so that warnings do not accumulate (needs no other part: it compiles against the headers)."""
+    import os
+    import shutil
+    import subprocess
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler on this machine")
+    src = os.path.join(os.path.dirname(__file__), "..", "rocking_model", "engine", "src", "rk_ed.c")
+    out = subprocess.run([cc, "-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra",
+                          "-pedantic", "-Wshadow", "-Werror", "-c", src, "-o", str(tmp_path / "rk_ed.o")],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+
+
+@needs_engine
+def test_max_events_refusal():
+    """EventDriven.max_events (not a Simulator option: the Engine's and the integrator's own): more events in
+    one advance are refused with the Python's message, the engine left as it was."""
+    from rocking_model import _engine
+    from rocking_model.integrators.event_driven import EventDriven
+    blk = RigidBlock(b=0.2, h=1.0, e_N=0.9)
+    mode, q, v = blk.initial_state(phi_0=0.12)
+    py = EventDriven(blk, mode, q, v, 0.0, max_events=5)
+    with pytest.raises(WorkLimitError) as ep:
+        py.advance(4.0, ConstantMotion(0.0))
+    params = [float(getattr(blk, p.name)) for p in type(blk).parameters()]
+    eng = _engine.Engine("RigidBlock", params, [0.12, 0.0], scheme="event_driven", max_events=5)
+    with pytest.raises(WorkLimitError) as ec:
+        eng.advance(4.0, 0.0)
+    assert str(ec.value) == str(ep.value)
+    assert eng.t == 0.0 and eng.impacts == 0 and eng.n_steps == 0

@@ -33,6 +33,8 @@
 #define ED_BRENT_MAX_ITER 60
 /** [1] check_times: an impact time may exceed t by this relative round-off */
 #define ED_TIMES_RTOL 1e-12
+/** the top bit of a motion key: set for a key taken from rk_motion.identity (never equal to a serial) */
+#define ED_KEY_IDENTITY (1ull << 63)
 /** math.pi */
 #define ED_PI 3.141592653589793
 
@@ -857,7 +859,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
     rk_stepper *st = &s->stepper;
     int same_rhs = s->rhs_mode == f->mode
                    && (f->constant ? (s->rhs_constant && s->rhs_value == f->a0)
-                                   : (!s->rhs_constant && s->rhs_motion == s->motion_serial));
+                                   : (!s->rhs_constant && s->rhs_motion == s->motion_key));
     if (s->live && st->t == s->t && st->max_step == max_step) {
         st->fun = ed_rhs;
         st->ctx = f;
@@ -872,7 +874,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
     s->rhs_mode = f->mode;
     s->rhs_constant = f->constant;
     s->rhs_value = f->a0;
-    s->rhs_motion = s->motion_serial;
+    s->rhs_motion = s->motion_key;
     return RK_OK;
 }
 
@@ -1096,8 +1098,14 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *sam
         out.row = 0;
         o = &out;
     }
-    if (!ag->constant)
-        s->motion_serial++;             /* a new GroundMotion object: its closures are new */
+    if (!ag->constant) {
+        /* the Python's closures of a non-constant input are keyed by id(ag): the same object carries the live
+         * stepper on (FSAL, h_abs), a new one restarts it (bit-identically) */
+        if (ag->identity != 0)
+            s->motion_key = ag->identity | ED_KEY_IDENTITY;
+        else
+            s->motion_key = ++s->motion_serial & ~ED_KEY_IDENTITY;
+    }
     s->max_work = max_steps < 0 ? -1 : max_steps;
     s->work_end = max_steps < 0 ? INFINITY : (double)s->n_steps + (double)max_steps;
     s->span0 = s->t;

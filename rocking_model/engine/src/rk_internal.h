@@ -66,6 +66,9 @@ typedef struct rk_ed_state {
     unsigned long long rhs_motion;      /**< non-constant: the serial of the motion (motion_serial at its call) */
     unsigned long long motion_serial;   /**< incremented by every advance / sample call with a non-constant
                                              motion (a new GroundMotion object in the Python) */
+    unsigned long long motion_key;      /**< (part D) the key of the current call's non-constant motion: its
+                                             rk_motion.identity (the same GroundMotion object: the Python's
+                                             id(ag)) with the top bit set, or a new motion_serial when 0 */
     /* settings (from the options and the model; constant after create) */
     double tolerance, dt_max;
     const rk_tableau *tab;
