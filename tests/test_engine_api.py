@@ -179,14 +179,17 @@ def test_the_raw_engine_checks_its_inputs_too():
 
 # ---------------------------------------------------------------------------------------------- work limit
 @needs_mj
-def test_work_refusal_before_any_work_with_the_python_message():
+@pytest.mark.parametrize("model, t0, span", [(RigidBlock(), 0.0, 1.0),
+                                             (FlexibleOscillator(EI=9.45e7), 123456.789, 1e6)],
+                         ids=["rigid", "flexible_stiff"])
+def test_work_refusal_before_any_work_with_the_python_message(model, t0, span):
     msgs = []
     for engine in ("python", "c"):
-        sim = Simulator(RigidBlock(), "moreau_jean", engine=engine, phi_0=0.1, max_steps=50)
-        sim.advance(0.02, 0.0)
+        sim = Simulator(model, "moreau_jean", engine=engine, phi_0=0.1, max_steps=50, t0=t0)
+        sim.advance(t0 + 0.02, 0.0)
         before = sim.get_state()
         with pytest.raises(WorkLimitError) as info:
-            sim.advance(1.0, 0.0)
+            sim.advance(t0 + span, 0.0)
         assert sim.get_state() == before
         msgs.append(str(info.value))
     assert msgs[0] == msgs[1]
