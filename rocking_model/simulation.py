@@ -230,10 +230,19 @@ class Simulator:
         the current state. The same guarantees as `advance` (the work budget applies between consecutive
         times); the event-driven scheme reads its dense output, so the times do not shorten its steps."""
         integ = self.integrator
-        times = [check_real("times", t, lo=integ.t) for t in times]
-        if not times:
+        if self.engine == "c" and isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1:
+            # the compiled engine reads the array as is: checked at once (the first bad value named as below)
+            arr = times
+            bad = ~(np.isfinite(arr) & (arr >= integ.t))
+            if bad.any():
+                check_real("times", arr[int(np.argmax(bad))], lo=integ.t)
+            times = arr
+        else:
+            times = [check_real("times", t, lo=integ.t) for t in times]
+        if not len(times):
             raise ValueError("times must hold at least one time after the current one")
-        if any(b < a for a, b in zip(times, times[1:])):
+        if (bool(np.any(times[1:] < times[:-1])) if isinstance(times, np.ndarray)
+                else any(b < a for a, b in zip(times, times[1:]))):
             raise ValueError("times must be increasing")
         gm = self._ground_motion(ag)
         return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))

@@ -487,3 +487,15 @@ def test_an_engine_is_freed_with_its_simulator_without_the_cyclic_collector(sche
         assert ref() is None
     finally:
         gc.enable()
+
+
+@needs_mj
+def test_sample_times_checked_at_once_with_the_python_messages():
+    for bad in ([0.1, float("nan")], [0.2, 0.1], [-1.0], [0.1, float("inf")], []):
+        msgs = []
+        for engine in ("python", "c"):
+            sim = Simulator(RigidBlock(), engine=engine)
+            with pytest.raises(ValueError) as info:
+                sim.sample(np.array(bad, dtype=float), 0.0)
+            msgs.append(str(info.value))
+        assert msgs[0] == msgs[1]
