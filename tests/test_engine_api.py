@@ -209,14 +209,15 @@ def _run(sim, t0, t1, dt=0.05, ag=lambda t: 0.0):
 
 
 @needs_mj
+@pytest.mark.parametrize("model", [None, FlexibleOscillator(e_N=0.5)], ids=["rigid", "flexible"])
 @pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
-def test_state_moves_between_the_engines_both_ways(scheme):
+def test_state_moves_between_the_engines_both_ways(scheme, model):
     ag = lambda t: 2.0 * math.sin(7.0 * t)  # noqa: E731
-    py, c = _scene("python", scheme), _scene("c", scheme)
+    py, c = _scene("python", scheme, model=model), _scene("c", scheme, model=model)
     _run(py, 0.0, 0.6, ag=ag)
     _run(c, 0.0, 0.6, ag=ag)
     # C -> Python and Python -> C: each continues exactly as the engine it came from
-    py2, c2 = _scene("python", scheme), _scene("c", scheme)
+    py2, c2 = _scene("python", scheme, model=model), _scene("c", scheme, model=model)
     py2.set_state(c.get_state())
     c2.set_state(py.get_state())
     for sim in (py, c, py2, c2):
