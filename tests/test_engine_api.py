@@ -500,3 +500,27 @@ def test_sample_times_checked_at_once_with_the_python_messages():
                 sim.sample(np.array(bad, dtype=float), 0.0)
             msgs.append(str(info.value))
         assert msgs[0] == msgs[1]
+
+
+def test_part_e_sources_compile_without_warnings(tmp_path):
+    """rk_engine.c, rk_mj.c, rk_motion.c compile warning-free as strict C99 (setup.py's flags plus -Wall
+    -Wextra -pedantic -Werror), and the extension's _engine.c with -Wall -Wextra -Werror (the Python headers
+    are not pedantic C99)."""
+    import os
+    import shutil
+    import subprocess
+    import sysconfig
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler on this machine")
+    here = os.path.join(os.path.dirname(__file__), "..", "rocking_model", "engine")
+    flags = ["-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-Wall", "-Wextra", "-Werror"]
+    for name in ("rk_engine.c", "rk_mj.c", "rk_motion.c"):
+        out = subprocess.run([cc, *flags, "-pedantic", "-c", os.path.join(here, "src", name), "-o",
+                              str(tmp_path / "x.o")], capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+    out = subprocess.run([cc, *flags, "-I", sysconfig.get_paths()["include"], "-I", here, "-c",
+                          os.path.join(here, "_engine.c"), "-o", str(tmp_path / "y.o")],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
