@@ -132,9 +132,12 @@ static int is_mj(const rk_engine *e)
     return e->options.scheme == RK_SCHEME_MOREAU_JEAN;
 }
 
-/** A new token: the state changed (or may have). */
+/** A new token: the state changed (or may have). Past every value the token ever had (the schemes also
+ *  increment it during a call), so that the output cache never meets an old token for a new state. */
 static void touch(rk_engine *e)
 {
+    if (e->core.token > e->token_serial)
+        e->token_serial = e->core.token;
     e->core.token = ++e->token_serial;
 }
 
