@@ -358,6 +358,30 @@ def test_state_moves_between_engines():
 
 
 @needs_engine
+@pytest.mark.parametrize("change", [
+    dict(shift=0.5, mode=3, y=[0.0, 1.0, 0.0, 0.0, 0.0, 0.0]), dict(y=[1.6, 0.0]),
+    dict(overturned=True, y=[1.0, 0.5]), dict(mode=3, y=[0.0, -2.0, 0.0, 0.0, 0.0, 0.0]), dict(h=-1.0),
+    dict(impact_times=[0.5], impacts=1, t=0.1), dict(impact_times=[0.5, 0.1], impacts=2, t=1.0),
+    dict(friction_demand=-1.0), dict(y=[1e300, 1e300]), dict(impact_log=[0.1, 0, 0, 0, 0, 0, 0], impacts=0)],
+    ids=["shift-in-flight", "phi-beyond", "overturned-moving", "sunk", "h", "time-after-t", "out-of-order",
+         "demand", "huge", "log-count"])
+def test_bad_state_same_message(change):
+    """set_state refuses a bad state field with the Python's message (rk_ed_set_state's checks, part E's
+    check_configuration) and leaves the state as it was."""
+    block = RigidBlock(b=0.2, h=1.0)
+    msgs = []
+    for sim in _pair(block, phi_0=0.1):
+        state = sim.get_state()
+        before = dict(state)
+        state.update(change)
+        with pytest.raises(ValueError) as exc:
+            sim.set_state(state)
+        msgs.append(str(exc.value))
+        assert sim.get_state() == before
+    assert msgs[0] == msgs[1]
+
+
+@needs_engine
 def test_work_limit_refused_state_kept():
     pulse = SinePulse(0.40 * G, 2.0 * math.pi * 2.0)
     py, c = _pair(RigidBlock(b=0.2, h=1.0), max_steps=70)

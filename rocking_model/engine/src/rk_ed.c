@@ -35,8 +35,6 @@
 #define ED_TIMES_RTOL 1e-12
 /** the top bit of a motion key: set for a key taken from rk_motion.identity (never equal to a serial) */
 #define ED_KEY_IDENTITY (1ull << 63)
-/** math.pi */
-#define ED_PI 3.141592653589793
 
 #define ED(e) (&(e)->core.s.ed)
 
@@ -1181,10 +1179,9 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
-    int n = m->ops->n_dof, nc = m->ops->n_contacts, k, i, idx[RK_MAX_DOF], row_len = 1 + 2 * m->ops->n_dof;
-    double q[RK_MAX_DOF], v[RK_MAX_DOF], g[RK_MAX_CONTACTS], out[RK_MAX_OUTPUTS], phi, gmin;
+    int k, i, idx[RK_MAX_DOF], row_len = 1 + 2 * m->ops->n_dof;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
     long long r;
-    char bad[256];
     if (!isfinite(st->t))
         return rk_fail(err, RK_ERR_VALUE, "state field 't' = %.17g is not finite; allowed range [-inf, inf]", st->t);
     if (st->mode < 0 || st->mode >= m->ops->n_modes)
@@ -1226,35 +1223,8 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
                        "[0, inf]", st->friction_demand);
     if (st->painleve < 0)
         return rk_fail(err, RK_ERR_VALUE, "state field 'painleve' = %lld is out of range", st->painleve);
-    /* check_configuration(model, state, "y", q, v, overturned, gap_tol=length_scale) */
-    phi = q[m->ops->phi_index];
-    if (!st->overturned && !(fabs(phi) < 0.5 * ED_PI))
-        return rk_fail(err, RK_ERR_VALUE, "state field 'y': |phi| = %g rad reaches pi/2 but 'overturned' is False; "
-                       "allowed range (-pi/2, pi/2)", fabs(phi));
-    if (st->overturned)
-        for (i = 0; i < n; i++)
-            if (v[i] != 0.0)
-                return rk_fail(err, RK_ERR_VALUE, "state field 'y': the velocities must be 0 once 'overturned' is "
-                               "True (the pose reached at overturning is kept at rest); got a moving state");
-    m->ops->gaps(m, q, g);
-    gmin = g[0];
-    for (i = 1; i < nc; i++)
-        if (g[i] < gmin)
-            gmin = g[i];
-    if (!st->overturned && gmin < -m->length_scale)
-        return rk_fail(err, RK_ERR_VALUE, "state field 'y': a base corner is %g m below the ground; allowed at most "
-                       "%g m", -gmin, m->length_scale);
-    m->ops->outputs(m, q, v, out);
-    bad[0] = '\0';
-    for (i = 0; i < m->ops->n_outputs; i++) {
-        if (!isfinite(out[i])) {
-            size_t len = strlen(bad);
-            snprintf(bad + len, sizeof bad - len, "%s%s", len ? ", " : "", m->ops->output_decls[i].name);
-        }
-    }
-    if (bad[0])
-        return rk_fail(err, RK_ERR_VALUE, "state field 'y' gives non-finite outputs (%s); the values are too large "
-                       "for the model", bad);
+    /* check_configuration(model, state, "y", q, v, overturned, gap_tol=length_scale): part E's shared check */
+    ED_TRY(rk_check_configuration(m, "y", q, v, st->overturned, m->length_scale, err));
     /* all checked: assign */
     s->t = st->t;
     s->impacts = st->impacts;
