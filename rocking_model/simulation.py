@@ -429,6 +429,8 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values["contact"] = modes
         values["impacts"] = impacts
         values["overturned"] = overturned
+    elif sim.engine == "c" and sim.on_report != "raise":
+        values = _zoh_c(sim, gm, times, n)
     else:
         records = [sim.outputs()]
         for k in range(n):
@@ -437,6 +439,22 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
                   n_steps=sim.integrator.n_steps)
+
+
+def _zoh_c(sim: Simulator, gm, times, n: int) -> dict:
+    """simulate's zero-order-hold loop on the compiled engine: the same advances (Simulator.advance under the
+    number ag(t_k), one call into C each) and the same outputs, read as one row of floats per step."""
+    eng = sim.integrator._engine
+    tl = times.tolist()
+    rows = [eng.output_row()]
+    for k in range(n):
+        sim.advance(tl[k + 1], gm(tl[k]))
+        rows.append(eng.output_row())
+    arr = np.array(rows)
+    names = list(eng.output_names) + ["contact", "impacts", "overturned", "friction_demand", "painleve"]
+    types = {"contact": np.int64, "impacts": np.int64, "overturned": bool, "painleve": np.int64}
+    return {name: arr[:, j].astype(types[name]) if name in types else arr[:, j].copy()
+            for j, name in enumerate(names)}
 
 
 def report_summary(reports) -> str:

@@ -353,10 +353,13 @@ def test_nan_and_huge_inputs_never_crash():
 
 
 @needs_mj
-def test_simulate_runs_on_the_c_engine_with_the_same_layout():
+@pytest.mark.parametrize("hold", ["exact", "zoh"])
+@pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
+def test_simulate_runs_on_the_c_engine_with_the_same_layout(scheme, hold):
     gm = SinePulse(3.0, 6.0, 0.1)
-    a = simulate(RigidBlock(), gm, 1.0, scheme="moreau_jean", phi_0=0.05)
-    b = simulate(RigidBlock(), gm, 1.0, scheme="moreau_jean", phi_0=0.05, engine="c")
+    a = simulate(RigidBlock(), gm, 1.0, scheme=scheme, phi_0=0.05, hold=hold)
+    b = simulate(RigidBlock(), gm, 1.0, scheme=scheme, phi_0=0.05, engine="c", hold=hold)
+    assert list(a.values) == list(b.values)
     assert a.values.keys() == b.values.keys()
     for k in a.values:
         assert a.values[k].dtype == b.values[k].dtype, k

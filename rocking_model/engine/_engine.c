@@ -817,6 +817,25 @@ static PyObject *engine_output_dict(EngineObject *self, PyObject *unused)
     return d;
 }
 
+/** output_row(): the values of output_dict() as a tuple of floats in the same order (contact, impacts,
+ *  overturned and painleve as exact floats): one row of simulate's zero-order-hold loop. */
+static PyObject *engine_output_row(EngineObject *self, PyObject *unused)
+{
+    double out[RK_MAX_OUTPUTS + 5];
+    int n;
+    (void)unused;
+    if (!ready(self))
+        return NULL;
+    n = rk_engine_n_outputs(self->e);
+    rk_engine_outputs(self->e, out);
+    out[n] = (double)rk_engine_contact_code(self->e);
+    out[n + 1] = (double)rk_engine_impacts(self->e);
+    out[n + 2] = (double)rk_engine_overturned(self->e);
+    out[n + 3] = rk_engine_friction_demand(self->e);
+    out[n + 4] = (double)rk_engine_painleve(self->e);
+    return doubles_tuple(out, n + 5);
+}
+
 static PyObject *engine_contacts(EngineObject *self, PyObject *unused)
 {
     int states[RK_MAX_CONTACTS], n, i;
@@ -1236,6 +1255,8 @@ static PyMethodDef engine_methods[] = {
     {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
      "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "
      "painleve."},
+    {"output_row", (PyCFunction)engine_output_row, METH_NOARGS,
+     "output_row() -> the values of output_dict() as a tuple of floats, in the same order."},
     {"contacts", (PyCFunction)engine_contacts, METH_NOARGS, "contacts() -> tuple of ContactState codes."},
     {"full_state", (PyCFunction)engine_full_state, METH_NOARGS, "full_state() -> (q, v) lists."},
     {"get_state", (PyCFunction)engine_get_state, METH_NOARGS, "get_state() -> dict of the scheme's STATE_KEYS."},
