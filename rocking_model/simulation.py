@@ -53,8 +53,9 @@ SOLVER_PARAMETERS = (
 DT_MIN_REL = 1e-6
 
 
-#: the types of a number that `Simulator.advance` passes to the compiled engine as is
-_NUMBERS = (float, int)
+#: the types of a number that `Simulator.advance` passes to the compiled engine as is (a non-finite numpy float
+#: takes the checked path: its message names it as the Python does, np.float64(nan))
+_NUMBERS = (float, int, np.float64)
 
 #: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
 #: event-driven, the base's offset; states of version 1 are refused by their version)
@@ -188,7 +189,9 @@ class Simulator:
         Raises ValueError (bad t_end or ag, or a motion that overflows: the message names the likely
         cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
         exactly as before the call."""
-        if self.engine == "c" and type(ag) in _NUMBERS and type(t_end) in _NUMBERS and self.on_report != "raise":
+        if self.engine == "c" and type(ag) in _NUMBERS and type(t_end) in _NUMBERS and self.on_report != "raise" \
+                and (type(ag) is not np.float64 or math.isfinite(ag)) \
+                and (type(t_end) is not np.float64 or math.isfinite(t_end)):
             # the lean path: one call into C (checks, checkpoint, outputs check in C)
             eng = self.integrator._engine
             try:

@@ -527,3 +527,21 @@ def test_part_e_sources_compile_without_warnings(tmp_path):
                           os.path.join(here, "_engine.c"), "-o", str(tmp_path / "y.o")],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
+
+
+@needs_mj
+@pytest.mark.parametrize("t_end, ag", [
+    (np.float64(0.1), np.float64(np.nan)), (np.float64(np.nan), 0.0), (np.float64(-1.0), np.float64(1.0)),
+    (0.1, np.float64(2000.0)), (np.float64(0.1), np.float64(-np.inf)), (np.float64(0.1), np.float64(0.5))])
+def test_numpy_numbers_take_the_same_path_and_messages(t_end, ag):
+    """numpy floats go through the lean path when finite, the checked one otherwise: the same results and the
+    Python's messages (np.float64(nan) named as such)."""
+    out = []
+    for engine in ("python", "c"):
+        sim = Simulator(RigidBlock(), engine=engine, phi_0=0.05)
+        try:
+            sim.advance(t_end, ag)
+            out.append(sim.outputs()["phi"])
+        except ValueError as exc:
+            out.append(str(exc))
+    assert out[0] == out[1]
