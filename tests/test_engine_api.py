@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from rocking_model import _engine
 from rocking_model.engine import CompiledIntegrator, motion_spec
-from rocking_model.ground_motion import (ConstantMotion, FunctionMotion, LinearMotion, RickerPulse, SampledMotion,
-                                         ScaledMotion, SinePulse, checked_motion)
+from rocking_model.ground_motion import (ConstantMotion, CosinePulse, FunctionMotion, LinearMotion, RectangularPulse,
+                                         RickerPulse, SampledMotion, ScaledMotion, SinePulse, checked_motion)
 from rocking_model.models import FlexibleOscillator, RigidBlock
 from rocking_model.simulation import Simulator, simulate
 from rocking_model.validation import WorkLimitError
@@ -57,11 +57,19 @@ RECORD_AG = np.random.default_rng(2).normal(0.0, 3.0, RECORD_T.size)
     SinePulse(2.5, 7.0, 0.2),
     ScaledMotion(SinePulse(2.5, 7.0, 0.2), -1.7),
     ScaledMotion(SampledMotion(RECORD_T, RECORD_AG), 0.3),
-], ids=["constant", "linear", "sampled", "sine", "scaled_sine", "scaled_record"])
+    CosinePulse(2.0, 5.0, 0.3),
+    RickerPulse(3.0, 6.0),
+    RickerPulse(-2.5, 17.0, 0.3),
+    RectangularPulse(2.0, 0.4, 0.2),
+    RectangularPulse(-1.0, 1e-11, 1.5),
+], ids=["constant", "linear", "sampled", "sine", "scaled_sine", "scaled_record", "cosine", "ricker", "ricker_tc",
+        "rect", "rect_sliver"])
 def test_motions_equal_the_python_classes_bit_for_bit(gm):
     spec = motion_spec(gm)
     assert spec[0] != "callback"
-    times = _times(-0.5, 3.0)
+    times = [float(t) for t in _times(-0.5, 3.0, n=3000)]
+    bps = list(getattr(gm, "_bp", []))
+    times += bps + [float(np.nextafter(b, 9.0)) for b in bps] + [float(np.nextafter(b, -9.0)) for b in bps]
     # the samples themselves, their neighbours and the ends: the interval cache and the bisection
     times += list(RECORD_T[::7]) + [np.nextafter(x, -1.0) for x in RECORD_T[::11]] + [RECORD_T[-1] + 1.0]
     c = _engine.motion_eval(spec, times)
@@ -72,7 +80,7 @@ def test_motions_equal_the_python_classes_bit_for_bit(gm):
 
 
 def test_a_python_motion_runs_as_a_callback_with_its_breakpoints():
-    gm = checked_motion(RickerPulse(3.0, 6.0))
+    gm = checked_motion(FunctionMotion(lambda t: 3.0 * math.sin(2.0 * t), breakpoints=[0.5, 1.25]))
     spec = motion_spec(gm)
     assert spec[0] == "callback"
     times = _times(0.0, 3.0)
@@ -88,9 +96,9 @@ def test_a_failing_callback_raises_the_python_exception():
 @settings(max_examples=60, derandomize=True, deadline=None)
 @given(st.floats(-1e3, 1e3), st.floats(0.1, 100.0), st.floats(-5.0, 5.0),
        st.lists(st.floats(-10.0, 20.0), min_size=1, max_size=20))
-def test_sine_pulses_agree_everywhere(A, w, t0, times):
-    gm = SinePulse(A, w, t0)
-    assert _engine.motion_eval(motion_spec(gm), times) == tuple(_python_trace(gm, times))
+def test_pulses_agree_everywhere(A, w, t0, times):
+    for gm in (SinePulse(A, w, t0), CosinePulse(A, w, t0), RickerPulse(A, w, t0), RectangularPulse(A, 1.0 / w, t0)):
+        assert _engine.motion_eval(motion_spec(gm), times) == tuple(_python_trace(gm, times)), type(gm).__name__
 
 
 def test_bad_motion_specs_are_clear_errors():
@@ -377,9 +385,9 @@ def test_compiled_integrator_is_an_integrator():
 @needs_mj
 @pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
 def test_python_motions_run_as_callbacks_with_the_same_results(scheme):
-    gm = RickerPulse(4.0, 8.0)
+    """A callable (a callback into Python) and the pulses the engine evaluates itself (jumps included)."""
     fm = lambda t: 3.0 * math.sin(6.0 * t)  # noqa: E731
-    for ag in (gm, fm):
+    for ag in (fm, RickerPulse(4.0, 8.0), CosinePulse(3.0, 8.0, 0.1), RectangularPulse(2.0, 0.3, 0.2)):
         py, c = _scene("python", scheme, on_report="ignore"), _scene("c", scheme, on_report="ignore")
         for t in np.arange(0.1, 1.0, 0.1):
             py.advance(float(t), ag)

@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from ..ground_motion import (CheckedMotion, ConstantMotion, GroundMotion, LinearMotion, SampledMotion, ScaledMotion,
-                             SinePulse)
+from ..ground_motion import (CheckedMotion, ConstantMotion, CosinePulse, GroundMotion, LinearMotion, RectangularPulse,
+                             RickerPulse, SampledMotion, ScaledMotion, SinePulse)
 from ..integrators.base import SCHEMES, Integrator, Report
 from ..modes import ContactState
 
@@ -44,10 +44,17 @@ def motion_spec(gm: GroundMotion) -> tuple:
         return ("sampled", np.ascontiguousarray(gm.t, dtype=float), np.ascontiguousarray(gm.ag, dtype=float))
     if cls is SinePulse:
         return ("sine", gm.A, gm.omega_p, gm.t0)
+    if cls is CosinePulse:
+        return ("cosine", gm.A, gm.omega_p, gm.t0)
+    if cls is RickerPulse:
+        return ("ricker", gm.A, gm.omega_p, gm.t_c)
+    if cls is RectangularPulse:
+        return ("rect", gm.A, gm.duration, gm.t0)
     if cls is ScaledMotion and gm.motion.peak_bound is not None:
         # (a scaled motion without a known peak is checked value by value: a callback, as the Python runs it)
         return ("scaled", gm.factor, motion_spec(gm.motion))
-    if cls is CheckedMotion and type(gm.motion) in (SampledMotion, SinePulse, LinearMotion, ConstantMotion):
+    if cls is CheckedMotion and type(gm.motion) in (SampledMotion, SinePulse, LinearMotion, ConstantMotion,
+                                                      CosinePulse, RickerPulse, RectangularPulse):
         return motion_spec(gm.motion)
     constant = bool(getattr(gm, "constant", False))
     return ("callback", gm, constant, float(getattr(gm, "value", 0.0)) if constant else 0.0)

@@ -314,6 +314,18 @@ static int parse_motion(motion_holder *h, PyObject *spec, int depth)
             raise_status(err.status, err.message);
             return -1;
         }
+    } else if ((strcmp(kind, "cosine") == 0 || strcmp(kind, "ricker") == 0 || strcmp(kind, "rect") == 0)
+               && n == 4) {
+        double A = ARG(1), w = ARG(2), t0 = ARG(3);
+        rk_status st;
+        if (PyErr_Occurred())
+            return -1;
+        st = kind[0] == 'c' ? rk_motion_cosine(m, A, w, t0, &err)
+             : kind[1] == 'i' ? rk_motion_ricker(m, A, w, t0, &err) : rk_motion_rect(m, A, w, t0, &err);
+        if (st != RK_OK) {
+            raise_status(err.status, err.message);
+            return -1;
+        }
     } else if (strcmp(kind, "scaled") == 0 && n == 3) {
         double factor = ARG(1);
         int inner;

@@ -74,6 +74,75 @@ rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_e
     return RK_OK;
 }
 
+/** ground_motion.JUMP_SLIVER: [s, relative to max(1, |t|)] the sliver after a jump */
+#define RK_JUMP_SLIVER 1e-10
+
+/** _jump_breakpoints((a, b)): a, a + sliver, b, b + sliver, sorted */
+static void jump_breakpoints(double a, double b, double *bp)
+{
+    int i, j;
+    bp[0] = a;
+    bp[1] = a + RK_JUMP_SLIVER * (fabs(a) > 1.0 ? fabs(a) : 1.0);
+    bp[2] = b;
+    bp[3] = b + RK_JUMP_SLIVER * (fabs(b) > 1.0 ? fabs(b) : 1.0);
+    for (i = 1; i < 4; i++) {       /* insertion sort (sorted() of four finite values) */
+        double x = bp[i];
+        for (j = i; j > 0 && bp[j - 1] > x; j--)
+            bp[j] = bp[j - 1];
+        bp[j] = x;
+    }
+}
+
+static rk_status pulse_checks(double A, double w, const char *w_name, double t0, const char *t0_name, rk_error *err)
+{
+    if (!isfinite(A))
+        return rk_fail(err, RK_ERR_VALUE, "A = %g is not finite; allowed range (-inf, inf)", A);
+    if (!isfinite(w) || !(w > 0.0))
+        return rk_fail(err, RK_ERR_VALUE, "%s = %g is out of range; allowed range (0, inf)", w_name, w);
+    if (!isfinite(t0))
+        return rk_fail(err, RK_ERR_VALUE, "%s = %g is not finite; allowed range (-inf, inf)", t0_name, t0);
+    return RK_OK;
+}
+
+rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk_error *err)
+{
+    rk_status st = pulse_checks(A, omega_p, "omega_p", t0, "t0", err);
+    if (st != RK_OK)
+        return st;
+    motion_clear(m, RK_MOTION_COSINE);
+    m->A = A;
+    m->omega_p = omega_p;
+    m->t0 = t0;
+    m->t1 = t0 + 2.0 * RK_PI / omega_p;
+    jump_breakpoints(m->t0, m->t1, m->bp);
+    return RK_OK;
+}
+
+rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err)
+{
+    rk_status st = pulse_checks(A, omega_p, "omega_p", t_c, "t_c", err);
+    if (st != RK_OK)
+        return st;
+    motion_clear(m, RK_MOTION_RICKER);
+    m->A = A;
+    m->omega_p = omega_p;
+    m->t0 = t_c;
+    return RK_OK;
+}
+
+rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err)
+{
+    rk_status st = pulse_checks(A, duration, "duration", t0, "t0", err);
+    if (st != RK_OK)
+        return st;
+    motion_clear(m, RK_MOTION_RECT);
+    m->A = A;
+    m->t0 = t0;
+    m->t1 = t0 + duration;
+    jump_breakpoints(m->t0, m->t1, m->bp);
+    return RK_OK;
+}
+
 /** bisect.bisect_right(t[0..n-1], x): the first index whose value is > x (n if none); NaN compares false
  *  as in Python (x < a[mid] false: lo moves right). */
 static long long bisect_right(const double *t, long long n, double x)
@@ -123,6 +192,19 @@ static double eval_const(const rk_motion *m, double t, long long *cache, int *fa
         if (t < m->t0 || t > m->t1)
             return 0.0;
         return m->A * sin(m->omega_p * (t - m->t0));
+    case RK_MOTION_COSINE:
+        if (t <= m->t0 || t > m->t1)
+            return 0.0;
+        return m->A * cos(m->omega_p * (t - m->t0));
+    case RK_MOTION_RECT:
+        return (m->t0 < t && t <= m->t1) ? m->A : 0.0;
+    case RK_MOTION_RICKER: {
+        /* 0.25 * (omega_p * (t - t_c)) ** 2: Python's float ** calls libm's pow, which is not always y * y
+         * rounded; the exponent is read through a volatile so that the compiler cannot turn pow(y, 2) into y * y */
+        volatile double two = 2.0;
+        double x = 0.25 * pow(m->omega_p * (t - m->t0), two);
+        return m->A * (1.0 - 2.0 * x) * exp(-x);
+    }
     case RK_MOTION_SCALED: {
         long long inner_cache = m->inner->i_last;
         return m->factor * eval_const(m->inner, t, &inner_cache, failed, msg);
@@ -158,6 +240,17 @@ double rk_motion_next_breakpoint(rk_motion *m, double t)
             return m->t0;
         if (m->t1 > t)
             return m->t1;
+        return INFINITY;
+    case RK_MOTION_COSINE:
+    case RK_MOTION_RECT: {
+        int i;
+        for (i = 0; i < 4; i++) {
+            if (m->bp[i] > t)
+                return m->bp[i];
+        }
+        return INFINITY;
+    }
+    case RK_MOTION_RICKER:
         return INFINITY;
     case RK_MOTION_SCALED:
         return rk_motion_next_breakpoint((rk_motion *)(void *)m->inner, t);

@@ -23,7 +23,11 @@ typedef enum rk_motion_kind {
     RK_MOTION_CALLBACK = 4,     /**< any other GroundMotion through C callbacks (the extension wraps a Python
                                      callable: slow, exact; a failing call sets *failed and the advance
                                      returns RK_ERR_VALUE with the callback's message) */
-    RK_MOTION_SCALED = 5        /**< ScaledMotion: factor * inner */
+    RK_MOTION_SCALED = 5,       /**< ScaledMotion: factor * inner */
+    /* (added by part E: the pulses of pulse_from_parameters in C, so that ensembles of pulses never call back) */
+    RK_MOTION_COSINE = 6,       /**< CosinePulse: A cos(omega_p (t - t0)) on (t0, t1]; jumps at t0 and t1 */
+    RK_MOTION_RICKER = 7,       /**< RickerPulse: A (1 - 2 x) exp(-x), x = (omega_p (t - t_c))^2 / 4 (t_c in t0) */
+    RK_MOTION_RECT = 8          /**< RectangularPulse: A on (t0, t1]; jumps at t0 and t1 */
 } rk_motion_kind;
 
 typedef struct rk_motion rk_motion;
@@ -33,7 +37,10 @@ struct rk_motion {
     const double *t, *ag;               /**< SAMPLED: borrowed arrays of n samples (t strictly increasing) */
     long long n;
     long long i_last;                   /**< SAMPLED: interval of the last evaluation (SampledMotion._i) */
-    double A, omega_p, t0, t1;          /**< SINE (t1 = t0 + 2 pi / omega_p, computed as the Python does) */
+    double A, omega_p, t0, t1;          /**< SINE (t1 = t0 + 2 pi / omega_p, computed as the Python does);
+                                             COSINE, RECT (t1 the end); RICKER (t0 = t_c) */
+    double bp[4];                       /**< COSINE, RECT: the jump breakpoints (ground_motion._jump_breakpoints:
+                                             t0, t0 + sliver, t1, t1 + sliver, sorted) */
     double factor;                      /**< SCALED */
     const rk_motion *inner;             /**< SCALED */
     /** CALLBACK: ag(t); set *failed = 1 and write msg (RK_MSG_LEN) on failure */
@@ -59,6 +66,10 @@ void rk_motion_constant(rk_motion *m, double value);
 void rk_motion_linear(rk_motion *m, double value, double rate, double t_ref);
 rk_status rk_motion_sampled(rk_motion *m, const double *t, const double *ag, long long n, rk_error *err);
 rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
+/** CosinePulse(A, omega_p, t0), RickerPulse(A, omega_p, t_c), RectangularPulse(A, duration, t0). (Added.) */
+rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
+rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
+rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
 
 /** ag(t) [m/s2]; a CALLBACK failure sets *failed (may be NULL for the others) and msg. */
 double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
