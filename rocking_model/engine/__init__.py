@@ -65,6 +65,10 @@ _SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", 
              "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
 
 
+#: model class -> the names of its declared parameters in order (declared_parameters is slow to call per run)
+_PARAM_NAMES: dict = {}
+
+
 class _Log:
     """What the Simulator and the tests read of a `BoundedLog` (tail(), maxlen, len, iteration, indexing): the
     rows the engine holds (impact_times, or impact_log as (t, v_minus, v_plus) rows)."""
@@ -163,8 +167,11 @@ class CompiledIntegrator(Integrator):
 
     def _engine_args(self):
         model = self.model
-        params = [float(getattr(model, p.name)) for p in type(model).parameters()]
-        return type(model).__name__, params
+        cls = type(model)
+        names = _PARAM_NAMES.get(cls)
+        if names is None:
+            names = _PARAM_NAMES[cls] = tuple(p.name for p in cls.parameters())
+        return cls.__name__, [float(getattr(model, name)) for name in names]
 
     def _engine_kwargs(self):
         o = self._options
