@@ -697,18 +697,26 @@ def _progress(total: int, initial: int, enabled: bool):
 NO_WORKERS_TIMEOUT = 60.0
 #: [s] sleep between two looks at the finished tasks while none is ready
 _POLL = 0.05
-#: [s] interval between two questions to the scheduler about its workers
-_WORKER_CHECK = 1.0
+#: [s] interval between two questions to the scheduler about its workers (one small RPC each)
+_WORKER_CHECK = 0.25
+#: [workers] how many workers may die (leave the cluster) while no batch finishes before the run ends with
+#: `WorkersLost`: a nanny restarts a killed worker, so a cluster whose workers are killed over and over (the
+#: out-of-memory killer on a case too large for the machine) is never without workers for long and its tasks
+#: may never reach Dask's own KilledWorker limit; an occasional death (one worker killed once) is retried
+MAX_DEATHS_WITHOUT_PROGRESS = 8
 
 
 def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> None:
     """Hand each batch's rows to ``take`` as it finishes; raise `WorkersLost` when the cluster has had no
-    worker for ``no_workers_timeout`` seconds, or when a batch killed every worker that ran it."""
+    worker for ``no_workers_timeout`` seconds, when `MAX_DEATHS_WITHOUT_PROGRESS` workers died while no batch
+    finished, or when a batch killed every worker that ran it."""
     from dask.distributed import KilledWorker, as_completed
 
     ac = as_completed(futures)
     no_worker_since = None
     t_check = time.monotonic()
+    alive: set = set()           # worker addresses seen at the last look
+    deaths = 0                   # workers that left the cluster since the last finished batch
     while not ac.is_empty():
         ready = ac.next_batch(block=False)
         for fut in ready:
@@ -723,12 +731,21 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
             fut.release()
         if ready:
             no_worker_since = None
+            deaths = 0
             continue
         time.sleep(_POLL)
         if time.monotonic() - t_check < _WORKER_CHECK:
             continue
         t_check = time.monotonic()
-        if client.nthreads():
+        workers = set(client.nthreads())
+        deaths += len(alive - workers)
+        alive = workers
+        if deaths >= MAX_DEATHS_WITHOUT_PROGRESS:
+            raise WorkersLost(f"{deaths} Dask workers died while no batch of cases finished (killed over and over, "
+                              f"e.g. by the out-of-memory killer); {ac.count()} task(s) of cases were left; the "
+                              f"finished cases are in {out}; run the same command to resume (fewer --workers, or "
+                              "--batch-size 1, need less memory)")
+        if workers:
             no_worker_since = None
         elif no_worker_since is None:
             no_worker_since = t_check

@@ -163,7 +163,7 @@ def _norm(number: str) -> str:
 
 
 #: units that the pages' tables print in the column heading, not after each number
-_UNIT_IN_HEADING = ("rad", "µs", "ratio")
+_UNIT_IN_HEADING = ("rad", "µs", "ratio", "cases/s")
 _RATIO = re.compile(rf"\bratios? ({_NUM})(?:\s?[–-]\s?({_NUM}))?")
 
 

@@ -195,7 +195,8 @@ def test_run_whose_workers_are_all_killed_ends_with_a_clear_error(tmp_path):
     assert ended, "the run still waits for results with no worker left"
     assert proc.returncode == 1 and "Traceback" not in stderr, stderr
     assert "rocking ensemble: error:" in stderr and f"the finished cases are in {out}" in stderr
-    assert ("no worker for 3 s" in stderr) or ("died while running it" in stderr), stderr
+    assert ("no worker for 3 s" in stderr) or ("died while running it" in stderr) or \
+        ("workers died while no batch of cases finished" in stderr), stderr
     after = {r["case_id"]: r for r in read_results(out)}
     assert kept and {r["case_id"] for r in kept} <= set(after) and out.read_bytes().startswith(before)
     assert all(len(r) == len(FIELDS) for r in _rows_per_line(out))
@@ -350,3 +351,42 @@ def test_cut_parquet_part_is_reported_and_set_aside_on_resume(tmp_path):
     assert s["n_run"] == 3 and s["n_skipped"] == 3
     assert (out / (parts[0].name + ".corrupt")).read_bytes() == data[:len(data) // 2]
     assert {r["case_id"] for r in read_results(out)} == {c["case_id"] for c in cases}
+
+
+def test_workers_dying_over_and_over_end_the_wait(monkeypatch, tmp_path):
+    """The stalled-wait rule itself, without timing: a cluster that always has a worker (a nanny restarts
+    each one) but loses them one after another while no batch finishes ends with `WorkersLost` after
+    MAX_DEATHS_WITHOUT_PROGRESS deaths; a finished batch resets the count."""
+    pytest.importorskip("dask.distributed")
+    import dask.distributed
+
+    from rocking_model import ensemble
+    from rocking_model.ensemble import MAX_DEATHS_WITHOUT_PROGRESS, WorkersLost
+
+    class Pending:                     # as_completed over tasks that never finish
+        def __init__(self, futures):
+            self.n = len(futures)
+
+        def is_empty(self):
+            return False
+
+        def next_batch(self, block=False):
+            return []
+
+        def count(self):
+            return self.n
+
+    class Churning:                    # each look at the scheduler shows a new worker: the last one died
+        looks = 0
+
+        def nthreads(self):
+            Churning.looks += 1
+            return {f"tcp://127.0.0.1:{40000 + Churning.looks}": 1}
+
+    monkeypatch.setattr(dask.distributed, "as_completed", Pending)
+    monkeypatch.setattr(ensemble, "_WORKER_CHECK", 0.0)
+    monkeypatch.setattr(ensemble, "_POLL", 0.0)
+    with pytest.raises(WorkersLost, match=rf"{MAX_DEATHS_WITHOUT_PROGRESS} Dask workers died while no batch"):
+        ensemble._collect(Churning(), [object()] * 3, lambda rows: None, 1e9, tmp_path / "r.csv")
+    # every death is counted once: the first look sees the first worker, then one death per look
+    assert Churning.looks == MAX_DEATHS_WITHOUT_PROGRESS + 1
