@@ -288,17 +288,20 @@ class RockingSlave(Fmi2Slave):
         and commit. Anything else, including every check that fails, goes through `_do_step`, which
         words the message."""
         lean = self._lean
-        if lean is not None and not self._rates and not self._frozen and self._error is None \
-                and not self._terminated:
-            t, dt, t_now = float(current_time), float(step_size), self._t
-            t_end = t + dt
+        if lean is not None and type(current_time) is float and type(step_size) is float and not self._rates \
+                and not self._frozen and self._error is None and not self._terminated:
+            t, t_now = current_time, self._t
+            t_end = t + step_size
             ag = self._values[lean[0]]
-            if 0.0 < dt <= _BIG and -_BIG <= t_end <= _BIG and \
-                    abs(t - t_now) <= self.time_tolerance * max(1.0, abs(t_now)) and lean[1] <= ag <= lean[2]:
+            # t_now within time_tolerance of t (relative beyond 1 s), as _do_step words it
+            lim = t_now if t_now >= 1.0 else (-t_now if t_now <= -1.0 else 1.0)
+            if 0.0 < step_size <= _BIG and -_BIG <= t_end <= _BIG and lean[1] <= ag <= lean[2] and \
+                    (t == t_now or -self.time_tolerance * lim <= t - t_now <= self.time_tolerance * lim):
                 eng = self._eng
+                t_sim = eng.t
                 eng.checkpoint()
                 try:
-                    eng.advance(max(t_end, eng.t), ag, 0.0, self._sim.max_steps)
+                    eng.advance(t_end if t_end >= t_sim else t_sim, ag, 0.0, self._max_steps)
                 except BaseException as exc:
                     eng.rollback()
                     return self._step_failed(exc, t, t_end, ag)
@@ -306,8 +309,9 @@ class RockingSlave(Fmi2Slave):
                     return False
                 eng.commit()
                 self._row = None
-                if self._freeze_overturned and eng.overturned:
-                    self._freeze()
+                if self._freeze_overturned:
+                    if eng.overturned:
+                        self._freeze()
                 elif self._freeze_other:
                     self._update_outputs()
                 self._t = t_end
@@ -404,6 +408,7 @@ class RockingSlave(Fmi2Slave):
             self._out_pos = {name: pos[name] for name, _ in self._outputs}
             self._real_out = {vr: pos[name] for vr, (name, kind, _) in self._output_vrs.items() if kind == "Real"}
         self._eng, self._row = eng, None
+        self._max_steps = None if eng is None else sim.max_steps
         self._freeze_overturned = eng is not None and self.freeze_output == "overturned"
         self._freeze_other = eng is not None and self.freeze_output not in (None, "overturned")
         # the single Real input of an FMU that keeps the default `advance`: stepped by the lean path
@@ -646,6 +651,12 @@ class RockingSlave(Fmi2Slave):
         where = self._real_out
         if where and type(vrs) is list:
             try:
+                if len(vrs) == 1:             # the usual request: one output
+                    i = where[vrs[0]]
+                    row = self._row
+                    if row is None:
+                        row = self._row = self._eng.output_row()
+                    return [row[i]]
                 pos = [where[vr] for vr in vrs]
             except (KeyError, TypeError):
                 pass
