@@ -18,6 +18,7 @@ from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate  #
 from rocking_model.engine import available  # noqa: E402
 from rocking_model.fmi.slave import ENGINE_VARIABLE  # noqa: E402
 from rocking_model.ground_motion import LinearMotion  # noqa: E402
+from pythonfmu.enums import Fmi2Status  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not available(), reason="the compiled engine is not built")
 
@@ -143,12 +144,13 @@ def test_interpolated_input_equals_the_simulator_on_the_compiled_engine(monkeypa
 
 # ---------------------------------------------------------------------------------------------- refused steps
 class FailingEngine:
-    """The slave's engine with the reports of its next advance replaced by one failed step (what the C
-    scheme reports when a step is accepted at the smallest size): fault injection at the boundary the slave
-    reads, as the fault suite forces the Python stepper."""
+    """The slave's engine with the reports of its next advance replaced by one report of ``kind``: a failed
+    step (what the C scheme reports when a step is accepted at the smallest size) or an inexact contact solve.
+    Fault injection at the boundary the slave reads, as the fault suite forces the Python stepper and solvers."""
 
-    def __init__(self, engine):
+    def __init__(self, engine, kind="failed_step", message="DOP853: forced failure (engine fault case)"):
         self._engine = engine
+        self.kind, self.message = kind, message
         self.armed = True
 
     def __getattr__(self, name):
@@ -161,7 +163,7 @@ class FailingEngine:
     def reports(self):
         if self.armed:
             self.armed = False
-            return [("failed_step", self._engine.t, "DOP853: forced failure (engine fault case)")]
+            return [(self.kind, self._engine.t, self.message)]
         return self._engine.reports()
 
 
@@ -187,6 +189,24 @@ def test_a_failed_step_is_refused_with_the_state_unchanged(monkeypatch, name):
             s.set_real([vr["ag"]], [0.5])
             assert s.do_step(k * DT, DT)
         assert outputs(slave, vr, names) == outputs(control, vr, names)
+
+
+@pytest.mark.parametrize("name", [RIGID, FLEX])
+def test_an_inexact_contact_solve_is_a_warning_and_the_step_is_done(monkeypatch, name):
+    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
+    slave, vr = started(name, phi_0=0.05)
+    control, _ = started(name, phi_0=0.05)
+    slave._eng = FailingEngine(slave._eng, "inexact_contact", "the contact problem has no exact solution (forced)")
+    for s in (slave, control):
+        s.set_real([vr["ag"]], [0.5])
+        assert s.do_step(0.0, DT) is True
+    warnings = [m for m in slave.log_queue if m.status == Fmi2Status.warning]
+    assert any("inexact contact report" in m.msg and "no exact solution (forced)" in m.msg for m in warnings)
+    assert slave._sim.last_reports and slave._sim.last_reports[0].kind == "inexact_contact"
+    names = output_names(name)
+    assert outputs(slave, vr, names) == outputs(control, vr, names)     # the step done as without the report
+    slave.set_real([vr["ag"]], [0.5])
+    assert slave.do_step(DT, DT) and slave._sim.last_reports == []      # the next step's reports (none)
 
 
 def test_a_step_over_the_work_budget_is_refused_on_the_lean_path(monkeypatch):

@@ -1,5 +1,19 @@
 """The slave and its state machine: `RockingSlave`, the generic pythonfmu slave around a `Simulator` that
-the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call)."""
+the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call).
+
+Engine. The model FMUs (`ModelSlave`) run the compiled engine (`Simulator(engine="c")`); the environment
+variable ``ROCKING_FMU_ENGINE=python`` (`ENGINE_VARIABLE`, read when the simulator is built: at
+fmi2ExitInitializationMode and fmi2SetFMUstate) selects the Python reference engine instead, with the same
+results to the engine's pinning tolerance and the same state format. It is not an FMU parameter: the
+engine is a property of the installation, not of the model.
+
+Per-step path on the compiled engine (`RockingSlave._bind`): fmi2SetReal of the input is one range comparison,
+fmi2DoStep is one `Engine.advance` between the engine's checkpoint and commit (a refused step is rolled back
+in C: fmi2Discard, the state bit-identical), and fmi2GetReal reads the engine's output row, fetched once per
+step when the importer first asks; nothing is copied per step. Every call that does not fit (an input rate,
+several inputs, a frozen or failed instance, a value or time that fails a check) takes the checked path,
+which words the messages.
+"""
 from __future__ import annotations
 
 import hashlib
@@ -100,6 +114,7 @@ class RockingSlave(Fmi2Slave):
         self._lean = None                        # (input name, lo, hi) of the lean do_step path, or None
         self._real_out: Dict[int, int] = {}      # Real output reference -> position in the engine's row
         self._freeze_overturned = self._freeze_other = False
+        self._reported = False                   # the Simulator's last_reports are not empty (lean path)
         self._initialized = False
         self._terminated = False
         self._error: Optional[str] = None        # permanent failure (an integrator crash), until reset
@@ -305,8 +320,12 @@ class RockingSlave(Fmi2Slave):
                 except BaseException as exc:
                     eng.rollback()
                     return self._step_failed(exc, t, t_end, ag)
-                if eng.report_count and not self._step_reports(t, t_end):
-                    return False
+                if eng.report_count:
+                    if not self._step_reports(t, t_end):
+                        return False
+                elif self._reported:              # the Simulator's last_reports: this step's (none)
+                    self._sim.last_reports = self._sim.integrator.reports = []
+                    self._reported = False
                 eng.commit()
                 self._row = None
                 if self._freeze_overturned:
@@ -334,6 +353,7 @@ class RockingSlave(Fmi2Slave):
         """Reports of a lean step: a failed internal step refuses it (rolled back, False); the others are
         logged as warnings (True)."""
         eng = self._eng
+        self._reported = True
         try:
             self._sim._c_reports(eng)               # raises SolverFailure (a ValueError) on a failed step
         except ValueError as exc:
@@ -407,7 +427,7 @@ class RockingSlave(Fmi2Slave):
                     raise KeyError(f"Simulator.outputs() has no entry {name!r}")
             self._out_pos = {name: pos[name] for name, _ in self._outputs}
             self._real_out = {vr: pos[name] for vr, (name, kind, _) in self._output_vrs.items() if kind == "Real"}
-        self._eng, self._row = eng, None
+        self._eng, self._row, self._reported = eng, None, False
         self._max_steps = None if eng is None else sim.max_steps
         self._freeze_overturned = eng is not None and self.freeze_output == "overturned"
         self._freeze_other = eng is not None and self.freeze_output not in (None, "overturned")
