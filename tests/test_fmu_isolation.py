@@ -19,16 +19,15 @@ ROOT = Path(__file__).resolve().parents[1]
 MODIFICATION = """
 
 # --- deliberately modified copy (tests/test_fmu_isolation.py) ---
-_original_outputs = Simulator.outputs
+_original_get_real = RockingSlave.get_real
 
 
-def _modified_outputs(self):
-    out = _original_outputs(self)
-    out["energy"] = out["energy"] + 1000.0
-    return out
+def _modified_get_real(self, vrs):
+    values = _original_get_real(self, vrs)
+    return [v + 1000.0 if self.vars[vr].name == "energy" else v for vr, v in zip(vrs, values)]
 
 
-Simulator.outputs = _modified_outputs
+RockingSlave.get_real = _modified_get_real
 """
 
 WORKER = textwrap.dedent("""
@@ -101,7 +100,7 @@ def two_versions(tmp_path_factory):
         src = ROOT / name
         (shutil.copytree(src, copy / name, ignore=shutil.ignore_patterns("__pycache__"))
          if src.is_dir() else shutil.copy2(src, copy / name))
-    with open(copy / "rocking_model" / "simulation.py", "a") as f:
+    with open(copy / "rocking_model" / "fmi" / "slave.py", "a") as f:
         f.write(MODIFICATION)
     subprocess.run([sys.executable, str(copy / "build_fmu.py"), "--dest", str(tmp / "modified"),
                     "--no-cross-check", "RigidRockingBlock"], check=True, capture_output=True, cwd=tmp)
