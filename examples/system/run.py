@@ -1,11 +1,14 @@
 """System-level co-simulation: ground-motion source -> linear building storey -> rigid rocking block and
 flexible rocking oscillator on the floor (examples/system/OspSystemStructure.xml).
 
-    python examples/system/run.py [--stop 5] [--out results] [--build] [--master both|libcosim|fmpy]
+    python examples/system/run.py [--stop 5] [--out results] [--build] [--master both|libcosim|fmpy] [--ssp]
 
 Builds the FMUs into dist/ when they are missing (or with --build), runs the system in libcosim (Open
 Simulation Platform, `pip install -e .[cosim]`) and with the fmpy master of rocking_model.cosim, writes
 <out>/system_<master>.csv and <out>/system.png, and prints the largest difference between the two masters.
+With --ssp, it also packages the system as an SSP 1.0 archive <out>/RockingSystem.ssp (the system structure,
+the connections, the parameter values and the FMUs; rocking_model.cosim.write_ssp) and runs the masters on
+the archive instead of the OSP file (same results: the archive holds the same system).
 """
 from __future__ import annotations
 
@@ -34,9 +37,18 @@ def build_fmus(force: bool = False) -> None:
     module.build_all(ROOT / "dist", names=FMUS)
 
 
+def write_ssp(path, osp=None) -> Path:
+    """Package the system of the OSP file (default: the example's) as an SSP 1.0 archive at ``path``."""
+    from rocking_model.cosim import read_osp_system_structure, write_ssp as _write_ssp
+
+    system = read_osp_system_structure(OSP if osp is None else osp)
+    return _write_ssp(system, path, name="RockingSystem")
+
+
 def run(stop: float = 5.0, master: str = "both", osp=None) -> dict:
-    """Run the system; return {"fmpy": result, "libcosim": result} (structured arrays, column 'time' and
-    one column per entry of OUTPUTS)."""
+    """Run the system (``osp``: an OspSystemStructure.xml or an .ssp archive, default the example's OSP
+    file); return {"fmpy": result, "libcosim": result} (structured arrays, column 'time' and one column per
+    entry of OUTPUTS)."""
     from rocking_model.cosim import run_fmpy, run_libcosim
 
     osp = OSP if osp is None else osp
@@ -89,6 +101,8 @@ def main(argv=None) -> int:
     parser.add_argument("--build", action="store_true", help="rebuild the FMUs into dist/")
     parser.add_argument("--master", choices=["both", "libcosim", "fmpy"], default="both")
     parser.add_argument("--no-plot", action="store_true")
+    parser.add_argument("--ssp", action="store_true",
+                        help="write <out>/RockingSystem.ssp (SSP 1.0) and run the masters on it")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     from rocking_model.cosim import write_csv
@@ -96,7 +110,11 @@ def main(argv=None) -> int:
     build_fmus(args.build)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    results = run(args.stop, args.master)
+    source = None
+    if args.ssp:
+        source = write_ssp(out / "RockingSystem.ssp")
+        print(f"wrote {source}")
+    results = run(args.stop, args.master, osp=source)
     for name, res in results.items():
         write_csv(out / f"system_{name}.csv", res)
         print(f"wrote {out / f'system_{name}.csv'}")
