@@ -1,5 +1,9 @@
 """Build every FMU script in fmu_src/ into <dest>/<Name>.fmu and validate it with fmpy.
 
+The registered models (the rigid block, the flexible oscillator) are also built as self-contained FMUs,
+<dest>/standalone/<Name>.fmu: the compiled C engine (rocking_model/engine/src) under the C FMI layer
+fmi_binary/standalone/fmi2_engine.c, no Python needed (`build_standalone`; issue 22).
+
 Usage:  python build_fmu.py [--dest dist] [--no-cross-check] [Name ...]
 
 Each FMU bundles a clean copy of the `rocking_model` package (no __pycache__, no .pyc) in its resources,
@@ -535,6 +539,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         fmus = build_all(args.dest, args.names or None, cross_check=not args.no_cross_check)
+        # the self-contained FMUs of the registered models among the names (issue 22)
+        wanted = set(registered_fmu_names()) & set(args.names or registered_fmu_names())
+        if wanted:
+            fmus += build_standalone(args.dest, sorted(wanted))
     except Exception as exc:
         print(f"build_fmu: FAILED: {exc}", file=sys.stderr)
         return 1
