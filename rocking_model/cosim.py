@@ -41,7 +41,7 @@ from .validation import check_real
 
 __all__ = ["MotionSource", "load_record", "ground_motion_from_parameters", "Component", "Connection",
            "System", "read_osp_system_structure", "write_osp_system_structure", "write_ssp", "read_ssp",
-           "read_system", "SSD_NAMESPACES", "PARAMETER_SET", "FmpyMaster", "run_fmpy", "run_libcosim", "NS"]
+           "read_system", "SSD_NAMESPACES", "PARAMETER_SET", "FmpyMaster", "run_fmpy", "run_libcosim", "run_ecos", "NS"]
 
 NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
 
@@ -734,6 +734,81 @@ def _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
     dtype = [("time", np.float64)] + [(k, np.float64) for k in outputs]
     result = np.array([tuple(r) for r in rows[1:]], dtype=dtype)
     return result
+
+
+# ------------------------------------------------------------------------------------------------------
+# Ecos (a third importer: C++, FMI 1/2, SSP 1.0) through ecospy
+def run_ecos(system, stop_time: float, outputs: Sequence[str], inputs: Optional[Mapping[str, Callable]] = None,
+             proxy: bool = False) -> np.ndarray:
+    """Run a `System`, the system of an OspSystemStructure.xml or an SSP archive (.ssp, read by Ecos' own SSP
+    loader) in Ecos (``pip install rocking-model[ecos]``; its binary needs libtbb12), one base step at a
+    time, and return the same structured array as `run_libcosim` (rows t0 + h, t0 + 2h, ...).
+
+    A `System` is given to Ecos as a structure: its components (``proxy``: each in a process of its own
+    through Ecos' proxyfmu), its connections and the start values as the parameter set `PARAMETER_SET`;
+    an .ssp archive carries them itself (`write_ssp`). ``inputs`` ("component.variable" -> f(t)) are set
+    before each step. Ecos counts time in doubles (t += h), so its communication points can differ from
+    the integer-nanosecond points of the other masters in the last bits; every component is initialized
+    once through fmpy first (`check_initialization`): invalid parameters raise ValueError. The
+    connections are Real ones (those of the rocking systems)."""
+    from ecospy import EcosSimulation, EcosSimulationStructure
+
+    ssp = Path(system).resolve() if not isinstance(system, System) and str(system).lower().endswith(".ssp") \
+        else None
+    if not isinstance(system, System):
+        system = read_system(system)
+    check_initialization(system)
+    t0 = float(system.start_time)
+    n_steps = int(round((_ticks(stop_time) - _ticks(system.start_time)) / _ticks(system.step_size)))
+
+    from fmpy import read_model_description
+
+    types = {}
+    for c in system.components:
+        for v in read_model_description(str(c.fmu)).modelVariables:
+            types[f"{c.name}.{v.name}"] = v.type
+
+    def ident(key):
+        comp, var = key.split(".", 1)
+        return f"{comp}::{var}"
+
+    def getter(sim, key):
+        if key not in types:
+            raise KeyError(f"Ecos: no variable {key!r}")
+        return {"Real": sim.get_real, "Integer": sim.get_integer, "Enumeration": sim.get_integer,
+                "Boolean": sim.get_bool}[types[key]]
+
+    def build(sim):
+        rows = []
+        sim.init(t0, PARAMETER_SET)
+        for n in range(n_steps):
+            t = (_ticks(system.start_time) + n * _ticks(system.step_size)) / NS  # the other masters' t_n
+            for key, f in (inputs or {}).items():
+                sim.set_real(ident(key), float(f(t)))
+            sim.step()
+            rows.append([sim.get_time()] + [float(getter(sim, k)(ident(k))) for k in outputs])
+        sim.terminate()
+        return rows
+
+    if ssp is not None:
+        with EcosSimulation(ssp_path=str(ssp), step_size=system.step_size) as sim:
+            rows = build(sim)
+    else:
+        structure = EcosSimulationStructure()
+        for c in system.components:
+            uri = str(Path(c.fmu).resolve())
+            structure.add_model(c.name, f"proxyfmu://localhost?file={uri}" if proxy else uri,
+                                c.step_size)
+        values = {f"{c.name}::{k}": v for c in system.components for k, v in c.start_values.items()}
+        if values:
+            structure.add_parameter_set(PARAMETER_SET, values)
+        for con in system.connections:
+            structure.make_real_connection(f"{con.source[0]}::{con.source[1]}",
+                                           f"{con.target[0]}::{con.target[1]}")
+        with EcosSimulation(structure=structure, step_size=system.step_size) as sim:
+            rows = build(sim)
+    dtype = [("time", np.float64)] + [(k, np.float64) for k in outputs]
+    return np.array([tuple(r) for r in rows], dtype=dtype)
 
 
 def write_csv(path, result: np.ndarray) -> None:
