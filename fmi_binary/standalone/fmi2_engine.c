@@ -279,16 +279,32 @@ static rk_engine *create_engine(const double *values, double t0, char *why, size
                  RK_FMU_MAX_STEPS_LIMIT);
         return NULL;
     }
-    for (int i = 0; i < RK_FMU_N_VARS; i++) /* the scheme code checked as the Python's choice */
-        if (RK_FMU_VARS[i].role == RK_ROLE_SCHEME && !(values[i] == 0 || values[i] == 1)) {
-            snprintf(why, size, "scheme = %.0f is not supported; allowed values: 0, 1", values[i]);
-            return NULL;
-        }
+    /* the scheme is checked after the model's parameters, as the Python builds the model before the Simulator */
+    int bad_scheme = !(o.scheme == RK_SCHEME_MOREAU_JEAN || o.scheme == RK_SCHEME_EVENT_DRIVEN);
+    if (bad_scheme) o.scheme = RK_SCHEME_EVENT_DRIVEN;
     rk_error err;
     rk_error_clear(&err);
     rk_engine *e = rk_engine_create(RK_FMU_MODEL_KIND, params, RK_FMU_N_PARAMS, initial, RK_FMU_N_INITIAL, &o, &err);
     if (!e) {
         snprintf(why, size, "%s", err.message);
+        /* an Integer choice named with its integer value, as the Python's message (the engine reads doubles) */
+        for (int i = 0; i < RK_FMU_N_VARS; i++) {
+            const rk_fmu_var *v = &RK_FMU_VARS[i];
+            char head[160], fixed[160];
+            if (v->type != RK_INTEGER) continue;
+            snprintf(head, sizeof head, "%s = %.1f is not supported", v->name, values[i]);
+            snprintf(fixed, sizeof fixed, "%s = %.0f is not supported", v->name, values[i]);
+            if (strncmp(err.message, head, strlen(head)) == 0)
+                snprintf(why, size, "%s%s", fixed, err.message + strlen(head));
+        }
+        return NULL;
+    }
+    if (bad_scheme) {
+        rk_engine_free(e);
+        for (int i = 0; i < RK_FMU_N_VARS; i++)
+            if (RK_FMU_VARS[i].role == RK_ROLE_SCHEME)
+                snprintf(why, size, "scheme = %.0f is not supported; allowed values: %s", values[i],
+                         RK_FMU_SCHEME_ALLOWED);
         return NULL;
     }
     if (rk_engine_n_outputs(e) < RK_FMU_N_OUTPUTS) {
@@ -1037,6 +1053,25 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
         }
         if (rk_engine_restore(e, body, rest) != RK_OK) {
             snprintf(why, size, "%s", rk_engine_message(e));
+            rk_engine_free(e);
+            return -1;
+        }
+        /* every field of the restored state checked as Simulator.set_state checks a state (a blob whose CRC
+         * was rewritten may hold anything): on a scratch engine, so that the restored one is left bit for bit
+         * as saved (set_state restarts the event-driven stepper) */
+        rk_engine *probe = create_engine(s.values, s.t0, why, size);
+        rk_plain_state ps;
+        int bad = !probe || rk_engine_restore(probe, body, rest) != RK_OK;
+        if (!bad) {
+            rk_engine_get_state(probe, &ps);
+            if (rk_engine_set_state(probe, &ps, NULL, 0, NULL, 0) != RK_OK) {
+                snprintf(why, size, "%s", rk_engine_message(probe));
+                bad = 1;
+            }
+        }
+        rk_engine_free(probe);
+        if (bad || !isfinite(rk_engine_time(e))) {
+            if (!bad) snprintf(why, size, "state field t is not finite");
             rk_engine_free(e);
             return -1;
         }

@@ -89,6 +89,21 @@ def _c_string(text: str) -> str:
     return '"' + out.encode("ascii", "backslashreplace").decode().replace("\\u", "\\u") + '"'
 
 
+def _scheme_allowed() -> str:
+    """The "allowed values: ..." text of the Simulator's check of the scheme, as its ValueError says it."""
+    from ..simulation import SCHEMES
+    from ..validation import check_choice
+
+    try:
+        check_choice("scheme", 2**31 - 1, SCHEMES)         # no scheme has this code
+    except ValueError as exc:
+        text = str(exc)
+        marker = "allowed values: "
+        if marker in text:
+            return text[text.index(marker) + len(marker):]
+    raise ValueError("cannot read the allowed schemes from the Simulator's check")
+
+
 def vars_header(slave, guid: str) -> str:
     """The C header rk_fmu_vars.h of ``slave``'s FMU (see the module docstring)."""
     cls = slave.model_class
@@ -142,6 +157,8 @@ def vars_header(slave, guid: str) -> str:
         f"#define RK_FMU_INPUT_RATE_MAX {_c_double(INPUT_RATE_MAX)}",
         f"#define RK_FMU_AG_MAX {_c_double(AG_MAX)}",
         f"#define RK_FMU_MAX_STEPS_LIMIT {int(MAX_STEPS_PARAMETER.max)}",
+        "/* the allowed values of the scheme as the Python's check names them (its message) */",
+        f"#define RK_FMU_SCHEME_ALLOWED {_c_string(_scheme_allowed())}",
         "/* the declared defaults of every model parameter and initial value (those without an FMU variable",
         " * keep them), in the model's declared order (rk_engine_create) */",
         "static const double RK_FMU_PARAM_DEFAULTS[] = {"
