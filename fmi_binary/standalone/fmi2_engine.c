@@ -979,12 +979,29 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 }
 
 /* ------------------------------------------------------------------------------------------ FMU state */
-/* The slave's bytes: PAYLOAD_MAGIC, GUID, the Slave struct (fixed layout of this binary), the engine
- * snapshot's size (uint64) and the snapshot (none before initialization). */
+/* The slave's bytes, field by field (no struct padding, native byte order, little-endian on every FMI
+ * platform this project builds; rocking_model/fmi/standalone.py: decode_state_payload reads them):
+ *   PAYLOAD_MAGIC (28 bytes, its last line the format version), GUID (36),
+ *   int32 n_vars, double values[n_vars] (value-reference order),
+ *   int32 initialized, terminated, frozen, has_rate, has_error,
+ *   double t, t0, rate, rate_t,
+ *   int32 error length, the error text (no NUL),
+ *   uint64 snapshot size, the engine snapshot (rk_engine_snapshot; none before initialization). */
+#define PUT(q, x) (memcpy((q), &(x), sizeof(x)), (q) += sizeof(x))
+#define GET(x) (memcpy(&(x), p + off, sizeof(x)), off += sizeof(x))
+
+static size_t fixed_payload_size(void) {
+    return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 5 * 4 + 4 * 8 + 4;
+}
+
 static unsigned char *encode_slave(Instance *S, size_t *n) {
+    const Slave *sl = &S->s;
     size_t snap = S->engine ? rk_engine_snapshot_size(S->engine) : 0;
     uint64_t snap64 = snap;
-    *n = PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof(Slave) + 8 + snap;
+    int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
+    int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
+    double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
+    *n = fixed_payload_size() + (size_t)len + 8 + snap;
     unsigned char *p = (unsigned char *)calloc(1, *n);
     if (!p) return NULL;
     unsigned char *q = p;
@@ -992,10 +1009,15 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     q += PAYLOAD_MAGIC_SIZE;
     memcpy(q, RK_FMU_GUID, GUID_SIZE);
     q += GUID_SIZE;
-    memcpy(q, &S->s, sizeof(Slave));
-    q += sizeof(Slave);
-    memcpy(q, &snap64, 8);
-    q += 8;
+    PUT(q, n_vars);
+    memcpy(q, sl->values, sizeof sl->values);
+    q += sizeof sl->values;
+    PUT(q, flags);
+    PUT(q, times);
+    PUT(q, len);
+    memcpy(q, sl->error, (size_t)len);
+    q += len;
+    PUT(q, snap64);
     if (snap && rk_engine_snapshot(S->engine, q, snap) != RK_OK) {
         free(p);
         return NULL;
@@ -1005,8 +1027,8 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
 static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
-    if (n < PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof(Slave) + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
-        snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (version 1)", n);
+    if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
+        snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (format version 1)", n);
         return -1;
     }
     if (memcmp(p + PAYLOAD_MAGIC_SIZE, RK_FMU_GUID, GUID_SIZE) != 0) {
@@ -1014,12 +1036,34 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
                  RK_FMU_NAME);
         return -1;
     }
+    size_t off = PAYLOAD_MAGIC_SIZE + GUID_SIZE;
+    int32_t n_vars, flags[5], len;
+    double times[4];
     Slave s;
-    memcpy(&s, p + PAYLOAD_MAGIC_SIZE + GUID_SIZE, sizeof s);
+    memset(&s, 0, sizeof s);
+    GET(n_vars);
+    if (n_vars != RK_FMU_N_VARS) {
+        snprintf(why, size, "the state has %d variables, %s has %d", (int)n_vars, RK_FMU_NAME, RK_FMU_N_VARS);
+        return -1;
+    }
+    memcpy(s.values, p + off, sizeof s.values);
+    off += sizeof s.values;
+    GET(flags);
+    GET(times);
+    GET(len);
+    if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 8 > n) {
+        snprintf(why, size, "state field slave.error has an invalid length");
+        return -1;
+    }
+    memcpy(s.error, p + off, (size_t)len);
+    off += (size_t)len;
+    s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_rate = flags[3];
+    s.has_error = flags[4];
+    s.t = times[0], s.t0 = times[1], s.rate = times[2], s.rate_t = times[3];
     uint64_t snap;
-    memcpy(&snap, p + PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s, 8);
-    const unsigned char *body = p + PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s + 8;
-    size_t rest = n - (PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s + 8);
+    GET(snap);
+    const unsigned char *body = p + off;
+    size_t rest = n - off;
     if (snap != rest) {
         snprintf(why, size, "the engine snapshot has %zu bytes, the header says %llu", rest, (unsigned long long)snap);
         return -1;
@@ -1028,7 +1072,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
                    (s.frozen == 0 || s.frozen == 1) && (s.has_rate == 0 || s.has_rate == 1) &&
                    (s.has_error == 0 || s.has_error == 1);
     if (!flags_ok || !isfinite(s.t) || !isfinite(s.t0) || !isfinite(s.rate) || !isfinite(s.rate_t) ||
-        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX || memchr(s.error, 0, sizeof s.error) == NULL) {
+        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX) {
         snprintf(why, size, "state fields of the slave are invalid");
         return -1;
     }
