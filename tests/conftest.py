@@ -31,11 +31,7 @@ def built_fmus(build_module, tmp_path_factory) -> dict:
     """Every FMU of fmu_src/, built once per session: {name: Path}."""
     pytest.importorskip("pythonfmu")
     dest = tmp_path_factory.mktemp("fmus")
-    out = {p.stem: p for p in build_module.build_all(dest)}
-    import os
-    if os.environ.get("H1_SWAP"):
-        out.update({p.stem: p for p in build_module.build_standalone(dest)})
-    return out
+    return {p.stem: p for p in build_module.build_all(dest)}
 
 
 @pytest.fixture(scope="session")
