@@ -307,13 +307,22 @@ def _messages(fmu, unzip, action):
     return [(s, text) for s, _, text in sink]
 
 
-@pytest.mark.parametrize("case", ["bad_param", "bad_input", "fixed", "unknown_vr", "bad_rate"])
+#: parameter values refused at fmi2ExitInitializationMode (by the model, the Simulator or the FMU's check)
+BAD_PARAMETERS = {"b_negative": ("Real", "b", -1.0), "b_nan": ("Real", "b", math.nan),
+                  "b_subnormal": ("Real", "b", 1e-310), "scheme": ("Integer", "scheme", 7),
+                  "impact_law": ("Integer", "impact_law", 5), "max_steps": ("Integer", "max_steps", 0),
+                  "dt_max": ("Real", "dt_max", 1e-12), "tolerance": ("Real", "tolerance", 1.0),
+                  "mu": ("Real", "mu", -1.0), "phi_0": ("Real", "phi_0", 2.0)}
+
+
+@pytest.mark.parametrize("case", ["bad_input", "fixed", "unknown_vr", "bad_rate", *BAD_PARAMETERS])
 def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_unzipped, case):
     def action(f, vr):
         f.setupExperiment(startTime=0.0)
         f.enterInitializationMode()
-        if case == "bad_param":
-            f.setReal([vr["b"]], [-1.0])
+        if case in BAD_PARAMETERS:
+            kind, name, value = BAD_PARAMETERS[case]
+            (f.setInteger if kind == "Integer" else f.setReal)([vr[name]], [value])
         f.exitInitializationMode() if case != "bad_rate" else None
         if case == "bad_input":
             f.setReal([vr["ag"]], [1e4])
@@ -442,3 +451,94 @@ def test_c_host_under_env_i_without_python(host, standalone, unzipped, name, tmp
     probe = subprocess.run([env_i, "-i", f"PATH={bindir}", "/bin/sh", "-c", "command -v python3 python"],
                            capture_output=True, text=True, timeout=30)
     assert probe.stdout.strip() == ""
+
+
+def test_crafted_state_blobs_with_a_valid_crc_never_crash_the_host(standalone, unzipped, tmp_path):
+    """Blobs altered byte by byte with the CRC rewritten (what the CRC cannot catch): each is refused with a
+    message or, if every field is still valid, steps on; never a crash. Run in a subprocess, so that a crash
+    fails this test instead of the session."""
+    script = tmp_path / "fuzz.py"
+    script.write_text(f"""
+import sys, zlib, random
+sys.path.insert(0, {str(ROOT / 'tests')!r})
+from test_standalone_fmu import Run
+fmu, unzip = {str(standalone[FLEX])!r}, {str(unzipped[FLEX])!r}
+r = Run(fmu, unzip, "src")
+vr = r.vars["ag"].valueReference
+for k in range(40):
+    r.f.setReal([vr], [4.0])
+    r.f.doStep(k * 0.01, 0.01)
+blob = bytes(r.f.serializeFMUstate(r.f.getFMUstate()))
+rng = random.Random(7)
+refused = accepted = 0
+for trial in range(400):
+    bad = bytearray(blob)
+    i = rng.randrange(46, len(bad))
+    bad[i] = rng.randrange(256)
+    crc = zlib.crc32(bytes(bad[:42]) + bytes(bad[46:]))
+    bad[42:46] = crc.to_bytes(4, "little")
+    t = Run(fmu, unzip, "t%d" % trial)
+    try:
+        t.f.setFMUstate(t.f.deSerializeFMUstate(bytes(bad)))
+    except Exception:
+        refused += 1
+        continue
+    accepted += 1
+    try:
+        for k in range(3):
+            t.f.doStep(0.4 + k * 0.01, 0.01)
+    except Exception:
+        pass
+print("refused", refused, "accepted", accepted)
+""")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    refused = int(re.search(r"refused (\d+)", proc.stdout).group(1))
+    assert refused > 0
+
+
+def test_hypothesis_scenes_bit_identical_to_the_c_engine(standalone, unzipped):
+    """Hypothesis-generated scenes (geometry, restitution, pulse, scheme, step size, both models): every output
+    of every step equals the `Simulator(engine="c")` run with the FMU's calls, bit for bit; a step refused
+    by one is refused by the other."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from rocking_model.models import make_model
+    from rocking_model.simulation import Simulator
+
+    @settings(max_examples=8, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    @given(kind=st.sampled_from(["rigid", "flexible"]), scheme=st.sampled_from([0, 1]),
+           b=st.floats(0.15, 0.4), e_N=st.floats(0.0, 0.9), amplitude=st.floats(0.0, 8.0),
+           freq=st.floats(0.5, 4.0), dt=st.sampled_from([0.005, 0.01, 0.02]))
+    def check(kind, scheme, b, e_N, amplitude, freq, dt):
+        name = RIGID if kind == "rigid" else FLEX
+        params = {"b": b, "e_N": e_N}
+        n = int(round(1.0 / dt))
+        ag = [amplitude * math.sin(2 * math.pi * freq * k * dt) if k * dt * freq < 1 else 0.0 for k in range(n)]
+        r = Run(standalone[name], unzipped[name], "hyp", {**params, "scheme": scheme})
+        sim = Simulator(make_model(kind, **params), ("moreau_jean", "event_driven")[scheme], engine="c",
+                        impact_log_size=0, max_steps=r.vars["max_steps"].start and int(r.vars["max_steps"].start))
+        sim.on_report = "raise"
+        vr = r.vars["ag"].valueReference
+        for k, a in enumerate(ag):
+            r.f.setReal([vr], [a])
+            try:
+                r.f.doStep(k * dt, dt)
+                refused = False
+            except Exception:
+                refused = True
+            try:
+                sim.advance(k * dt + dt, a)
+                sim_refused = False
+            except Exception:
+                sim_refused = True
+            assert refused == sim_refused, k
+            if refused:
+                break
+            out = sim.outputs()
+            assert r.row() == [type(x)(out[v.name]) for v, x in zip(r.outputs, r.row())], k
+        r.free()
+
+    check()

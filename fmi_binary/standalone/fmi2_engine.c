@@ -279,16 +279,32 @@ static rk_engine *create_engine(const double *values, double t0, char *why, size
                  RK_FMU_MAX_STEPS_LIMIT);
         return NULL;
     }
-    for (int i = 0; i < RK_FMU_N_VARS; i++) /* the scheme code checked as the Python's choice */
-        if (RK_FMU_VARS[i].role == RK_ROLE_SCHEME && !(values[i] == 0 || values[i] == 1)) {
-            snprintf(why, size, "scheme = %.0f is not supported; allowed values: 0, 1", values[i]);
-            return NULL;
-        }
+    /* the scheme is checked after the model's parameters, as the Python builds the model before the Simulator */
+    int bad_scheme = !(o.scheme == RK_SCHEME_MOREAU_JEAN || o.scheme == RK_SCHEME_EVENT_DRIVEN);
+    if (bad_scheme) o.scheme = RK_SCHEME_EVENT_DRIVEN;
     rk_error err;
     rk_error_clear(&err);
     rk_engine *e = rk_engine_create(RK_FMU_MODEL_KIND, params, RK_FMU_N_PARAMS, initial, RK_FMU_N_INITIAL, &o, &err);
     if (!e) {
         snprintf(why, size, "%s", err.message);
+        /* an Integer choice named with its integer value, as the Python's message (the engine reads doubles) */
+        for (int i = 0; i < RK_FMU_N_VARS; i++) {
+            const rk_fmu_var *v = &RK_FMU_VARS[i];
+            char head[160], fixed[160];
+            if (v->type != RK_INTEGER) continue;
+            snprintf(head, sizeof head, "%s = %.1f is not supported", v->name, values[i]);
+            snprintf(fixed, sizeof fixed, "%s = %.0f is not supported", v->name, values[i]);
+            if (strncmp(err.message, head, strlen(head)) == 0)
+                snprintf(why, size, "%s%s", fixed, err.message + strlen(head));
+        }
+        return NULL;
+    }
+    if (bad_scheme) {
+        rk_engine_free(e);
+        for (int i = 0; i < RK_FMU_N_VARS; i++)
+            if (RK_FMU_VARS[i].role == RK_ROLE_SCHEME)
+                snprintf(why, size, "scheme = %.0f is not supported; allowed values: %s", values[i],
+                         RK_FMU_SCHEME_ALLOWED);
         return NULL;
     }
     if (rk_engine_n_outputs(e) < RK_FMU_N_OUTPUTS) {
@@ -963,12 +979,29 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 }
 
 /* ------------------------------------------------------------------------------------------ FMU state */
-/* The slave's bytes: PAYLOAD_MAGIC, GUID, the Slave struct (fixed layout of this binary), the engine
- * snapshot's size (uint64) and the snapshot (none before initialization). */
+/* The slave's bytes, field by field (no struct padding, native byte order, little-endian on every FMI
+ * platform this project builds; rocking_model/fmi/standalone.py: decode_state_payload reads them):
+ *   PAYLOAD_MAGIC (28 bytes, its last line the format version), GUID (36),
+ *   int32 n_vars, double values[n_vars] (value-reference order),
+ *   int32 initialized, terminated, frozen, has_rate, has_error,
+ *   double t, t0, rate, rate_t,
+ *   int32 error length, the error text (no NUL),
+ *   uint64 snapshot size, the engine snapshot (rk_engine_snapshot; none before initialization). */
+#define PUT(q, x) (memcpy((q), &(x), sizeof(x)), (q) += sizeof(x))
+#define GET(x) (memcpy(&(x), p + off, sizeof(x)), off += sizeof(x))
+
+static size_t fixed_payload_size(void) {
+    return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 5 * 4 + 4 * 8 + 4;
+}
+
 static unsigned char *encode_slave(Instance *S, size_t *n) {
+    const Slave *sl = &S->s;
     size_t snap = S->engine ? rk_engine_snapshot_size(S->engine) : 0;
     uint64_t snap64 = snap;
-    *n = PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof(Slave) + 8 + snap;
+    int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
+    int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
+    double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
+    *n = fixed_payload_size() + (size_t)len + 8 + snap;
     unsigned char *p = (unsigned char *)calloc(1, *n);
     if (!p) return NULL;
     unsigned char *q = p;
@@ -976,10 +1009,15 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     q += PAYLOAD_MAGIC_SIZE;
     memcpy(q, RK_FMU_GUID, GUID_SIZE);
     q += GUID_SIZE;
-    memcpy(q, &S->s, sizeof(Slave));
-    q += sizeof(Slave);
-    memcpy(q, &snap64, 8);
-    q += 8;
+    PUT(q, n_vars);
+    memcpy(q, sl->values, sizeof sl->values);
+    q += sizeof sl->values;
+    PUT(q, flags);
+    PUT(q, times);
+    PUT(q, len);
+    memcpy(q, sl->error, (size_t)len);
+    q += len;
+    PUT(q, snap64);
     if (snap && rk_engine_snapshot(S->engine, q, snap) != RK_OK) {
         free(p);
         return NULL;
@@ -989,8 +1027,8 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
 static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
-    if (n < PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof(Slave) + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
-        snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (version 1)", n);
+    if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
+        snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (format version 1)", n);
         return -1;
     }
     if (memcmp(p + PAYLOAD_MAGIC_SIZE, RK_FMU_GUID, GUID_SIZE) != 0) {
@@ -998,12 +1036,34 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
                  RK_FMU_NAME);
         return -1;
     }
+    size_t off = PAYLOAD_MAGIC_SIZE + GUID_SIZE;
+    int32_t n_vars, flags[5], len;
+    double times[4];
     Slave s;
-    memcpy(&s, p + PAYLOAD_MAGIC_SIZE + GUID_SIZE, sizeof s);
+    memset(&s, 0, sizeof s);
+    GET(n_vars);
+    if (n_vars != RK_FMU_N_VARS) {
+        snprintf(why, size, "the state has %d variables, %s has %d", (int)n_vars, RK_FMU_NAME, RK_FMU_N_VARS);
+        return -1;
+    }
+    memcpy(s.values, p + off, sizeof s.values);
+    off += sizeof s.values;
+    GET(flags);
+    GET(times);
+    GET(len);
+    if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 8 > n) {
+        snprintf(why, size, "state field slave.error has an invalid length");
+        return -1;
+    }
+    memcpy(s.error, p + off, (size_t)len);
+    off += (size_t)len;
+    s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_rate = flags[3];
+    s.has_error = flags[4];
+    s.t = times[0], s.t0 = times[1], s.rate = times[2], s.rate_t = times[3];
     uint64_t snap;
-    memcpy(&snap, p + PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s, 8);
-    const unsigned char *body = p + PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s + 8;
-    size_t rest = n - (PAYLOAD_MAGIC_SIZE + GUID_SIZE + sizeof s + 8);
+    GET(snap);
+    const unsigned char *body = p + off;
+    size_t rest = n - off;
     if (snap != rest) {
         snprintf(why, size, "the engine snapshot has %zu bytes, the header says %llu", rest, (unsigned long long)snap);
         return -1;
@@ -1012,7 +1072,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
                    (s.frozen == 0 || s.frozen == 1) && (s.has_rate == 0 || s.has_rate == 1) &&
                    (s.has_error == 0 || s.has_error == 1);
     if (!flags_ok || !isfinite(s.t) || !isfinite(s.t0) || !isfinite(s.rate) || !isfinite(s.rate_t) ||
-        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX || memchr(s.error, 0, sizeof s.error) == NULL) {
+        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX) {
         snprintf(why, size, "state fields of the slave are invalid");
         return -1;
     }
@@ -1037,6 +1097,25 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
         }
         if (rk_engine_restore(e, body, rest) != RK_OK) {
             snprintf(why, size, "%s", rk_engine_message(e));
+            rk_engine_free(e);
+            return -1;
+        }
+        /* every field of the restored state checked as Simulator.set_state checks a state (a blob whose CRC
+         * was rewritten may hold anything): on a scratch engine, so that the restored one is left bit for bit
+         * as saved (set_state restarts the event-driven stepper) */
+        rk_engine *probe = create_engine(s.values, s.t0, why, size);
+        rk_plain_state ps;
+        int bad = !probe || rk_engine_restore(probe, body, rest) != RK_OK;
+        if (!bad) {
+            rk_engine_get_state(probe, &ps);
+            if (rk_engine_set_state(probe, &ps, NULL, 0, NULL, 0) != RK_OK) {
+                snprintf(why, size, "%s", rk_engine_message(probe));
+                bad = 1;
+            }
+        }
+        rk_engine_free(probe);
+        if (bad || !isfinite(rk_engine_time(e))) {
+            if (!bad) snprintf(why, size, "state field t is not finite");
             rk_engine_free(e);
             return -1;
         }

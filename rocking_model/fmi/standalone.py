@@ -89,6 +89,21 @@ def _c_string(text: str) -> str:
     return '"' + out.encode("ascii", "backslashreplace").decode().replace("\\u", "\\u") + '"'
 
 
+def _scheme_allowed() -> str:
+    """The "allowed values: ..." text of the Simulator's check of the scheme, as its ValueError says it."""
+    from ..simulation import SCHEMES
+    from ..validation import check_choice
+
+    try:
+        check_choice("scheme", 2**31 - 1, SCHEMES)         # no scheme has this code
+    except ValueError as exc:
+        text = str(exc)
+        marker = "allowed values: "
+        if marker in text:
+            return text[text.index(marker) + len(marker):]
+    raise ValueError("cannot read the allowed schemes from the Simulator's check")
+
+
 def vars_header(slave, guid: str) -> str:
     """The C header rk_fmu_vars.h of ``slave``'s FMU (see the module docstring)."""
     cls = slave.model_class
@@ -142,6 +157,8 @@ def vars_header(slave, guid: str) -> str:
         f"#define RK_FMU_INPUT_RATE_MAX {_c_double(INPUT_RATE_MAX)}",
         f"#define RK_FMU_AG_MAX {_c_double(AG_MAX)}",
         f"#define RK_FMU_MAX_STEPS_LIMIT {int(MAX_STEPS_PARAMETER.max)}",
+        "/* the allowed values of the scheme as the Python's check names them (its message) */",
+        f"#define RK_FMU_SCHEME_ALLOWED {_c_string(_scheme_allowed())}",
         "/* the declared defaults of every model parameter and initial value (those without an FMU variable",
         " * keep them), in the model's declared order (rk_engine_create) */",
         "static const double RK_FMU_PARAM_DEFAULTS[] = {"
@@ -192,3 +209,45 @@ def documentation(slave) -> str:
             "<table border=\"1\">\n<tr><th>value reference</th><th>name</th><th>causality</th>"
             "<th>variability</th><th>type</th><th>unit</th><th>start</th><th>range</th><th>description</th>"
             "</tr>\n" + "\n".join(rows) + "\n</table>\n</body></html>\n")
+
+
+# ---------------------------------------------------------------------------------------------- FMU states
+#: the slave part of a standalone FMU's serialized state (fmi_binary/standalone/fmi2_engine.c, encode_slave)
+STATE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
+
+
+def decode_state_payload(data: bytes) -> dict:
+    """The fields of a standalone FMU's state payload (the bytes after the binary's 46-byte header, what
+    fmi2_cs.c's header precedes too): guid, values (value-reference order), the slave's flags and times, the
+    error text, and the engine snapshot (opaque bytes, rk_engine_snapshot). ValueError naming what is wrong."""
+    import struct
+
+    data = bytes(data)
+    m, g = len(STATE_PAYLOAD_MAGIC), 36
+    if not data.startswith(STATE_PAYLOAD_MAGIC) or len(data) < m + g + 4:
+        raise ValueError("not a standalone rocking_model FMU state (bad header)")
+    guid = data[m:m + g].decode("ascii", "replace")
+    off = m + g
+    (n_vars,) = struct.unpack_from("<i", data, off)
+    off += 4
+    if not 0 <= n_vars <= 10_000 or len(data) < off + 8 * n_vars + 20 + 32 + 4:
+        raise ValueError("the standalone FMU state is truncated")
+    values = list(struct.unpack_from(f"<{n_vars}d", data, off))
+    off += 8 * n_vars
+    flags = struct.unpack_from("<5i", data, off)
+    off += 20
+    t, t0, rate, rate_t = struct.unpack_from("<4d", data, off)
+    off += 32
+    (n_err,) = struct.unpack_from("<i", data, off)
+    off += 4
+    if not 0 <= n_err <= len(data) - off - 8:
+        raise ValueError("the standalone FMU state is truncated")
+    error = data[off:off + n_err].decode("utf-8", "replace")
+    off += n_err
+    (n_snap,) = struct.unpack_from("<Q", data, off)
+    off += 8
+    if n_snap != len(data) - off:
+        raise ValueError("the standalone FMU state's engine snapshot has the wrong length")
+    keys = ("initialized", "terminated", "frozen", "has_rate", "has_error")
+    return {"guid": guid, "values": values, **dict(zip(keys, flags)), "t": t, "t0": t0, "rate": rate,
+            "rate_t": rate_t, "error": error if flags[4] else None, "engine": data[off:]}
