@@ -87,9 +87,17 @@ def slave_bytes(data: bytes) -> bytes:
     return data
 
 
-def is_standalone_state(data: bytes) -> bool:
-    """Whether ``data`` (a serialized state or its payload) is a self-contained FMU's state."""
-    return STANDALONE_PAYLOAD_MAGIC in data[:SERIAL_HEADER_SIZE + len(STANDALONE_PAYLOAD_MAGIC)]
+def decode_payload(payload: bytes) -> dict:
+    """The fields of a state payload (`slave_bytes`): the pythonfmu FMUs' document (rocking_model.fmi_state)
+    or the self-contained FMUs' binary record (rocking_model.fmi.standalone.decode_state_payload; its engine
+    snapshot as opaque bytes). Raises what the decoder raises."""
+    if payload.startswith(STANDALONE_PAYLOAD_MAGIC):
+        from rocking_model.fmi.standalone import decode_state_payload
+
+        return decode_state_payload(payload)
+    from rocking_model.fmi_state import decode_state
+
+    return decode_state(payload)
 
 
 #: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c: magic 22,
@@ -539,9 +547,7 @@ class Inst:
             return b"", f"fmi2SerializeFMUstate returned {STATUS_NAMES.get(st2)}"
         problem = None
         try:
-            from rocking_model.fmi_state import decode_state
-            if not is_standalone_state(data):  # the standalone FMU checks its binary payload itself
-                decode_state(slave_bytes(data))
+            decode_payload(slave_bytes(data))
         except ImportError:
             problem = None if data else "empty"
         except Exception as exc:
@@ -559,8 +565,7 @@ class Inst:
                 "state_ok": bool(data) and problem is None, "state_problem": problem, "state_doc": None}
         if snap["state_ok"]:
             try:
-                from rocking_model.fmi_state import decode_state
-                snap["state_doc"] = decode_state(slave_bytes(data))
+                snap["state_doc"] = decode_payload(slave_bytes(data))
             except Exception:
                 pass
         # a snapshot must not leave messages behind that a later check could mistake for its own
