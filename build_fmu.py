@@ -438,9 +438,9 @@ def build_standalone_one(script: Path, dest: Path) -> Path:
     name = script.stem
     slave = _standalone_slave(script)
     engine_files = _engine_sources()
-    fmi_files = [STANDALONE_SRC / f for f in standalone.FMI_SOURCES]
+    fmi_files = [FMI_BINARY / f for f in standalone.FMI_SOURCES]
     digest = b"".join(p.name.encode() + b"\0" + p.read_bytes() for p in engine_files + fmi_files)
-    c_sources = [p.name for p in engine_files + fmi_files if p.suffix == ".c"]
+    c_sources = sorted(p.name for p in engine_files + fmi_files if p.suffix == ".c")
     xml, guid = standalone.model_description(slave, c_sources, digest)
     folder, suffix = _binary_platform()
     cc = find_compiler()

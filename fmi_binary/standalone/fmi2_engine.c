@@ -25,6 +25,7 @@
 
 #include "fmi2Functions.h"
 #include "rk_engine.h"
+#include "uri.h"
 
 enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
 enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
@@ -396,7 +397,6 @@ static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
-    (void)fmuResourceLocation; /* the FMU reads no resources */
     (void)visible;
     if (!instanceName || !instanceName[0]) {
         instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
@@ -416,6 +416,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" is not the GUID of this "
                           "binary (%s): the modelDescription.xml belongs to another FMU or build", fmuGUID,
                           RK_FMU_GUID);
+        return NULL;
+    }
+    /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
+     * binary refuses it (fmi_binary/uri.c, the same messages) */
+    char resources[4096], why[2048];
+    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
@@ -986,7 +993,13 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
  *   int32 initialized, terminated, frozen, has_rate, has_error,
  *   double t, t0, rate, rate_t,
  *   int32 error length, the error text (no NUL),
- *   uint64 snapshot size, the engine snapshot (rk_engine_snapshot; none before initialization). */
+ *   int32 has_engine, then (with an engine) its plain-data state (Simulator.get_state's fields,
+ *   rk_plain_state): double t, int32 mode, int32 n_y, double y[RK_MAX_Y], double q[RK_MAX_DOF],
+ *   double v[RK_MAX_DOF], uint32 closed, int64 impacts, int32 overturned, int64 n_steps, double h, double
+ *   shift, double friction_demand, int64 painleve. The engine's state, not its memory: no cache keys, no
+ *   stepper internals, so two instances in the same state serialize to the same bytes, and setting a state
+ *   goes through rk_engine_set_state, which checks every field as Simulator.set_state does (the pythonfmu
+ *   FMU restores its Simulator the same way). The FMU keeps no impact log (impact_log_size 0). */
 #define PUT(q, x) (memcpy((q), &(x), sizeof(x)), (q) += sizeof(x))
 #define GET(x) (memcpy(&(x), p + off, sizeof(x)), off += sizeof(x))
 
@@ -994,14 +1007,59 @@ static size_t fixed_payload_size(void) {
     return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 5 * 4 + 4 * 8 + 4;
 }
 
+#define PLAIN_SIZE (8 + 4 + 4 + 8 * RK_MAX_Y + 16 * RK_MAX_DOF + 4 + 8 + 4 + 8 + 8 * 3 + 8)
+
+static void put_plain(unsigned char *q, const rk_plain_state *ps) {
+    int32_t mode = ps->mode, n_y = ps->n_y, overturned = ps->overturned;
+    uint32_t closed = ps->closed;
+    int64_t impacts = ps->impacts, n_steps = ps->n_steps, painleve = ps->painleve;
+    PUT(q, ps->t);
+    PUT(q, mode);
+    PUT(q, n_y);
+    memcpy(q, ps->y, sizeof ps->y), q += sizeof ps->y;
+    memcpy(q, ps->q, sizeof ps->q), q += sizeof ps->q;
+    memcpy(q, ps->v, sizeof ps->v), q += sizeof ps->v;
+    PUT(q, closed);
+    PUT(q, impacts);
+    PUT(q, overturned);
+    PUT(q, n_steps);
+    PUT(q, ps->h);
+    PUT(q, ps->shift);
+    PUT(q, ps->friction_demand);
+    PUT(q, painleve);
+}
+
+static void get_plain(const unsigned char *p, rk_plain_state *ps) {
+    size_t off = 0;
+    int32_t mode, n_y, overturned;
+    uint32_t closed;
+    int64_t impacts, n_steps, painleve;
+    memset(ps, 0, sizeof *ps);
+    GET(ps->t);
+    GET(mode);
+    GET(n_y);
+    memcpy(ps->y, p + off, sizeof ps->y), off += sizeof ps->y;
+    memcpy(ps->q, p + off, sizeof ps->q), off += sizeof ps->q;
+    memcpy(ps->v, p + off, sizeof ps->v), off += sizeof ps->v;
+    GET(closed);
+    GET(impacts);
+    GET(overturned);
+    GET(n_steps);
+    GET(ps->h);
+    GET(ps->shift);
+    GET(ps->friction_demand);
+    GET(painleve);
+    ps->mode = mode, ps->n_y = n_y, ps->overturned = overturned, ps->closed = closed;
+    ps->impacts = impacts, ps->n_steps = n_steps, ps->painleve = painleve;
+}
+
 static unsigned char *encode_slave(Instance *S, size_t *n) {
     const Slave *sl = &S->s;
-    size_t snap = S->engine ? rk_engine_snapshot_size(S->engine) : 0;
-    uint64_t snap64 = snap;
+    int32_t has_engine = S->engine != NULL;
     int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
     int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
     double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
-    *n = fixed_payload_size() + (size_t)len + 8 + snap;
+    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0);
     unsigned char *p = (unsigned char *)calloc(1, *n);
     if (!p) return NULL;
     unsigned char *q = p;
@@ -1017,17 +1075,19 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     PUT(q, len);
     memcpy(q, sl->error, (size_t)len);
     q += len;
-    PUT(q, snap64);
-    if (snap && rk_engine_snapshot(S->engine, q, snap) != RK_OK) {
-        free(p);
-        return NULL;
+    PUT(q, has_engine);
+    if (has_engine) {
+        rk_plain_state ps;
+        memset(&ps, 0, sizeof ps);
+        rk_engine_get_state(S->engine, &ps);
+        put_plain(q, &ps);
     }
     return p;
 }
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
 static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
-    if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
+    if (n < fixed_payload_size() + 4 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
         snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (format version 1)", n);
         return -1;
     }
@@ -1037,7 +1097,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
         return -1;
     }
     size_t off = PAYLOAD_MAGIC_SIZE + GUID_SIZE;
-    int32_t n_vars, flags[5], len;
+    int32_t n_vars, flags[5], len, has_engine;
     double times[4];
     Slave s;
     memset(&s, 0, sizeof s);
@@ -1051,7 +1111,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     GET(flags);
     GET(times);
     GET(len);
-    if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 8 > n) {
+    if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 4 > n) {
         snprintf(why, size, "state field slave.error has an invalid length");
         return -1;
     }
@@ -1060,12 +1120,9 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_rate = flags[3];
     s.has_error = flags[4];
     s.t = times[0], s.t0 = times[1], s.rate = times[2], s.rate_t = times[3];
-    uint64_t snap;
-    GET(snap);
-    const unsigned char *body = p + off;
-    size_t rest = n - off;
-    if (snap != rest) {
-        snprintf(why, size, "the engine snapshot has %zu bytes, the header says %llu", rest, (unsigned long long)snap);
+    GET(has_engine);
+    if (!(has_engine == 0 || has_engine == 1) || n - off != (has_engine ? (size_t)PLAIN_SIZE : 0)) {
+        snprintf(why, size, "the engine state has %zu bytes, expected %d", n - off, has_engine ? PLAIN_SIZE : 0);
         return -1;
     }
     int flags_ok = (s.initialized == 0 || s.initialized == 1) && (s.terminated == 0 || s.terminated == 1) &&
@@ -1088,34 +1145,17 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
         }
     }
     rk_engine *e = NULL;
-    if (snap) {
+    if (has_engine) {
         char reason[RK_MSG_LEN + 128];
+        rk_plain_state ps;
+        get_plain(p + off, &ps);
         e = create_engine(s.values, s.t0, reason, sizeof reason);
         if (!e) {
             snprintf(why, size, "%s", reason);
             return -1;
         }
-        if (rk_engine_restore(e, body, rest) != RK_OK) {
+        if (rk_engine_set_state(e, &ps, NULL, 0, NULL, 0) != RK_OK) {
             snprintf(why, size, "%s", rk_engine_message(e));
-            rk_engine_free(e);
-            return -1;
-        }
-        /* every field of the restored state checked as Simulator.set_state checks a state (a blob whose CRC
-         * was rewritten may hold anything): on a scratch engine, so that the restored one is left bit for bit
-         * as saved (set_state restarts the event-driven stepper) */
-        rk_engine *probe = create_engine(s.values, s.t0, why, size);
-        rk_plain_state ps;
-        int bad = !probe || rk_engine_restore(probe, body, rest) != RK_OK;
-        if (!bad) {
-            rk_engine_get_state(probe, &ps);
-            if (rk_engine_set_state(probe, &ps, NULL, 0, NULL, 0) != RK_OK) {
-                snprintf(why, size, "%s", rk_engine_message(probe));
-                bad = 1;
-            }
-        }
-        rk_engine_free(probe);
-        if (bad || !isfinite(rk_engine_time(e))) {
-            if (!bad) snprintf(why, size, "state field t is not finite");
             rk_engine_free(e);
             return -1;
         }

@@ -34,8 +34,9 @@ _SPECIAL = {"scheme": "RK_ROLE_SCHEME", "dt_max": "RK_ROLE_DT_MAX", "tolerance":
 _TYPES = {"Real": "RK_REAL", "Integer": "RK_INTEGER", "Boolean": "RK_BOOLEAN", "String": "RK_STRING"}
 _CAUS = {"parameter": "RK_PARAMETER", "input": "RK_INPUT", "output": "RK_OUTPUT"}
 
-#: the C sources of a standalone FMU: the engine's (rocking_model/engine/src) and the FMI layer's
-FMI_SOURCES = ("fmi2_engine.c",)
+#: the C sources of a standalone FMU besides the engine's (rocking_model/engine/src): the FMI layer and the
+#: resource-URI check it shares with the pythonfmu FMUs' binary (paths relative to fmi_binary/)
+FMI_SOURCES = ("standalone/fmi2_engine.c", "uri.c", "uri.h")
 
 
 def slave_instance(slave_class):
@@ -214,12 +215,16 @@ def documentation(slave) -> str:
 # ---------------------------------------------------------------------------------------------- FMU states
 #: the slave part of a standalone FMU's serialized state (fmi_binary/standalone/fmi2_engine.c, encode_slave)
 STATE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
+#: rk_common.h: RK_MAX_DOF, RK_MAX_Y = 2 RK_MAX_DOF (the fixed array sizes of the engine's plain state)
+RK_MAX_DOF = 8
+RK_MAX_Y = 2 * RK_MAX_DOF
 
 
 def decode_state_payload(data: bytes) -> dict:
     """The fields of a standalone FMU's state payload (the bytes after the binary's 46-byte header, what
     fmi2_cs.c's header precedes too): guid, values (value-reference order), the slave's flags and times, the
-    error text, and the engine snapshot (opaque bytes, rk_engine_snapshot). ValueError naming what is wrong."""
+    error text, and the engine's plain-data state (None before initialization). ValueError naming what is
+    wrong."""
     import struct
 
     data = bytes(data)
@@ -244,10 +249,23 @@ def decode_state_payload(data: bytes) -> dict:
         raise ValueError("the standalone FMU state is truncated")
     error = data[off:off + n_err].decode("utf-8", "replace")
     off += n_err
-    (n_snap,) = struct.unpack_from("<Q", data, off)
-    off += 8
-    if n_snap != len(data) - off:
-        raise ValueError("the standalone FMU state's engine snapshot has the wrong length")
+    (has_engine,) = struct.unpack_from("<i", data, off)
+    off += 4
+    engine = None
+    if has_engine:
+        fmt = f"<dii{RK_MAX_Y}d{RK_MAX_DOF}d{RK_MAX_DOF}dIqiqdddq"
+        if len(data) - off != struct.calcsize(fmt):
+            raise ValueError("the standalone FMU state's engine state has the wrong length")
+        f = struct.unpack_from(fmt, data, off)
+        y = f[3:3 + RK_MAX_Y]
+        q = f[3 + RK_MAX_Y:3 + RK_MAX_Y + RK_MAX_DOF]
+        v = f[3 + RK_MAX_Y + RK_MAX_DOF:3 + RK_MAX_Y + 2 * RK_MAX_DOF]
+        rest = f[3 + RK_MAX_Y + 2 * RK_MAX_DOF:]
+        engine = {"t": f[0], "mode": f[1], "y": list(y[:f[2]]), "q": list(q), "v": list(v),
+                  **dict(zip(("closed", "impacts", "overturned", "n_steps", "h", "shift", "friction_demand",
+                              "painleve"), rest))}
+    elif len(data) != off:
+        raise ValueError("the standalone FMU state has bytes after its end")
     keys = ("initialized", "terminated", "frozen", "has_rate", "has_error")
     return {"guid": guid, "values": values, **dict(zip(keys, flags)), "t": t, "t0": t0, "rate": rate,
-            "rate_t": rate_t, "error": error if flags[4] else None, "engine": data[off:]}
+            "rate_t": rate_t, "error": error if flags[4] else None, "engine": engine}
