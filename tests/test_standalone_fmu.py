@@ -543,3 +543,29 @@ def test_hypothesis_scenes_bit_identical_to_the_c_engine(standalone, unzipped):
         r.free()
 
     check()
+
+
+def test_state_payload_decodes_in_python(standalone, unzipped):
+    """rocking_model.fmi.standalone.decode_state_payload reads the FMU's state before and after
+    initialization (the fault suite and other tools compare states field by field with it)."""
+    from rocking_model.fmi.standalone import decode_state_payload
+
+    md = read_model_description(str(standalone[RIGID]))
+    f = FMU2Slave(guid=md.guid, unzipDirectory=unzipped[RIGID], modelIdentifier=md.coSimulation.modelIdentifier,
+                  instanceName="decode")
+    f.instantiate()
+    before = decode_state_payload(bytes(f.serializeFMUstate(f.getFMUstate()))[46:])
+    assert before["initialized"] == 0 and before["engine"] is None and before["guid"] == md.guid
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.exitInitializationMode()
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    f.setReal([vr["ag"]], [3.0])
+    f.doStep(0.0, 0.2)
+    after = decode_state_payload(bytes(f.serializeFMUstate(f.getFMUstate()))[46:])
+    assert after["initialized"] == 1 and after["t"] == 0.2 and after["engine"]["t"] == 0.2
+    assert after["values"][vr["phi"]] == f.getReal([vr["phi"]])[0] != 0.0
+    blob = bytearray(f.serializeFMUstate(f.getFMUstate()))[46:]
+    blob[60] ^= 1
+    with pytest.raises(ValueError, match="CRC-32"):
+        decode_state_payload(bytes(blob))

@@ -250,7 +250,7 @@ def decode_state_payload(data: bytes) -> dict:
     off += 32
     (n_err,) = struct.unpack_from("<i", data, off)
     off += 4
-    if not 0 <= n_err <= len(data) - off - 8:          # the error, has_engine, the CRC-32
+    if not 0 <= n_err <= len(data) - off - 4:          # the error text, then has_engine
         raise ValueError("the standalone FMU state is truncated")
     error = data[off:off + n_err].decode("utf-8", "replace")
     off += n_err
