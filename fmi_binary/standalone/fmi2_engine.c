@@ -1120,7 +1120,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     uint32_t crc;
     memcpy(&crc, p + n - 4, 4);
     if (crc != crc32_update(0, p, n - 4)) {
-        snprintf(why, size, "the engine FMU state is corrupted (CRC-32 mismatch of its payload)");
+        snprintf(why, size, "the engine FMU state is corrupted (CRC-32 mismatch of its %zu payload bytes)", n - 4);
         return -1;
     }
     n -= 4;
