@@ -481,6 +481,8 @@ def build_standalone_one(script: Path, dest: Path) -> Path:
             for p in sorted(src.iterdir()):
                 put(zf, f"sources/{p.name}", p.read_bytes())
             put(zf, "documentation/index.html", standalone.documentation(slave).encode())
+            # the FMU reads no resources; the folder exists so that every importer has one to point to
+            put(zf, "resources/README.txt", b"This FMU reads no resources: the model is compiled into its binary.\n")
         os.replace(tmp_fmu, fmu)
     validate(fmu)
     return fmu

@@ -16,12 +16,17 @@
  *                         fmi2Terminate and fmi2FreeInstance allowed).
  * Messages are passed to the logger as data ("%s"), never as a format.
  * Thread safety: no mutable globals; each instance owns its engine. */
+#if !defined(_WIN32) && !defined(_POSIX_C_SOURCE)
+#define _POSIX_C_SOURCE 200809L /* stat() */
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <sys/stat.h>
 
 #include "fmi2Functions.h"
 #include "rk_engine.h"
@@ -380,6 +385,17 @@ static int check_real(const char *name, double x, const rk_fmu_var *v, char *out
 static const rk_fmu_var RATE_RANGE = {"rate", RK_REAL, RK_INPUT, 0, 0, 0, 0.0, 1, -RK_FMU_INPUT_RATE_MAX, 1,
                                       RK_FMU_INPUT_RATE_MAX};
 
+/* the resource folder exists (the FMU reads nothing from it; a missing one means a broken extraction) */
+static int is_directory(const char *path) {
+#ifdef _WIN32
+    struct _stat st;
+    return _stat(path, &st) == 0 && (st.st_mode & _S_IFDIR);
+#else
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+#endif
+}
+
 /* ------------------------------------------------------------------------------------------ life cycle */
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -413,8 +429,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     if (strcmp(fmuGUID, RK_FMU_GUID) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" is not the GUID of this "
-                          "binary (%s): the modelDescription.xml belongs to another FMU or build", fmuGUID,
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the GUID of "
+                          "this binary, %s (the modelDescription.xml belongs to another FMU or build)", fmuGUID,
                           RK_FMU_GUID);
         return NULL;
     }
@@ -423,6 +439,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     char resources[4096], why[2048];
     if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
         instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        return NULL;
+    }
+    if (!is_directory(resources)) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from fmuResourceLocation "
+                          "\"%.500s\") does not exist or is not a folder", resources, fmuResourceLocation);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
@@ -996,7 +1017,9 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
  *   int32 has_engine, then (with an engine) its plain-data state (Simulator.get_state's fields,
  *   rk_plain_state): double t, int32 mode, int32 n_y, double y[RK_MAX_Y], double q[RK_MAX_DOF],
  *   double v[RK_MAX_DOF], uint32 closed, int64 impacts, int32 overturned, int64 n_steps, double h, double
- *   shift, double friction_demand, int64 painleve. The engine's state, not its memory: no cache keys, no
+ *   shift, double friction_demand, int64 painleve;
+ *   uint32 CRC-32 of all the payload's bytes before it (a corruption inside the payload is refused by itself,
+ *   as the pythonfmu slave's SHA-256 does). The engine's state, not its memory: no cache keys, no
  *   stepper internals, so two instances in the same state serialize to the same bytes, and setting a state
  *   goes through rk_engine_set_state, which checks every field as Simulator.set_state does (the pythonfmu
  *   FMU restores its Simulator the same way). The FMU keeps no impact log (impact_log_size 0). */
@@ -1059,7 +1082,7 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
     int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
     double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
-    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0);
+    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
     unsigned char *p = (unsigned char *)calloc(1, *n);
     if (!p) return NULL;
     unsigned char *q = p;
@@ -1081,16 +1104,26 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
         memset(&ps, 0, sizeof ps);
         rk_engine_get_state(S->engine, &ps);
         put_plain(q, &ps);
+        q += PLAIN_SIZE;
     }
+    uint32_t crc = crc32_update(0, p, *n - 4);
+    memcpy(q, &crc, 4);
     return p;
 }
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
 static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
-    if (n < fixed_payload_size() + 4 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
-        snprintf(why, size, "the %zu bytes are not a state of the C engine FMU (format version 1)", n);
+    if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
+        snprintf(why, size, "bad header: the %zu bytes are not a state of the C engine FMU (format version 1)", n);
         return -1;
     }
+    uint32_t crc;
+    memcpy(&crc, p + n - 4, 4);
+    if (crc != crc32_update(0, p, n - 4)) {
+        snprintf(why, size, "the engine FMU state is corrupted (CRC-32 mismatch of its %zu payload bytes)", n - 4);
+        return -1;
+    }
+    n -= 4;
     if (memcmp(p + PAYLOAD_MAGIC_SIZE, RK_FMU_GUID, GUID_SIZE) != 0) {
         snprintf(why, size, "the state belongs to another FMU (or to another version of its variables), not to '%s'",
                  RK_FMU_NAME);

@@ -227,8 +227,13 @@ def decode_state_payload(data: bytes) -> dict:
     wrong."""
     import struct
 
+    import zlib
+
     data = bytes(data)
     m, g = len(STATE_PAYLOAD_MAGIC), 36
+    if len(data) < 4 or zlib.crc32(data[:-4]) != struct.unpack("<I", data[-4:])[0]:
+        raise ValueError("the standalone FMU state is corrupted (CRC-32 mismatch of its payload)")
+    data = data[:-4]
     if not data.startswith(STATE_PAYLOAD_MAGIC) or len(data) < m + g + 4:
         raise ValueError("not a standalone rocking_model FMU state (bad header)")
     guid = data[m:m + g].decode("ascii", "replace")
@@ -245,7 +250,7 @@ def decode_state_payload(data: bytes) -> dict:
     off += 32
     (n_err,) = struct.unpack_from("<i", data, off)
     off += 4
-    if not 0 <= n_err <= len(data) - off - 8:
+    if not 0 <= n_err <= len(data) - off - 4:          # the error text, then has_engine
         raise ValueError("the standalone FMU state is truncated")
     error = data[off:off + n_err].decode("utf-8", "replace")
     off += n_err
