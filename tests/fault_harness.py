@@ -2409,45 +2409,30 @@ def standalone_fmus(build_module, tmp_path_factory) -> Dict[str, Path]:
     return built
 
 
-_PY_PAYLOAD = ("it edits the pythonfmu FMU's own state payload (its JSON document, or the version and length "
-               "words of its header at their offsets); the self-contained FMU's payload is a binary record of the C "
-               "slave and engine (`rocking engine FMU state v1`), which such bytes do not reach: the state "
-               "checks that apply to any format (random, short, empty, truncated, padded, another FMU's state, "
-               "corrupted bytes) run on it")
+_PY_PAYLOAD = ("it edits the pythonfmu FMU's own state payload (a field of its JSON document, or JSON behind its "
+               "header, or the length word of that header at its offset); the self-contained FMU's payload is a "
+               "binary record of the C slave and engine under its own CRC-32, which such bytes do not reach "
+               "(refused there as a bad header or a CRC mismatch): the state cases that apply to any format "
+               "(pickles, random, short, empty, truncated, padded, versions, 2 MiB, another FMU's state, "
+               "flipped bytes) run on it")
 _PY_MODULE = ("it forces the failure by patching the FMU's bundled Python module (the stepper or the contact "
               "solver) in this process; the self-contained FMU has no Python module to patch")
 #: cases (id or id prefix) that do not apply to the self-contained FMUs, with the reason
 STANDALONE_NA: Dict[str, str] = {
-    **{f"badstate/{f}/{w}": ("pickles as states: " + _PY_PAYLOAD) for f in ("rigid", "flex")
-       for w in ("pickle-gadget", "pickle-gadget-via-rocking_model.fmi", "pickle-in-new-header")},
     **{f"badstate/{f}/{w}": _PY_PAYLOAD for f in ("rigid", "flex")
-       for w in ("version=2", "version=0", "length-huge", "json-not-object", "json-invalid", "json-deep",
-                 "payload-2MiB", "t=nan", "initialized-string", "value-wrong-type", "value-missing", "extra-key",
-                 "signature", "pending-huge", "array-length", "array-wrong-type", "mode=10", "negative-impacts",
+       for w in ("pickle-in-new-header", "length-huge", "json-not-object", "json-invalid", "json-deep", "t=nan",
+                 "initialized-string", "value-wrong-type", "value-missing", "extra-key", "signature",
+                 "pending-huge", "array-length", "array-wrong-type", "mode=10", "negative-impacts",
                  "negative-n_steps", "sim-nan")},
     "report/rigid/failed-step": _PY_MODULE,
     "report/flex/failed-step": _PY_MODULE,
     "report/rigid/inexact-contact": _PY_MODULE,
-    **{f"instantiate/rigid/{w}": ("the self-contained FMU reads nothing from its resources folder (the engine "
-                                  "and its tables are compiled in), so any fmuResourceLocation is accepted; the "
-                                  "pythonfmu FMU needs the folder to find its Python package")
-       for w in ("uri-null", "uri-http", "uri-remote-host", "uri-missing", "uri-bad-escape")},
 }
 
 
 #: cases where the self-contained FMUs differ from the pythonfmu ones today (issue 22 asks for the same statuses
 #: and messages): strict xfails, so that a fix shows as an unexpected pass and the entry is removed
-STANDALONE_XFAIL: Dict[str, str] = {
-    "badstate/rigid/byte-flipped": ("a byte flipped inside the payload (behind a binary header whose CRC-32 "
-                                    "holds) is accepted (fmi2OK): the payload has no digest of its own, where "
-                                    "the pythonfmu payload's SHA-256 refuses it"),
-    "badstate/rigid/nul-bytes": ("the message says 'not a state of the C engine FMU' where the pythonfmu FMU "
-                                 "names the header"),
-    "badstate/rigid/magic-flipped": ("the message says 'not a state of the C engine FMU' where the pythonfmu FMU "
-                                     "names the header"),
-    "instantiate/rigid/wrong-guid": ("the message says 'is not the GUID of this binary' where the pythonfmu FMU "
-                                     "says 'does not match'"),
-}
+STANDALONE_XFAIL: Dict[str, str] = {}
 
 
 def standalone_xfail(kind: str, cid: str) -> Optional[str]:
