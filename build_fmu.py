@@ -1,5 +1,9 @@
 """Build every FMU script in fmu_src/ into <dest>/<Name>.fmu and validate it with fmpy.
 
+The registered models (the rigid block, the flexible oscillator) are also built as self-contained FMUs,
+<dest>/standalone/<Name>.fmu: the compiled C engine (rocking_model/engine/src) under the C FMI layer
+fmi_binary/standalone/fmi2_engine.c, no Python needed (`build_standalone`; issue 22).
+
 Usage:  python build_fmu.py [--dest dist] [--no-cross-check] [Name ...]
 
 Each FMU bundles a clean copy of the `rocking_model` package (no __pycache__, no .pyc) in its resources,
@@ -379,6 +383,121 @@ def write_cross_check(fmu: Path, root) -> Path:
     return folder
 
 
+# ---------------------------------------------------------------------------------------------------- standalone
+#: the self-contained FMUs (issue 22): <dest>/standalone/<Name>.fmu, the compiled engine with no Python
+STANDALONE_DIR = "standalone"
+ENGINE_SRC = PACKAGE / "engine" / "src"
+STANDALONE_SRC = FMI_BINARY / "standalone"
+#: portable flags: strict C99, IEEE arithmetic as written (no contraction into FMAs, no fast-math), no
+#: -march: the binary runs on any x86-64 (or whatever the compiler targets) and the results are the engine's
+PORTABLE_CFLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-fno-fast-math", "-fPIC"]
+#: the FMI 2.0 headers shipped in sources/ (from fmpy's copy of the standard's headers, BSD-2-Clause)
+FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+#: fixed zip timestamps: the same sources give the same FMU bytes
+_ZIP_DATE = (2020, 1, 1, 0, 0, 0)
+
+
+def _package_version() -> str:
+    text = (PACKAGE / "__init__.py").read_text()
+    match = re.search(r'^__version__\s*=\s*["\']([^"\']+)["\']', text, re.M)
+    return match.group(1) if match else "unknown"
+
+
+def _engine_sources() -> list[Path]:
+    if not (ENGINE_SRC / "rk_tableaux.h").is_file():     # generated (gitignored): gen_rk.py writes it
+        import runpy
+        runpy.run_path(str(PACKAGE / "engine" / "gen_rk.py"), run_name="__main__")
+    return sorted(ENGINE_SRC.glob("*.c")) + sorted(ENGINE_SRC.glob("*.h"))
+
+
+def _standalone_slave(script: Path):
+    """The slave class of the FMU script (imported under its own name, as pythonfmu's builder does)."""
+    import importlib.util
+
+    sys.path.insert(0, str(ROOT))
+    try:
+        spec = importlib.util.spec_from_file_location(f"_standalone_{script.stem}", script)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        from rocking_model.fmi.standalone import slave_instance
+        return slave_instance(getattr(module, script.stem))
+    finally:
+        sys.path.remove(str(ROOT))
+
+
+def build_standalone_one(script: Path, dest: Path) -> Path:
+    """Build the self-contained FMU of ``script`` into ``dest``/<Name>.fmu: the modelDescription, the C
+    variable table and the documentation generated from the script's declarations, the engine and the FMI
+    layer compiled in a folder of their own (relative paths: no path of this machine in the binary), the
+    sources shipped under sources/ with their buildDescription.xml."""
+    sys.path.insert(0, str(ROOT))
+    try:
+        from rocking_model.fmi import standalone
+    finally:
+        sys.path.remove(str(ROOT))
+    name = script.stem
+    slave = _standalone_slave(script)
+    engine_files = _engine_sources()
+    fmi_files = [FMI_BINARY / f for f in standalone.FMI_SOURCES]
+    digest = b"".join(p.name.encode() + b"\0" + p.read_bytes() for p in engine_files + fmi_files)
+    c_sources = sorted(p.name for p in engine_files + fmi_files if p.suffix == ".c")
+    xml, guid = standalone.model_description(slave, c_sources, digest)
+    folder, suffix = _binary_platform()
+    cc = find_compiler()
+    version = _package_version()
+    with tempfile.TemporaryDirectory(prefix="rocking_sa_") as tmp:
+        src = Path(tmp) / "sources"
+        src.mkdir()
+        for p in engine_files + fmi_files:
+            shutil.copy2(p, src / p.name)
+        for h in FMI2_HEADERS:
+            shutil.copy2(fmi_headers() / h, src / h)
+        (src / "rk_fmu_vars.h").write_text(standalone.vars_header(slave, guid))
+        (src / "buildDescription.xml").write_bytes(standalone.build_description(name, c_sources, version))
+        binary = Path(tmp) / f"{name}{suffix}"
+        cmd = [cc, "-shared", *PORTABLE_CFLAGS, "-fvisibility=hidden", "-I.",
+               f'-DRK_ENGINE_VERSION_STRING="{version}"', *c_sources, "-o", str(binary), "-lm"]
+        if platform.system() == "Linux":
+            cmd += ["-Wl,--no-undefined", "-s"]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, cwd=src)
+        except OSError as exc:
+            raise BuildError(f"cannot run the C compiler {cc}: {exc}") from None
+        if proc.returncode != 0:
+            raise BuildError(f"compiling the standalone FMU {name} failed ({' '.join(cmd)}):\n{proc.stderr.strip()}")
+        dest.mkdir(parents=True, exist_ok=True)
+        fmu = dest / f"{name}.fmu"
+        tmp_fmu = fmu.with_suffix(".fmu.tmp")
+
+        def put(zf, arcname, data):
+            info = zipfile.ZipInfo(arcname, _ZIP_DATE)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, data)
+
+        with zipfile.ZipFile(tmp_fmu, "w") as zf:
+            put(zf, "modelDescription.xml", xml)
+            put(zf, f"binaries/{folder}/{name}{suffix}", binary.read_bytes())
+            for p in sorted(src.iterdir()):
+                put(zf, f"sources/{p.name}", p.read_bytes())
+            put(zf, "documentation/index.html", standalone.documentation(slave).encode())
+            # the FMU reads no resources; the folder exists so that every importer has one to point to
+            put(zf, "resources/README.txt", b"This FMU reads no resources: the model is compiled into its binary.\n")
+        os.replace(tmp_fmu, fmu)
+    validate(fmu)
+    return fmu
+
+
+def build_standalone(dest="dist", names=None) -> list[Path]:
+    """Build (and validate) the self-contained FMUs of the registered models into ``dest``/standalone."""
+    dest = Path(dest)
+    if not dest.is_absolute():
+        dest = Path.cwd() / dest
+    wanted = registered_fmu_names()
+    scripts = [s for s in fmu_scripts(names) if s.stem in wanted]
+    return [build_standalone_one(script, dest / STANDALONE_DIR) for script in scripts]
+
+
 def build_all(dest="dist", names=None, cross_check=False) -> list[Path]:
     """Build (and validate) all FMUs of fmu_src/ into ``dest``; return their paths. With ``cross_check``,
     also write their cross-check folders under ``dest``/cross-check."""
@@ -422,6 +541,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         fmus = build_all(args.dest, args.names or None, cross_check=not args.no_cross_check)
+        # the self-contained FMUs of the registered models among the names (issue 22)
+        wanted = set(registered_fmu_names()) & set(args.names or registered_fmu_names())
+        if wanted:
+            fmus += build_standalone(args.dest, sorted(wanted))
     except Exception as exc:
         print(f"build_fmu: FAILED: {exc}", file=sys.stderr)
         return 1

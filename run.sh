@@ -20,6 +20,19 @@ setup() {
     "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[$1]"
 }
 
+# Ecos' library (the 'ecos' extra, tests/test_ecos.py) needs Debian's libtbb12: installed here when it is
+# missing and this is a root shell with apt-get; otherwise (or if apt-get fails) the Ecos tests skip.
+libtbb() {
+    if ldconfig -p 2>/dev/null | grep -q 'libtbb\.so\.12'; then return 0; fi
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        say "installing libtbb12 for Ecos (apt-get)"
+        { apt-get install -y -q libtbb12 || { apt-get update -q && apt-get install -y -q libtbb12; }; } \
+            >/dev/null 2>&1 || say "apt-get could not install libtbb12: the Ecos tests will skip"
+    else
+        say "libtbb12 is missing (not root or no apt-get): the Ecos tests will skip"
+    fi
+}
+
 case "${1:-}" in
     demo)
         setup plot
@@ -29,7 +42,8 @@ case "${1:-}" in
         "$VENV/bin/python" examples/demo.py
         ;;
     test)
-        setup test
+        setup test,ecos
+        libtbb
         shift
         say "running the tests (pytest $*)"
         "$VENV/bin/python" -m pytest "$@"

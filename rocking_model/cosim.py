@@ -8,6 +8,11 @@ relative to the file, optional ``stepSize``, ``<InitialValues>``) and ``<Connect
 ``<VariableConnection>`` (two ``<Variable simulator=... name=...>``; the output end is found from the
 causalities). The same file drives both masters, so their results can be compared.
 
+The same system can also be packaged as an SSP 1.0 archive (`write_ssp`: ``SystemStructure.ssd`` with the
+components, their connectors, the connections and the parameter values, and the FMUs in ``resources/``;
+the base step in the OSP annotation of ``<ssd:DefaultExperiment>`` that libcosim reads). `read_ssp` reads
+it back into a `System`, so the fmpy master runs an .ssp exactly as it runs the OSP file.
+
 Master algorithm (`FmpyMaster`, mirroring libcosim's ``fixedStep`` algorithm). Time is counted in
 integer nanoseconds as in libcosim: communication point n is ``t_n = (t0_ns + n * h_ns) / 1e9`` and every
 step is ``h_ns / 1e9`` long, so both masters hand the FMUs the same doubles. In each base step, every
@@ -35,7 +40,8 @@ from .records import Record, load_motion, unit_factor
 from .validation import check_real
 
 __all__ = ["MotionSource", "load_record", "ground_motion_from_parameters", "Component", "Connection",
-           "System", "read_osp_system_structure", "write_osp_system_structure", "FmpyMaster", "run_fmpy", "run_libcosim", "NS"]
+           "System", "read_osp_system_structure", "write_osp_system_structure", "write_ssp", "read_ssp",
+           "read_system", "SSD_NAMESPACES", "PARAMETER_SET", "FmpyMaster", "run_fmpy", "run_libcosim", "run_ecos", "NS"]
 
 NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
 
@@ -259,6 +265,204 @@ def write_osp_system_structure(system: System, path) -> Path:
     return path
 
 
+# ------------------------------------------------------------------------------------------------------
+# SSP 1.0 (System Structure and Parameterization): SystemStructure.ssd + resources/*.fmu in a zip archive
+#: the SSP 1.0 namespaces (prefix -> URI) of the .ssd, and the OSP annotation namespace of the step size
+SSD_NAMESPACES = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+    "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+}
+#: the annotation type that carries the fixed-step algorithm (base step) and the step size hints; SSP 1.0
+#: itself has no step size (libcosim and Ecos read this annotation)
+OSP_ANNOTATION = "com.opensimulationplatform"
+#: the name of every component's parameter set: one name for the whole system, so that an importer that
+#: applies parameter sets by name (Ecos: ``init(parameter_set="initialValues")``) applies them all at once
+PARAMETER_SET = "initialValues"
+#: the MIME type SSP 1.0 gives an FMU component
+FMU_MIME = "application/x-fmu-sharedlibrary"
+_FMI_TYPES = ("Real", "Integer", "Boolean", "String", "Enumeration")
+
+
+def _q(prefix: str, tag: str) -> str:
+    return f"{{{SSD_NAMESPACES[prefix]}}}{tag}"
+
+
+def _typed_value(parent, prefix: str, value) -> None:
+    """Append <prefix:Real|Integer|Boolean|String value=...> for a Python value (the OSP file's typing)."""
+    if isinstance(value, bool):
+        ElementTree.SubElement(parent, _q(prefix, "Boolean"), {"value": "true" if value else "false"})
+    elif isinstance(value, (int, np.integer)):
+        ElementTree.SubElement(parent, _q(prefix, "Integer"), {"value": str(int(value))})
+    elif isinstance(value, (float, np.floating)):
+        ElementTree.SubElement(parent, _q(prefix, "Real"), {"value": repr(float(value))})
+    else:
+        ElementTree.SubElement(parent, _q(prefix, "String"), {"value": str(value)})
+
+
+def _parse_typed(node, where: str):
+    kind, text = _strip(node.tag), node.get("value")
+    if text is None:
+        raise ValueError(f"{where}: <{kind}> has no value attribute")
+    try:
+        return {"Real": float, "Integer": int, "String": str,
+                "Boolean": lambda s: {"true": True, "1": True, "false": False, "0": False}[s.strip().lower()]
+                }[kind](text)
+    except KeyError:
+        raise ValueError(f"{where}: unsupported value type <{kind}> (Real, Integer, Boolean, String)") from None
+    except ValueError:
+        raise ValueError(f"{where}: {text!r} is not a valid {kind}") from None
+
+
+def write_ssp(system: System, path, name: str = "System", stop_time: Optional[float] = None) -> Path:
+    """Write ``system`` as an SSP 1.0 archive at ``path`` (.ssp) and return the path.
+
+    The archive holds ``SystemStructure.ssd`` and each distinct FMU once as ``resources/<file name>``. Each
+    component lists its inputs and outputs as connectors (kind and type from its modelDescription) and its
+    start values as an inline parameter set (``<ssd:ParameterBinding>``, the values typed as in the OSP
+    file, named `PARAMETER_SET`). Connections go from an output (start) to an input (end).
+    ``<ssd:DefaultExperiment>`` has the start time (and ``stop_time`` if given) and, in an OSP annotation,
+    the base step; a component step size is an OSP ``StepSizeHint`` annotation of the component."""
+    import zipfile
+
+    from fmpy import read_model_description
+
+    path = Path(path)
+    for prefix, uri in SSD_NAMESPACES.items():
+        ElementTree.register_namespace(prefix, uri)
+    root = ElementTree.Element(_q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": name})
+    sys_el = ElementTree.SubElement(root, _q("ssd", "System"), {"name": name})
+    elements = ElementTree.SubElement(sys_el, _q("ssd", "Elements"))
+    resources: Dict[str, Path] = {}
+    for comp in system.components:
+        fmu = Path(comp.fmu).resolve()
+        entry = f"resources/{fmu.name}"
+        if resources.setdefault(entry, fmu) != fmu:
+            raise ValueError(f"component {comp.name}: two different FMUs named {fmu.name}")
+        md = read_model_description(str(fmu))
+        el = ElementTree.SubElement(elements, _q("ssd", "Component"),
+                                    {"name": comp.name, "type": FMU_MIME, "source": entry})
+        connectors = ElementTree.SubElement(el, _q("ssd", "Connectors"))
+        for v in md.modelVariables:
+            if v.causality in ("input", "output") and v.type in _FMI_TYPES:
+                con = ElementTree.SubElement(connectors, _q("ssd", "Connector"),
+                                             {"name": v.name, "kind": v.causality})
+                # no unit attribute: SSP 1.0 units must then be declared in <ssd:Units> (the FMU has them)
+                ElementTree.SubElement(con, _q("ssc", v.type))
+        if comp.start_values:
+            bindings = ElementTree.SubElement(el, _q("ssd", "ParameterBindings"))
+            values = ElementTree.SubElement(ElementTree.SubElement(bindings, _q("ssd", "ParameterBinding")),
+                                            _q("ssd", "ParameterValues"))
+            pset = ElementTree.SubElement(values, _q("ssv", "ParameterSet"),
+                                          {"version": "1.0", "name": PARAMETER_SET})
+            params = ElementTree.SubElement(pset, _q("ssv", "Parameters"))
+            for var, value in comp.start_values.items():
+                _typed_value(ElementTree.SubElement(params, _q("ssv", "Parameter"), {"name": var}), "ssv", value)
+        if comp.step_size is not None:
+            ann = ElementTree.SubElement(ElementTree.SubElement(el, _q("ssd", "Annotations")),
+                                         _q("ssc", "Annotation"), {"type": OSP_ANNOTATION})
+            ElementTree.SubElement(ann, _q("osp", "StepSizeHint"), {"value": repr(float(comp.step_size))})
+    if system.connections:
+        conns = ElementTree.SubElement(sys_el, _q("ssd", "Connections"))
+        for con in system.connections:
+            ElementTree.SubElement(conns, _q("ssd", "Connection"),
+                                   {"startElement": con.source[0], "startConnector": con.source[1],
+                                    "endElement": con.target[0], "endConnector": con.target[1]})
+    exp = {"startTime": repr(float(system.start_time))}
+    if stop_time is not None:
+        exp["stopTime"] = repr(float(stop_time))
+    exp_el = ElementTree.SubElement(root, _q("ssd", "DefaultExperiment"), exp)
+    ann = ElementTree.SubElement(ElementTree.SubElement(exp_el, _q("ssd", "Annotations")),
+                                 _q("ssc", "Annotation"), {"type": OSP_ANNOTATION})
+    ElementTree.SubElement(ElementTree.SubElement(ann, _q("osp", "Algorithm")), _q("osp", "FixedStepAlgorithm"),
+                           {"baseStepSize": repr(float(system.step_size))})
+    ElementTree.indent(root)
+    ssd = ElementTree.tostring(root, encoding="utf-8", xml_declaration=True)
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        for entry, fmu in resources.items():
+            z.write(fmu, entry, compress_type=zipfile.ZIP_STORED)  # FMUs are zips already
+    return path
+
+
+def read_ssp(path, unzipdir=None) -> System:
+    """Read an SSP 1.0 archive written by `write_ssp` (or any .ssp of FMU components with inline parameter
+    values and connections between components) into a `System`.
+
+    The FMUs are extracted to ``unzipdir`` (default: a temporary folder removed when the System is garbage
+    collected). The base step comes from the OSP ``FixedStepAlgorithm`` annotation of
+    ``<ssd:DefaultExperiment>``. Raises ValueError naming what is missing or not supported."""
+    import shutil
+    import weakref
+    import zipfile
+
+    path = Path(path)
+    with zipfile.ZipFile(path) as z:
+        names = set(z.namelist())
+        if "SystemStructure.ssd" not in names:
+            raise ValueError(f"{path}: no SystemStructure.ssd in the archive")
+        root = ElementTree.fromstring(z.read("SystemStructure.ssd"))
+        if root.tag != _q("ssd", "SystemStructureDescription"):
+            raise ValueError(f"{path}: root element is {root.tag!r}, expected ssd:SystemStructureDescription")
+        sys_el = root.find("ssd:System", SSD_NAMESPACES)
+        if sys_el is None:
+            raise ValueError(f"{path}: <ssd:System> is required")
+        step = root.find("ssd:DefaultExperiment/ssd:Annotations/ssc:Annotation/osp:Algorithm/"
+                         "osp:FixedStepAlgorithm", SSD_NAMESPACES)
+        if step is None or step.get("baseStepSize") is None:
+            raise ValueError(f"{path}: no base step (<osp:FixedStepAlgorithm baseStepSize=...> in the "
+                             f"{OSP_ANNOTATION} annotation of <ssd:DefaultExperiment>)")
+        exp = root.find("ssd:DefaultExperiment", SSD_NAMESPACES)
+        own_dir = unzipdir is None
+        out = Path(tempfile.mkdtemp(prefix="rocking_ssp_") if own_dir else unzipdir)
+        components, kinds = [], {}
+        for el in sys_el.findall("ssd:Elements/*", SSD_NAMESPACES):
+            cname = el.get("name")
+            if el.tag != _q("ssd", "Component") or el.get("type", FMU_MIME) != FMU_MIME:
+                raise ValueError(f"{path}: element {cname!r}: only FMU components are supported")
+            source = el.get("source", "")
+            if source not in names:
+                raise ValueError(f"{path}: component {cname!r}: source {source!r} is not in the archive")
+            fmu = out / source
+            if not fmu.is_file():
+                fmu.parent.mkdir(parents=True, exist_ok=True)
+                fmu.write_bytes(z.read(source))
+            values: Dict[str, Any] = {}
+            for binding in el.findall("ssd:ParameterBindings/ssd:ParameterBinding", SSD_NAMESPACES):
+                if binding.get("source"):
+                    raise ValueError(f"{path}: component {cname!r}: external parameter files are not supported")
+                for p in binding.findall("ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter",
+                                         SSD_NAMESPACES):
+                    (typed,) = list(p)
+                    values[p.get("name")] = _parse_typed(typed, f"{path}: {cname}.{p.get('name')}")
+            hint = el.find("ssd:Annotations/ssc:Annotation/osp:StepSizeHint", SSD_NAMESPACES)
+            components.append(Component(cname, fmu, None if hint is None else float(hint.get("value")), values))
+            for con in el.findall("ssd:Connectors/ssd:Connector", SSD_NAMESPACES):
+                kinds[(cname, con.get("name"))] = con.get("kind")
+    connections = []
+    for con in sys_el.findall("ssd:Connections/ssd:Connection", SSD_NAMESPACES):
+        if con.get("startElement") is None or con.get("endElement") is None:
+            raise ValueError(f"{path}: connections to the system's own connectors are not supported")
+        a = (con.get("startElement"), con.get("startConnector"))
+        b = (con.get("endElement"), con.get("endConnector"))
+        for end, kind in ((a, "output"), (b, "input")):
+            if kinds.get(end) != kind:
+                raise ValueError(f"{path}: connection {a[0]}.{a[1]} -> {b[0]}.{b[1]}: {end[0]}.{end[1]} "
+                                 f"is not an {kind} connector")
+        connections.append(Connection(a, b))
+    system = System(components, connections, float(step.get("baseStepSize")),
+                    float(exp.get("startTime", 0.0)) if exp is not None else 0.0)
+    if own_dir:
+        weakref.finalize(system, shutil.rmtree, str(out), True)
+    return system
+
+
+def read_system(path) -> System:
+    """A `System` from an OspSystemStructure.xml or an SSP archive (.ssp)."""
+    return read_ssp(path) if str(path).lower().endswith(".ssp") else read_osp_system_structure(path)
+
+
 def _ticks(seconds: float) -> int:
     return int(round(float(seconds) * NS))
 
@@ -397,10 +601,10 @@ class FmpyMaster:
 
 
 def run_fmpy(system, stop_time: float, outputs: Sequence[str], **kwargs) -> np.ndarray:
-    """Run a `System` or the system of an OspSystemStructure.xml with `FmpyMaster` (keyword arguments as
-    `FmpyMaster.run`)."""
+    """Run a `System`, the system of an OspSystemStructure.xml or an SSP archive (.ssp) with `FmpyMaster`
+    (keyword arguments as `FmpyMaster.run`)."""
     if not isinstance(system, System):
-        system = read_osp_system_structure(system)
+        system = read_system(system)
     return FmpyMaster(system).run(stop_time, outputs, **kwargs)
 
 
@@ -446,9 +650,10 @@ def check_initialization(system: System, start_values: Optional[Mapping[str, Any
 def run_libcosim(system, stop_time: float, outputs: Sequence[str],
                  inputs: Optional[Mapping[str, Callable]] = None,
                  start_values: Optional[Mapping[str, Any]] = None) -> np.ndarray:
-    """Run a `System` or the system of an OspSystemStructure.xml in libcosim, one base step at a time, and
-    return the same structured array as `FmpyMaster.run` without its first row (libcosim's observers have
-    values only from the first step on: the rows are t0 + h, t0 + 2h, ...). ``inputs``
+    """Run a `System`, the system of an OspSystemStructure.xml or an SSP archive (.ssp, read by libcosim's
+    own SSP loader) in libcosim, one base step at a time, and return the same structured array as
+    `FmpyMaster.run` without its first row (libcosim's observers have values only from the first step on:
+    the rows are t0 + h, t0 + 2h, ...). ``inputs``
     ("component.variable" -> f(t)) are applied with an override manipulator before each step;
     ``start_values`` ("component.variable" -> value) override the initial values. Every component is
     initialized once through fmpy first (`check_initialization`): invalid parameters raise ValueError here
@@ -465,9 +670,16 @@ def run_libcosim(system, stop_time: float, outputs: Sequence[str],
     log_output_level(CosimLogLevel.WARNING)
 
     osp_file = Path(system).resolve()
-    system = read_osp_system_structure(osp_file)
-    check_initialization(system, start_values)
-    execution = CosimExecution.from_osp_config_file(str(osp_file))
+    if osp_file.suffix.lower() == ".ssp":
+        # libcosim reads the archive itself (its SSP loader: components, parameter sets, connections and
+        # the OSP base-step annotation); the System is read here for the initialization check and the steps
+        system = read_ssp(osp_file)
+        check_initialization(system, start_values)
+        execution = CosimExecution.from_ssp_file(str(osp_file))
+    else:
+        system = read_osp_system_structure(osp_file)
+        check_initialization(system, start_values)
+        execution = CosimExecution.from_osp_config_file(str(osp_file))
     return _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
                            CosimManipulator, CosimObserver)
 
@@ -522,6 +734,81 @@ def _drive_libcosim(execution, system, stop_time, outputs, inputs, start_values,
     dtype = [("time", np.float64)] + [(k, np.float64) for k in outputs]
     result = np.array([tuple(r) for r in rows[1:]], dtype=dtype)
     return result
+
+
+# ------------------------------------------------------------------------------------------------------
+# Ecos (a third importer: C++, FMI 1/2, SSP 1.0) through ecospy
+def run_ecos(system, stop_time: float, outputs: Sequence[str], inputs: Optional[Mapping[str, Callable]] = None,
+             proxy: bool = False) -> np.ndarray:
+    """Run a `System`, the system of an OspSystemStructure.xml or an SSP archive (.ssp, read by Ecos' own SSP
+    loader) in Ecos (``pip install rocking-model[ecos]``; its binary needs libtbb12), one base step at a
+    time, and return the same structured array as `run_libcosim` (rows t0 + h, t0 + 2h, ...).
+
+    A `System` is given to Ecos as a structure: its components (``proxy``: each in a process of its own
+    through Ecos' proxyfmu), its connections and the start values as the parameter set `PARAMETER_SET`;
+    an .ssp archive carries them itself (`write_ssp`). ``inputs`` ("component.variable" -> f(t)) are set
+    before each step. Ecos counts time in doubles (t += h), so its communication points can differ from
+    the integer-nanosecond points of the other masters in the last bits; every component is initialized
+    once through fmpy first (`check_initialization`): invalid parameters raise ValueError. The
+    connections are Real ones (those of the rocking systems)."""
+    from ecospy import EcosSimulation, EcosSimulationStructure
+
+    ssp = Path(system).resolve() if not isinstance(system, System) and str(system).lower().endswith(".ssp") \
+        else None
+    if not isinstance(system, System):
+        system = read_system(system)
+    check_initialization(system)
+    t0 = float(system.start_time)
+    n_steps = int(round((_ticks(stop_time) - _ticks(system.start_time)) / _ticks(system.step_size)))
+
+    from fmpy import read_model_description
+
+    types = {}
+    for c in system.components:
+        for v in read_model_description(str(c.fmu)).modelVariables:
+            types[f"{c.name}.{v.name}"] = v.type
+
+    def ident(key):
+        comp, var = key.split(".", 1)
+        return f"{comp}::{var}"
+
+    def getter(sim, key):
+        if key not in types:
+            raise KeyError(f"Ecos: no variable {key!r}")
+        return {"Real": sim.get_real, "Integer": sim.get_integer, "Enumeration": sim.get_integer,
+                "Boolean": sim.get_bool}[types[key]]
+
+    def build(sim):
+        rows = []
+        sim.init(t0, PARAMETER_SET)
+        for n in range(n_steps):
+            t = (_ticks(system.start_time) + n * _ticks(system.step_size)) / NS  # the other masters' t_n
+            for key, f in (inputs or {}).items():
+                sim.set_real(ident(key), float(f(t)))
+            sim.step()
+            rows.append([sim.get_time()] + [float(getter(sim, k)(ident(k))) for k in outputs])
+        sim.terminate()
+        return rows
+
+    if ssp is not None:
+        with EcosSimulation(ssp_path=str(ssp), step_size=system.step_size) as sim:
+            rows = build(sim)
+    else:
+        structure = EcosSimulationStructure()
+        for c in system.components:
+            uri = str(Path(c.fmu).resolve())
+            structure.add_model(c.name, f"proxyfmu://localhost?file={uri}" if proxy else uri,
+                                c.step_size)
+        values = {f"{c.name}::{k}": v for c in system.components for k, v in c.start_values.items()}
+        if values:
+            structure.add_parameter_set(PARAMETER_SET, values)
+        for con in system.connections:
+            structure.make_real_connection(f"{con.source[0]}::{con.source[1]}",
+                                           f"{con.target[0]}::{con.target[1]}")
+        with EcosSimulation(structure=structure, step_size=system.step_size) as sim:
+            rows = build(sim)
+    dtype = [("time", np.float64)] + [(k, np.float64) for k in outputs]
+    return np.array([tuple(r) for r in rows], dtype=dtype)
 
 
 def write_csv(path, result: np.ndarray) -> None:

@@ -69,13 +69,35 @@ BAD_VR = 9999
 PWNED = "pwned"
 
 
+#: the magic that starts the self-contained FMUs' own state payload (a binary record of the slave's fields
+#: and the engine snapshot, fmi_binary/standalone/fmi2_engine.c), behind the same binary header
+STANDALONE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
+
+
 def slave_bytes(data: bytes) -> bytes:
     """The slave's own state format inside a serialized FMU state (after the binary's header: the
-    communication time, the FMI state fields and the CRC-32, fmi_binary/fmi2_cs.c)."""
+    communication time, the FMI state fields and the CRC-32, fmi_binary/fmi2_cs.c and the standalone FMUs'
+    fmi2_engine.c)."""
     from rocking_model.fmi_state import MAGIC
 
-    i = data.find(MAGIC)
-    return data[i:] if i >= 0 else data
+    for magic in (MAGIC, STANDALONE_PAYLOAD_MAGIC):
+        i = data.find(magic)
+        if i >= 0:
+            return data[i:]
+    return data
+
+
+def decode_payload(payload: bytes) -> dict:
+    """The fields of a state payload (`slave_bytes`): the pythonfmu FMUs' document (rocking_model.fmi_state)
+    or the self-contained FMUs' binary record (rocking_model.fmi.standalone.decode_state_payload; its engine
+    snapshot as opaque bytes). Raises what the decoder raises."""
+    if payload.startswith(STANDALONE_PAYLOAD_MAGIC):
+        from rocking_model.fmi.standalone import decode_state_payload
+
+        return decode_state_payload(payload)
+    from rocking_model.fmi_state import decode_state
+
+    return decode_state(payload)
 
 
 #: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c: magic 22,
@@ -525,8 +547,7 @@ class Inst:
             return b"", f"fmi2SerializeFMUstate returned {STATUS_NAMES.get(st2)}"
         problem = None
         try:
-            from rocking_model.fmi_state import decode_state
-            decode_state(slave_bytes(data))
+            decode_payload(slave_bytes(data))
         except ImportError:
             problem = None if data else "empty"
         except Exception as exc:
@@ -544,8 +565,7 @@ class Inst:
                 "state_ok": bool(data) and problem is None, "state_problem": problem, "state_doc": None}
         if snap["state_ok"]:
             try:
-                from rocking_model.fmi_state import decode_state
-                snap["state_doc"] = decode_state(slave_bytes(data))
+                snap["state_doc"] = decode_payload(slave_bytes(data))
             except Exception:
                 pass
         # a snapshot must not leave messages behind that a later check could mistake for its own
@@ -2361,6 +2381,81 @@ def robustness_page() -> str:
         rows.append(f"| `{family}` | {len(cases)} | {_cell(shown)} | {_cell(tried)} | {_cell(statuses)} | "
                     f"{_cell(holds)} |")
     return (_PAGE_HEAD.format(n_cases=len(CASES), n_classes=len(order)) + "\n".join(rows) + "\n" + _PAGE_TAIL)
+
+
+# ============================================================================================== FMU kinds
+#: the kinds of FMU the suite runs on: the pythonfmu FMUs (every FMU of fmu_src/) and the self-contained ones
+#: (issue 22: RigidRockingBlock and FlexibleRockingOscillator built from the C engine, dist/standalone/)
+KINDS = ("pythonfmu", "standalone")
+#: the FMUs that have a self-contained build; the system FMUs (source, storey) exist as pythonfmu FMUs only
+STANDALONE_FMUS = (RIGID, FLEX)
+_STANDALONE_BUILDS: Dict[str, Any] = {}
+
+
+def standalone_fmus(build_module, tmp_path_factory) -> Dict[str, Path]:
+    """{name: path} of the self-contained FMUs, built once per test session (shared by the test modules
+    that run them: the fault suite, libcosim, Ecos, the system example). Raises what the build raises (no C
+    compiler, ...): the callers skip with that reason."""
+    key = str(tmp_path_factory.getbasetemp())
+    if key not in _STANDALONE_BUILDS:
+        try:
+            dest = tmp_path_factory.mktemp("standalone_fmus")
+            _STANDALONE_BUILDS[key] = {p.stem: p for p in build_module.build_standalone(dest)}
+        except Exception as exc:
+            _STANDALONE_BUILDS[key] = exc
+    built = _STANDALONE_BUILDS[key]
+    if isinstance(built, Exception):
+        raise built
+    return built
+
+
+_PY_PAYLOAD = ("it edits the pythonfmu FMU's own state payload (a field of its JSON document, or JSON behind its "
+               "header, or the length word of that header at its offset); the self-contained FMU's payload is a "
+               "binary record of the C slave and engine under its own CRC-32, which such bytes do not reach "
+               "(refused there as a bad header or a CRC mismatch): the state cases that apply to any format "
+               "(pickles, random, short, empty, truncated, padded, versions, 2 MiB, another FMU's state, "
+               "flipped bytes) run on it")
+_PY_MODULE = ("it forces the failure by patching the FMU's bundled Python module (the stepper or the contact "
+              "solver) in this process; the self-contained FMU has no Python module to patch")
+#: cases (id or id prefix) that do not apply to the self-contained FMUs, with the reason
+STANDALONE_NA: Dict[str, str] = {
+    **{f"badstate/{f}/{w}": _PY_PAYLOAD for f in ("rigid", "flex")
+       for w in ("pickle-in-new-header", "length-huge", "json-not-object", "json-invalid", "json-deep", "t=nan",
+                 "initialized-string", "value-wrong-type", "value-missing", "extra-key", "signature",
+                 "pending-huge", "array-length", "array-wrong-type", "mode=10", "negative-impacts",
+                 "negative-n_steps", "sim-nan")},
+    "report/rigid/failed-step": _PY_MODULE,
+    "report/flex/failed-step": _PY_MODULE,
+    "report/rigid/inexact-contact": _PY_MODULE,
+}
+
+
+#: cases where the self-contained FMUs differ from the pythonfmu ones today (issue 22 asks for the same statuses
+#: and messages): strict xfails, so that a fix shows as an unexpected pass and the entry is removed
+STANDALONE_XFAIL: Dict[str, str] = {}
+
+
+def standalone_xfail(kind: str, cid: str) -> Optional[str]:
+    """The reason case ``cid`` is a known difference of ``kind`` of FMU from the pythonfmu FMUs, or None."""
+    return STANDALONE_XFAIL.get(cid) if kind == "standalone" else None
+
+
+def not_applicable(kind: str, cid: str) -> Optional[str]:
+    """Why case ``cid`` does not apply to ``kind`` of FMU, or None when it does. On the standalone FMUs every
+    case of the two rocking FMUs runs, except those of `STANDALONE_NA`; the cases of the system FMUs alone
+    (source, storey) would rerun the pythonfmu FMUs and are left to the pythonfmu kind."""
+    if kind == "pythonfmu":
+        return None
+    if kind != "standalone":
+        raise ValueError(f"kind = {kind!r}; allowed: {KINDS}")
+    for prefix, reason in STANDALONE_NA.items():
+        if cid == prefix or cid.startswith(prefix + "/") or cid.startswith(prefix + "-"):
+            return reason
+    fmu = _fmu_of(CASES[cid])
+    if fmu in (GMS, STOREY):
+        return (f"{fmu} has no self-contained build (a pythonfmu FMU only): the case would rerun the pythonfmu "
+                f"FMU")
+    return None
 
 
 # ============================================================================================== running

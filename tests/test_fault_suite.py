@@ -51,18 +51,36 @@ JOBS = int(os.environ.get("FAULT_SUITE_JOBS", "0")) or max(2, min(4, os.cpu_coun
 
 
 # ---------------------------------------------------------------------------------------------- running
-@pytest.fixture(scope="session")
-def fault_config(built_fmus, tmp_path_factory):
-    """The session's FMUs, each extracted once (the cases share the read-only folders)."""
+def _write_config(dest: Path, paths: list) -> Path:
     from fmpy import extract
 
-    dest = tmp_path_factory.mktemp("fault_fmus")
-    paths = [built_fmus[name] for name in fh.FMUS]
     fmus = {p.stem: {"path": str(p), "unzip": str(extract(str(p), unzipdir=str(dest / f"{p.stem}_unzipped")))}
             for p in paths}
     config = dest / "fmus.json"
     config.write_text(json.dumps({"fmus": fmus}))
     return config
+
+
+@pytest.fixture(scope="session")
+def fault_configs(request, built_fmus, build_module, tmp_path_factory):
+    """{kind: config file} of the session's FMUs, each extracted once (the cases share the read-only
+    folders): "pythonfmu" the four pythonfmu FMUs; "standalone" the self-contained rocking FMUs (the source
+    and the storey, which exist as pythonfmu FMUs only, stay those) -- built only when a standalone case is
+    selected; a failed build leaves the kind out (its cases skip with the build's error)."""
+    kinds = {kind for kind, _ in _selected_cases(request.session)} or set(fh.KINDS)
+    configs = {}
+    if "pythonfmu" in kinds:
+        configs["pythonfmu"] = _write_config(tmp_path_factory.mktemp("fault_fmus"),
+                                             [built_fmus[name] for name in fh.FMUS])
+    if "standalone" in kinds:
+        try:
+            sa = fh.standalone_fmus(build_module, tmp_path_factory)
+        except Exception as exc:
+            configs["standalone"] = exc
+        else:
+            configs["standalone"] = _write_config(tmp_path_factory.mktemp("fault_fmus_standalone"),
+                                                  [sa.get(name, built_fmus[name]) for name in fh.FMUS])
+    return configs
 
 
 class _Server:
@@ -107,22 +125,29 @@ def _run_plain(request: dict) -> dict:
 
 
 def _selected_cases(session) -> list:
-    ids = []
+    """The (kind, case id) pairs of the session's selected test_fault_case items."""
+    pairs = []
     for item in session.items:
         callspec = getattr(item, "callspec", None)
         if callspec is not None and "cid" in callspec.params and item.module.__name__ == __name__:
-            ids.append(callspec.params["cid"])
-    return ids
+            pairs.append((callspec.params["kind"], callspec.params["cid"]))
+    return pairs
+
+
+def _all_pairs() -> list:
+    return [(kind, cid) for kind in fh.KINDS for cid in fh.CASES if fh.not_applicable(kind, cid) is None]
 
 
 @pytest.fixture(scope="session")
-def fault_records(request, fault_config, tmp_path_factory):
-    """Run every selected case (in parallel: JOBS fork servers) and return {case id: outcome}."""
-    cids = _selected_cases(request.session) or list(fh.CASES)
+def fault_records(request, fault_configs, tmp_path_factory):
+    """Run every selected case on every selected kind of FMU (in parallel: JOBS fork servers) and return
+    {(kind, case id): outcome}."""
+    pairs = [(k, c) for k, c in (_selected_cases(request.session) or _all_pairs())
+             if isinstance(fault_configs.get(k), Path) and fh.not_applicable(k, c) is None]
     base = tmp_path_factory.mktemp("fault_cases")
-    todo: "queue.Queue[str]" = queue.Queue()
-    for cid in sorted(cids, key=lambda c: -fh.CASES[c].timeout):
-        todo.put(cid)
+    todo: "queue.Queue[tuple]" = queue.Queue()
+    for pair in sorted(pairs, key=lambda kc: -fh.CASES[kc[1]].timeout):
+        todo.put(pair)
     results: dict = {}
     no_fork = os.environ.get("FAULT_SUITE_NO_FORK") == "1"
     t_start = time.perf_counter()
@@ -132,13 +157,13 @@ def fault_records(request, fault_config, tmp_path_factory):
         try:
             while True:
                 try:
-                    cid = todo.get_nowait()
+                    kind, cid = todo.get_nowait()
                 except queue.Empty:
                     return
-                cwd = base / cid.replace("/", "__")
+                cwd = base / kind / cid.replace("/", "__")
                 cwd.mkdir(parents=True)
-                req = {"case": cid, "config": str(fault_config), "out": str(cwd / "record.json"), "cwd": str(cwd),
-                       "timeout": fh.CASES[cid].timeout}
+                req = {"case": cid, "config": str(fault_configs[kind]), "out": str(cwd / "record.json"),
+                       "cwd": str(cwd), "timeout": fh.CASES[cid].timeout}
                 try:
                     outcome = _run_plain(req) if server is None else server.run(req)
                 except Exception as exc:  # the server itself died: report it, start another one
@@ -151,7 +176,7 @@ def fault_records(request, fault_config, tmp_path_factory):
                 outcome["stderr"] = (cwd / "stderr.txt").read_text(errors="replace")[-3000:] \
                     if (cwd / "stderr.txt").exists() else ""
                 outcome["cwd"] = str(cwd)
-                results[cid] = outcome
+                results[(kind, cid)] = outcome
         finally:
             if server is not None:
                 server.close()
@@ -196,13 +221,15 @@ def _verdict(cid: str, outcome: dict) -> list:
     return problems
 
 
-def _summary(config, results: dict, wall: float) -> None:
+def _kind_summary(kind: str, results: dict, verdicts: dict) -> list:
+    """The summary lines of one kind of FMU: classes tried / passing, the longest case and FMI call."""
     tried = len(results)
-    verdicts = {cid: _verdict(cid, o) for cid, o in results.items()}
     passing = sum(1 for v in verdicts.values() if not v)
-    xfail = [cid for cid in results if fh.CASES[cid].xfail]
+    xfail = [cid for cid in results if fh.CASES[cid].xfail or fh.standalone_xfail(kind, cid)]
     xfail_failing = sum(1 for cid in xfail if verdicts[cid])
+    na = sum(1 for cid in fh.CASES if fh.not_applicable(kind, cid) is not None)
     longest = max(results.items(), key=lambda kv: kv[1]["elapsed"], default=(None, {"elapsed": 0.0}))
+
     def slowest(key):
         return max(((c.get("elapsed", 0.0), cid, c) for cid, o in results.items()
                     for c in [((o.get("record") or {}).get(key) or {})]), default=(0.0, None, {}))
@@ -213,19 +240,29 @@ def _summary(config, results: dict, wall: float) -> None:
         fam = fh.CASES[cid].family
         t, p = families.get(fam, (0, 0))
         families[fam] = (t + 1, p + (not v))
-    lines = [f"fault suite: {tried} classes tried, {passing} passing ({len(xfail)} strict xfails, "
-             f"{xfail_failing} of them failing as expected); cases wall time {wall:.1f} s on {JOBS} "
-             f"processes",
-             f"  longest case: {longest[0]} {longest[1]['elapsed']:.2f} s; longest FMI call: "
-             f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}; longest fmi2DoStep: "
-             f"{slow_step[0]:.3f} s in {slow_step[1]}",
-             "  by family: " + ", ".join(f"{f} {p}/{t}" for f, (t, p) in sorted(families.items()))]
+    return [f"{kind} FMUs: {tried} classes tried, {passing} passing ({len(xfail)} strict xfails, "
+            f"{xfail_failing} of them failing as expected; {na} not applicable to this kind)",
+            f"  longest case: {longest[0]} {longest[1]['elapsed']:.2f} s; longest FMI call: "
+            f"{slow_call[2].get('call')} {slow_call[0]:.3f} s in {slow_call[1]}; longest fmi2DoStep: "
+            f"{slow_step[0]:.3f} s in {slow_step[1]}",
+            "  by family: " + ", ".join(f"{f} {p}/{t}" for f, (t, p) in sorted(families.items()))]
+
+
+def _summary(config, results: dict, wall: float) -> None:
+    lines = [f"fault suite: cases wall time {wall:.1f} s on {JOBS} processes (both kinds of FMU)"]
+    verdicts = {key: _verdict(key[1], o) for key, o in results.items()}
+    for kind in fh.KINDS:
+        mine = {cid: o for (k, cid), o in results.items() if k == kind}
+        if not mine:
+            continue
+        lines += _kind_summary(kind, mine, {cid: verdicts[(kind, cid)] for cid in mine})
     out_dir = os.environ.get("FAULT_SUITE_REPORT")
     if out_dir:
-        Path(out_dir).write_text(json.dumps({cid: {"problems": v, "elapsed": results[cid]["elapsed"],
-                                                   "figures": (results[cid].get("record") or {}).get("figures"),
-                                                   "what": fh.CASES[cid].what}
-                                             for cid, v in verdicts.items()}, indent=1, default=repr))
+        report = {f"{kind}:{cid}": {"problems": v, "elapsed": results[(kind, cid)]["elapsed"],
+                                    "figures": (results[(kind, cid)].get("record") or {}).get("figures"),
+                                    "what": fh.CASES[cid].what}
+                  for (kind, cid), v in verdicts.items()}
+        Path(out_dir).write_text(json.dumps(report, indent=1, default=repr))
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     capture = config.pluginmanager.get_plugin("capturemanager")
     with capture.global_and_fixture_disabled() if capture is not None else _nullcontext():
@@ -240,10 +277,17 @@ def _summary(config, results: dict, wall: float) -> None:
 
 # ---------------------------------------------------------------------------------------------- tests
 def _params():
+    """(kind, case id) for every case on both kinds of FMU; the pythonfmu ids are the case ids, the
+    standalone ids "standalone:<case id>"; a case that does not apply to a kind is a skip with the reason."""
     out = []
-    for cid, case in fh.CASES.items():
-        marks = [pytest.mark.xfail(strict=True, reason=case.xfail)] if case.xfail else []
-        out.append(pytest.param(cid, id=cid, marks=marks))
+    for kind in fh.KINDS:
+        for cid, case in fh.CASES.items():
+            xfail = case.xfail or fh.standalone_xfail(kind, cid)
+            marks = [pytest.mark.xfail(strict=True, reason=xfail)] if xfail else []
+            reason = fh.not_applicable(kind, cid)
+            if reason is not None:
+                marks = [pytest.mark.skip(reason=f"not applicable to the {kind} FMUs: {reason}")]
+            out.append(pytest.param(kind, cid, id=cid if kind == "pythonfmu" else f"{kind}:{cid}", marks=marks))
     return out
 
 
@@ -265,7 +309,9 @@ def test_robustness_page_is_what_the_case_list_generates():
                                           "python tests/fault_harness.py --write-doc docs/robustness.md")
 
 
-@pytest.mark.parametrize("cid", _params())
-def test_fault_case(fault_records, cid):
-    problems = _verdict(cid, fault_records[cid])
-    assert not problems, f"{cid} ({fh.CASES[cid].what}):\n  " + "\n  ".join(problems)
+@pytest.mark.parametrize("kind, cid", _params())
+def test_fault_case(fault_configs, fault_records, kind, cid):
+    if isinstance(fault_configs[kind], Exception):
+        pytest.skip(f"the {kind} FMUs could not be built: {fault_configs[kind]!r}")
+    problems = _verdict(cid, fault_records[(kind, cid)])
+    assert not problems, f"{kind}: {cid} ({fh.CASES[cid].what}):\n  " + "\n  ".join(problems)

@@ -289,3 +289,59 @@ def test_readme_states_the_example_step_count():
                  .find("{*}BaseStepSize").text)
     assert ms / 1000.0 == base and round(stop / base) == steps
     assert f'default={stop}' in (ROOT / "examples" / "system" / "run.py").read_text().replace(" ", "")
+
+
+# ------------------------------------------------------------------------------ the self-contained block
+#: [rad, m, m/s2] the system with the self-contained rocking FMUs against the pythonfmu ones: round-off of the
+#: compiled engine against the Python one, carried through the storey (measured ~4e-13 over 3 s)
+STANDALONE_ROUND_OFF = 1e-9
+
+
+@pytest.fixture(scope="module")
+def standalone_osp(fmus, build_module, tmp_path_factory):
+    """The example's OspSystemStructure.xml with the self-contained block and oscillator (issue 22)."""
+    import fault_harness as fh
+
+    try:
+        sa = fh.standalone_fmus(build_module, tmp_path_factory)
+    except Exception as exc:
+        pytest.skip(f"the self-contained FMUs could not be built: {exc!r}")
+    text = (EXAMPLE / "OspSystemStructure.xml").read_text()
+    for name, path in fmus.items():
+        text = text.replace(f"../../dist/{name}.fmu", str(sa.get(name, path)))
+    osp = tmp_path_factory.mktemp("osp_standalone") / "OspSystemStructure.xml"
+    osp.write_text(text)
+    return osp
+
+
+def test_example_system_with_the_standalone_block(example_osp, standalone_osp):
+    """The system example with the self-contained block and oscillator: both masters agree bit for bit, and
+    the results equal those of the pythonfmu FMUs to round-off."""
+    system = read_osp_system_structure(standalone_osp)
+    assert {c.name: Path(c.fmu).parent.name for c in system.components}["block"] == "standalone"
+    example = _load("system_example", EXAMPLE / "run.py")
+    sa = example.run(stop=3.0, osp=standalone_osp, master="fmpy")["fmpy"]
+    py = example.run(stop=3.0, osp=example_osp, master="fmpy")["fmpy"]
+    for k in example.OUTPUTS:
+        np.testing.assert_allclose(sa[k], py[k], rtol=0, atol=STANDALONE_ROUND_OFF, err_msg=k)
+    assert np.abs(sa["block.phi"]).max() > 0.05 and sa["block.impacts"][-1] >= 2
+    try:
+        import libcosimpy.CosimExecution  # noqa: F401
+    except Exception as exc:
+        pytest.skip(f"libcosimpy cannot be imported ({exc!r}): fmpy master only")
+    lc = example.run(stop=3.0, osp=standalone_osp, master="libcosim")["libcosim"]
+    for k in example.OUTPUTS:
+        np.testing.assert_array_equal(lc[k], sa[k][1:], err_msg=k)
+
+
+def test_example_script_runs_the_standalone_block(example_osp, tmp_path, monkeypatch):
+    """`run.py --standalone` puts the self-contained block and oscillator of dist/standalone/ in the system,
+    the source and the storey stay the pythonfmu FMUs."""
+    example = _load("system_example", EXAMPLE / "run.py")
+    monkeypatch.setattr(example, "ROOT", tmp_path)
+    sysm = example.system(example_osp, standalone=True)
+    fmus = {c.name: Path(c.fmu) for c in sysm.components}
+    assert fmus["block"] == tmp_path / "dist" / "standalone" / "RigidRockingBlock.fmu"
+    assert fmus["oscillator"] == tmp_path / "dist" / "standalone" / "FlexibleRockingOscillator.fmu"
+    assert fmus["storey"] == {c.name: Path(c.fmu) for c in
+                              read_osp_system_structure(example_osp).components}["storey"]

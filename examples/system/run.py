@@ -1,11 +1,17 @@
 """System-level co-simulation: ground-motion source -> linear building storey -> rigid rocking block and
 flexible rocking oscillator on the floor (examples/system/OspSystemStructure.xml).
 
-    python examples/system/run.py [--stop 5] [--out results] [--build] [--master both|libcosim|fmpy]
+    python examples/system/run.py [--stop 5] [--out results] [--build] [--master both|libcosim|fmpy] [--ssp]
+                                  [--standalone]
 
 Builds the FMUs into dist/ when they are missing (or with --build), runs the system in libcosim (Open
 Simulation Platform, `pip install -e .[cosim]`) and with the fmpy master of rocking_model.cosim, writes
 <out>/system_<master>.csv and <out>/system.png, and prints the largest difference between the two masters.
+With --ssp, it also packages the system as an SSP 1.0 archive <out>/RockingSystem.ssp (the system structure,
+the connections, the parameter values and the FMUs; rocking_model.cosim.write_ssp) and runs the masters on
+the archive instead of the OSP file (same results: the archive holds the same system). With --standalone,
+the block and the oscillator are the self-contained FMUs of dist/standalone/ (no Python inside; built by
+build_fmu.py when missing) instead of the pythonfmu ones: the same results to round-off.
 """
 from __future__ import annotations
 
@@ -34,8 +40,41 @@ def build_fmus(force: bool = False) -> None:
     module.build_all(ROOT / "dist", names=FMUS)
 
 
+STANDALONE = ["RigidRockingBlock", "FlexibleRockingOscillator"]
+
+
+def build_standalone(force: bool = False) -> None:
+    if not force and all((ROOT / "dist" / "standalone" / f"{n}.fmu").is_file() for n in STANDALONE):
+        return
+    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.build_standalone(ROOT / "dist", names=STANDALONE)
+
+
+def system(osp=None, standalone: bool = False):
+    """The example's system (a rocking_model.cosim.System) from the OSP file; with ``standalone``, the block and
+    the oscillator are the self-contained FMUs of dist/standalone/."""
+    from rocking_model.cosim import read_osp_system_structure
+
+    sysm = read_osp_system_structure(OSP if osp is None else osp)
+    if standalone:
+        for c in sysm.components:
+            if Path(c.fmu).stem in STANDALONE:
+                c.fmu = ROOT / "dist" / "standalone" / Path(c.fmu).name
+    return sysm
+
+
+def write_ssp(path, osp=None, standalone: bool = False) -> Path:
+    """Package the system of the OSP file (default: the example's) as an SSP 1.0 archive at ``path``."""
+    from rocking_model.cosim import write_ssp as _write_ssp
+
+    return _write_ssp(system(osp, standalone), path, name="RockingSystem")
+
+
 def run(stop: float = 5.0, master: str = "both", osp=None) -> dict:
-    """Run the system; return {"fmpy": result, "libcosim": result} (structured arrays, column 'time' and
+    """Run the system (``osp``: an OspSystemStructure.xml, an .ssp archive or a System; default the
+    example's OSP file); return {"fmpy": result, "libcosim": result} (structured arrays, column 'time' and
     one column per entry of OUTPUTS)."""
     from rocking_model.cosim import run_fmpy, run_libcosim
 
@@ -89,14 +128,24 @@ def main(argv=None) -> int:
     parser.add_argument("--build", action="store_true", help="rebuild the FMUs into dist/")
     parser.add_argument("--master", choices=["both", "libcosim", "fmpy"], default="both")
     parser.add_argument("--no-plot", action="store_true")
+    parser.add_argument("--standalone", action="store_true",
+                        help="the self-contained block and oscillator (dist/standalone/) instead of the pythonfmu ones")
+    parser.add_argument("--ssp", action="store_true",
+                        help="write <out>/RockingSystem.ssp (SSP 1.0) and run the masters on it")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     from rocking_model.cosim import write_csv
 
     build_fmus(args.build)
+    if args.standalone:
+        build_standalone(args.build)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    results = run(args.stop, args.master)
+    source = system(standalone=True) if args.standalone else None
+    if args.ssp:
+        source = write_ssp(out / "RockingSystem.ssp", standalone=args.standalone)
+        print(f"wrote {source}")
+    results = run(args.stop, args.master, osp=source)
     for name, res in results.items():
         write_csv(out / f"system_{name}.csv", res)
         print(f"wrote {out / f'system_{name}.csv'}")

@@ -6,6 +6,8 @@
  * location file://<dir>/resources, sets the input ag, steps from 0 to t_end with step dt, prints "t,phi"
  * after every step (%.17g), frees the instance and unloads the binary. The FMU's binary loads libpython and
  * finds numpy by itself (the paths recorded when it was built): no LD_PRELOAD, no PYTHONPATH.
+ * With a 9th argument --maps, the host reports on stderr whether libpython is mapped into the process
+ * (/proc/self/maps) after the run: "host: libpython mapped: yes|no" (the self-contained FMUs never map it).
  * Build: cc -std=c99 -I<dir with fmi2Functions.h> host.c -o host -ldl
  */
 #define _XOPEN_SOURCE 700
@@ -47,8 +49,10 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     } while (0)
 
 int main(int argc, char **argv) {
-    if (argc != 9) {
-        fprintf(stderr, "usage: %s <fmu dir> <modelIdentifier> <guid> <vr ag> <vr phi> <ag> <t_end> <dt>\n", argv[0]);
+    int check_maps = argc == 10 && strcmp(argv[9], "--maps") == 0;
+    if (argc != 9 && !check_maps) {
+        fprintf(stderr, "usage: %s <fmu dir> <modelIdentifier> <guid> <vr ag> <vr phi> <ag> <t_end> <dt> [--maps]\n",
+                argv[0]);
         return 1;
     }
     char dir[PATH_MAX];
@@ -99,6 +103,15 @@ int main(int argc, char **argv) {
         fflush(stdout);
     }
     CHECK(fmi2Terminate(c));
+    if (check_maps) {
+        FILE *maps = fopen("/proc/self/maps", "r");
+        char line[4096];
+        int mapped = 0;
+        while (maps && fgets(line, sizeof line, maps))
+            if (strstr(line, "libpython")) mapped = 1;
+        if (maps) fclose(maps);
+        fprintf(stderr, "host: libpython mapped: %s\n", maps ? (mapped ? "yes" : "no") : "unknown");
+    }
     fmi2FreeInstance(c);
     fflush(stdout);
     /* the binary never finalizes the interpreter it started: unloading it and returning is safe */

@@ -1,0 +1,1349 @@
+/* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs of issue 22, with no
+ * Python at all. C99 + libm.
+ *
+ * The state machine, the statuses, the messages and the serialized FMU state's header are those of
+ * fmi_binary/fmi2_cs.c (the binary of the pythonfmu FMUs, per-call state masks after modelica/Reference-FMUs);
+ * the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave) is written here in C with the same
+ * checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
+ * rocking_model/fmi/standalone.py from the declarations the pythonfmu FMUs use.
+ *
+ * Status of a call (FMI 2.0, section 2.1.3):
+ *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when a warning was logged meanwhile);
+ *   fmi2Discard           a refused step: the engine is where it was (fmi2Terminated true until a later step
+ *                         succeeds, fmi2LastSuccessfulTime the instance's time);
+ *   fmi2Error             an invalid argument, value or call sequence: the message goes to the logger, the
+ *                         instance enters the error state (only getters, fmi2SetFMUstate, fmi2Reset,
+ *                         fmi2Terminate and fmi2FreeInstance allowed).
+ * Messages are passed to the logger as data ("%s"), never as a format.
+ * Thread safety: no mutable globals; each instance owns its engine. */
+#if !defined(_WIN32) && !defined(_POSIX_C_SOURCE)
+#define _POSIX_C_SOURCE 200809L /* stat() */
+#endif
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <sys/stat.h>
+
+#include "fmi2Functions.h"
+#include "rk_engine.h"
+#include "uri.h"
+
+enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
+enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
+enum { RK_ROLE_PARAM, RK_ROLE_INITIAL, RK_ROLE_SCHEME, RK_ROLE_DT_MAX, RK_ROLE_TOLERANCE, RK_ROLE_MAX_STEPS,
+       RK_ROLE_INPUT, RK_ROLE_OUTPUT, RK_ROLE_CONTACT, RK_ROLE_IMPACTS, RK_ROLE_OVERTURNED,
+       RK_ROLE_FRICTION_DEMAND, RK_ROLE_PAINLEVE };
+typedef struct {
+    const char *name;
+    int type, causality, fixed, role, index;
+    double start;
+    int has_min;
+    double min;
+    int has_max;
+    double max;
+} rk_fmu_var;
+
+#include "rk_fmu_vars.h"
+
+static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
+
+/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|) */
+#define TIME_TOLERANCE 1e-9
+
+enum {
+    INSTANTIATED = 1 << 0,
+    INITIALIZATION_MODE = 1 << 1,
+    STEP_COMPLETE = 1 << 2,
+    STEP_FAILED = 1 << 3,
+    TERMINATED = 1 << 4,
+    ERROR_STATE = 1 << 5,
+    FATAL_STATE = 1 << 6,
+};
+#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
+#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
+#define MASK_SetupExperiment INSTANTIATED
+#define MASK_EnterInitializationMode INSTANTIATED
+#define MASK_ExitInitializationMode INITIALIZATION_MODE
+#define MASK_Terminate (SIMULATING | ERROR_STATE)
+#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
+#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
+#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
+#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
+#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
+#define MASK_FreeFMUstate ANY_STATE
+#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
+#define MASK_DoStep SIMULATING
+#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
+
+static const char *state_name(int state) {
+    switch (state) {
+    case INSTANTIATED: return "instantiated";
+    case INITIALIZATION_MODE: return "in initialization mode";
+    case STEP_COMPLETE: return "simulating (step complete)";
+    case STEP_FAILED: return "simulating (last step discarded)";
+    case TERMINATED: return "terminated";
+    case ERROR_STATE: return "in the error state (call fmi2Reset or fmi2FreeInstance)";
+    default: return "in the fatal state (only fmi2FreeInstance is allowed)";
+    }
+}
+
+#define INSTANCE_MAGIC 0x46d12a7cu
+#define STATE_MAGIC 0x5d7e0c1au
+#define ERROR_LEN 1024
+
+/* the slave's part of the instance (RockingSlave._clear_state): what an FMU state holds */
+typedef struct {
+    double values[RK_FMU_N_VARS]; /* every variable as a double (Integer / Boolean exactly representable) */
+    int initialized, terminated, frozen, has_rate;
+    double t, t0;                 /* [s] communication point, start time */
+    double rate, rate_t;          /* input = value + rate (t - rate_t) when has_rate */
+    int has_error;
+    char error[ERROR_LEN];        /* permanent failure, until reset */
+} Slave;
+
+typedef struct {
+    unsigned magic;
+    int state;
+    char *name;
+    fmi2CallbackLogger logger;
+    fmi2ComponentEnvironment env;
+    int logging_on;
+    char **categories;
+    size_t n_categories;
+    Slave s;
+    rk_engine *engine;            /* NULL until initialized (or after an error without simulator) */
+    double time;
+    int terminated_flag;
+    fmi2Status last_step_status;
+    fmi2Status worst_logged;      /* the worst status logged during the current call (capped at Warning) */
+} Instance;
+
+typedef struct {
+    unsigned magic;
+    int instance_state;
+    double time;
+    int terminated_flag;
+    fmi2Status last_step_status;
+    size_t n;
+    unsigned char *payload;       /* the slave's bytes (see encode_slave) */
+} SavedState;
+
+/* serialized FMU state: the header of fmi2_cs.c (magic, time, instance state, fmi2Terminated, last DoStep
+ * status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
+ * fields and the engine snapshot. */
+#define SERIAL_MAGIC "rocking FMI2 state v2\n"
+#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
+#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
+#define PAYLOAD_MAGIC "rocking engine FMU state v1\n"
+#define PAYLOAD_MAGIC_SIZE (sizeof PAYLOAD_MAGIC - 1)
+#define GUID_SIZE 36
+
+static uint32_t crc32_update(uint32_t crc, const unsigned char *p, size_t n) {
+    crc = ~crc;
+    while (n--) {
+        crc ^= *p++;
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static uint32_t serial_crc(const unsigned char *header, const unsigned char *payload, size_t n) {
+    return crc32_update(crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
+}
+
+/* ------------------------------------------------------------------------------------------ texts */
+/* Python's repr of a float: the shortest text that reads back as the same double, in the notation Python
+ * chooses (fixed for 1e-4 <= |x| < 1e16, else scientific with a signed two-digit exponent). */
+static void py_repr(double x, char *out, size_t size) {
+    if (isnan(x)) { snprintf(out, size, "nan"); return; }
+    if (isinf(x)) { snprintf(out, size, x > 0 ? "inf" : "-inf"); return; }
+    if (x == 0.0) { snprintf(out, size, signbit(x) ? "-0.0" : "0.0"); return; }
+    char buf[40];
+    int p;
+    for (p = 1; p <= 17; p++) {
+        snprintf(buf, sizeof buf, "%.*e", p - 1, x);
+        if (strtod(buf, NULL) == x) break;
+    }
+    /* buf: [-]d.ddde[+-]XX */
+    char digits[24];
+    int nd = 0, neg = buf[0] == '-';
+    const char *c = buf + neg;
+    for (; *c && *c != 'e'; c++)
+        if (*c != '.') digits[nd++] = *c;
+    digits[nd] = 0;
+    int e = atoi(c + 1);
+    while (nd > 1 && digits[nd - 1] == '0') digits[--nd] = 0;
+    char body[64];
+    if (e >= -5 + 1 && e < 16) { /* Python: repr uses 'r' format: fixed when -4 <= exp < 16 */
+        if (e >= 0) {
+            if (nd <= e + 1) {
+                snprintf(body, sizeof body, "%s%0*d.0", digits, e + 1 - nd, 0);
+                if (e + 1 - nd == 0) snprintf(body, sizeof body, "%s.0", digits);
+            } else {
+                snprintf(body, sizeof body, "%.*s.%s", e + 1, digits, digits + e + 1);
+            }
+        } else {
+            snprintf(body, sizeof body, "0.%0*d%s", -e - 1, 0, digits);
+            if (-e - 1 == 0) snprintf(body, sizeof body, "0.%s", digits);
+        }
+    } else {
+        if (nd > 1) snprintf(body, sizeof body, "%c.%se%c%02d", digits[0], digits + 1, e < 0 ? '-' : '+', abs(e));
+        else snprintf(body, sizeof body, "%ce%c%02d", digits[0], e < 0 ? '-' : '+', abs(e));
+    }
+    snprintf(out, size, "%s%s", neg ? "-" : "", body);
+}
+
+/* ------------------------------------------------------------------------------------------ messages */
+static int category_enabled(const Instance *S, const char *category) {
+    if (S->n_categories == 0) return 1;
+    for (size_t i = 0; i < S->n_categories; i++)
+        if (category && strcmp(S->categories[i], category) == 0) return 1;
+    return 0;
+}
+
+static void emit(Instance *S, fmi2Status status, const char *category, const char *text) {
+    if (status > S->worst_logged && status <= fmi2Warning) S->worst_logged = status;
+    if (!S->logger) return;
+    if (status == fmi2OK && !(S->logging_on && category_enabled(S, category))) return;
+    S->logger(S->env, S->name, status, category ? category : "logAll", "%s", text ? text : "");
+}
+
+static void logf_(Instance *S, fmi2Status status, const char *category, const char *format, ...) {
+    char text[4096];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    emit(S, status, category, text);
+}
+#define log_error(S, ...) logf_(S, fmi2Error, "logStatusError", __VA_ARGS__)
+#define log_warning(S, ...) logf_(S, fmi2Warning, "logStatusWarning", __VA_ARGS__)
+
+static int valid(const Instance *S) { return S && S->magic == INSTANCE_MAGIC; }
+
+static fmi2Status illegal(Instance *S, const char *function) {
+    log_error(S, "%s: illegal call sequence: the instance is %s", function, state_name(S->state));
+    if (S->state != FATAL_STATE) S->state = ERROR_STATE;
+    return fmi2Error;
+}
+
+static fmi2Status fail(Instance *S, fmi2Status status) {
+    if (status == fmi2Error) S->state = ERROR_STATE;
+    if (status == fmi2Fatal) S->state = FATAL_STATE;
+    return status;
+}
+
+#define BEGIN(F)                                                                  \
+    Instance *S = (Instance *)c;                                                  \
+    if (!valid(S)) return fmi2Error;                                              \
+    S->worst_logged = fmi2OK;                                                     \
+    if (!(S->state & MASK_##F)) return illegal(S, "fmi2" #F)
+
+#define NOT_NULL(F, p)                                                            \
+    if (!(p)) {                                                                   \
+        log_error(S, "fmi2" #F ": argument " #p " is NULL");                      \
+        return fail(S, fmi2Error);                                                \
+    }
+
+/* ------------------------------------------------------------------------------------------ the slave */
+static void slave_clear(Slave *s) {
+    memset(s, 0, sizeof *s);
+    for (int i = 0; i < RK_FMU_N_VARS; i++) s->values[i] = RK_FMU_VARS[i].start;
+}
+
+/* The engine of the parameter values `values` (ModelSlave.create_simulator): NULL with `why` filled. */
+static rk_engine *create_engine(const double *values, double t0, char *why, size_t size) {
+    double params[RK_FMU_N_PARAMS > 0 ? RK_FMU_N_PARAMS : 1], initial[RK_FMU_N_INITIAL > 0 ? RK_FMU_N_INITIAL : 1];
+    rk_options o;
+    rk_options_default(&o);
+    o.t0 = t0;
+    o.impact_log_size = 0; /* the FMU keeps no impact log (memory flat over any run; the count is kept) */
+    for (int i = 0; i < RK_FMU_N_PARAMS; i++) params[i] = RK_FMU_PARAM_DEFAULTS[i];
+    for (int i = 0; i < RK_FMU_N_INITIAL; i++) initial[i] = RK_FMU_INITIAL_DEFAULTS[i];
+    double max_steps = 0.0;
+    for (int i = 0; i < RK_FMU_N_VARS; i++) {
+        const rk_fmu_var *v = &RK_FMU_VARS[i];
+        switch (v->role) {
+        case RK_ROLE_PARAM: params[v->index] = values[i]; break;
+        case RK_ROLE_INITIAL: initial[v->index] = values[i]; break;
+        case RK_ROLE_SCHEME: o.scheme = (rk_scheme)(int)values[i]; break;
+        case RK_ROLE_DT_MAX: o.dt_max = values[i]; break;
+        case RK_ROLE_TOLERANCE: o.tolerance = values[i]; break;
+        case RK_ROLE_MAX_STEPS: max_steps = values[i]; break;
+        default: break;
+        }
+    }
+    if (!(max_steps >= 1 && max_steps <= RK_FMU_MAX_STEPS_LIMIT)) {
+        snprintf(why, size, "max_steps = %.0f is out of range; allowed range [1, %d]", max_steps,
+                 RK_FMU_MAX_STEPS_LIMIT);
+        return NULL;
+    }
+    /* the scheme is checked after the model's parameters, as the Python builds the model before the Simulator */
+    int bad_scheme = !(o.scheme == RK_SCHEME_MOREAU_JEAN || o.scheme == RK_SCHEME_EVENT_DRIVEN);
+    if (bad_scheme) o.scheme = RK_SCHEME_EVENT_DRIVEN;
+    rk_error err;
+    rk_error_clear(&err);
+    rk_engine *e = rk_engine_create(RK_FMU_MODEL_KIND, params, RK_FMU_N_PARAMS, initial, RK_FMU_N_INITIAL, &o, &err);
+    if (!e) {
+        snprintf(why, size, "%s", err.message);
+        /* an Integer choice named with its integer value, as the Python's message (the engine reads doubles) */
+        for (int i = 0; i < RK_FMU_N_VARS; i++) {
+            const rk_fmu_var *v = &RK_FMU_VARS[i];
+            char head[160], fixed[160];
+            if (v->type != RK_INTEGER) continue;
+            snprintf(head, sizeof head, "%s = %.1f is not supported", v->name, values[i]);
+            snprintf(fixed, sizeof fixed, "%s = %.0f is not supported", v->name, values[i]);
+            if (strncmp(err.message, head, strlen(head)) == 0)
+                snprintf(why, size, "%s%s", fixed, err.message + strlen(head));
+        }
+        return NULL;
+    }
+    if (bad_scheme) {
+        rk_engine_free(e);
+        for (int i = 0; i < RK_FMU_N_VARS; i++)
+            if (RK_FMU_VARS[i].role == RK_ROLE_SCHEME)
+                snprintf(why, size, "scheme = %.0f is not supported; allowed values: %s", values[i],
+                         RK_FMU_SCHEME_ALLOWED);
+        return NULL;
+    }
+    if (rk_engine_n_outputs(e) < RK_FMU_N_OUTPUTS) {
+        snprintf(why, size, "the engine has %d outputs, the FMU declares %d", rk_engine_n_outputs(e),
+                 RK_FMU_N_OUTPUTS);
+        rk_engine_free(e);
+        return NULL;
+    }
+    for (int i = 0; i < RK_FMU_N_OUTPUTS; i++)
+        if (strcmp(rk_engine_output_name(e, i), RK_FMU_OUTPUT_NAMES[i]) != 0) {
+            snprintf(why, size, "the engine's output %d is %s, the FMU declares %s", i, rk_engine_output_name(e, i),
+                     RK_FMU_OUTPUT_NAMES[i]);
+            rk_engine_free(e);
+            return NULL;
+        }
+    return e;
+}
+
+static long long max_steps_of(const Slave *s) {
+    for (int i = 0; i < RK_FMU_N_VARS; i++)
+        if (RK_FMU_VARS[i].role == RK_ROLE_MAX_STEPS) return (long long)s->values[i];
+    return -1;
+}
+
+static int input_index(void) {
+    for (int i = 0; i < RK_FMU_N_VARS; i++)
+        if (RK_FMU_VARS[i].role == RK_ROLE_INPUT) return i;
+    return -1;
+}
+
+/* RockingSlave._update_outputs: the outputs from the engine; the freeze once overturned (with its warning) */
+static void update_outputs(Instance *S) {
+    Slave *s = &S->s;
+    double out[RK_MAX_OUTPUTS];
+    rk_engine_outputs(S->engine, out);
+    int overturned = rk_engine_overturned(S->engine);
+    for (int i = 0; i < RK_FMU_N_VARS; i++) {
+        const rk_fmu_var *v = &RK_FMU_VARS[i];
+        switch (v->role) {
+        case RK_ROLE_OUTPUT: s->values[i] = out[v->index]; break;
+        case RK_ROLE_CONTACT: s->values[i] = rk_engine_contact_code(S->engine); break;
+        case RK_ROLE_IMPACTS: s->values[i] = (double)rk_engine_impacts(S->engine); break;
+        case RK_ROLE_OVERTURNED: s->values[i] = overturned ? 1.0 : 0.0; break;
+        case RK_ROLE_FRICTION_DEMAND: s->values[i] = rk_engine_friction_demand(S->engine); break;
+        case RK_ROLE_PAINLEVE: s->values[i] = (double)rk_engine_painleve(S->engine); break;
+        default: break;
+        }
+    }
+    if (RK_FMU_FREEZE && overturned && !s->frozen) {
+        s->frozen = 1;
+        log_warning(S, "overturned at t = %g s: the outputs are frozen from now on", rk_engine_time(S->engine));
+    }
+}
+
+/* check_real(name, x, lo, hi) of rocking_model.validation: 0, or 1 with the message in `out` */
+static int check_real(const char *name, double x, const rk_fmu_var *v, char *out, size_t size) {
+    if (isfinite(x) && (!v->has_min || x >= v->min) && (!v->has_max || x <= v->max)) return 0;
+    char lo[32], hi[32], r[40];
+    if (v->has_min) snprintf(lo, sizeof lo, "%g", v->min); else snprintf(lo, sizeof lo, "-inf");
+    if (v->has_max) snprintf(hi, sizeof hi, "%g", v->max); else snprintf(hi, sizeof hi, "inf");
+    char rng[80];
+    snprintf(rng, sizeof rng, "%c%s, %s%c", v->has_min ? '[' : '(', lo, hi, v->has_max ? ']' : ')');
+    if (!isfinite(x)) {
+        py_repr(x, r, sizeof r);
+        snprintf(out, size, "%s = %s is not finite; allowed range %s", name, r, rng);
+    } else {
+        snprintf(out, size, "%s = %g is out of range; allowed range %s", name, x, rng);
+    }
+    return 1;
+}
+
+static const rk_fmu_var RATE_RANGE = {"rate", RK_REAL, RK_INPUT, 0, 0, 0, 0.0, 1, -RK_FMU_INPUT_RATE_MAX, 1,
+                                      RK_FMU_INPUT_RATE_MAX};
+
+/* the resource folder exists (the FMU reads nothing from it; a missing one means a broken extraction) */
+static int is_directory(const char *path) {
+#ifdef _WIN32
+    struct _stat st;
+    return _stat(path, &st) == 0 && (st.st_mode & _S_IFDIR);
+#else
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+#endif
+}
+
+/* ------------------------------------------------------------------------------------------ life cycle */
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
+    if (!functions || !functions->logger) return;
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s", text);
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    (void)visible;
+    if (!instanceName || !instanceName[0]) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
+        return NULL;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
+                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
+                          (int)fmi2CoSimulation);
+        return NULL;
+    }
+    if (!fmuGUID) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
+        return NULL;
+    }
+    if (strcmp(fmuGUID, RK_FMU_GUID) != 0) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the GUID of "
+                          "this binary, %s (the modelDescription.xml belongs to another FMU or build)", fmuGUID,
+                          RK_FMU_GUID);
+        return NULL;
+    }
+    /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
+     * binary refuses it (fmi_binary/uri.c, the same messages) */
+    char resources[4096], why[2048];
+    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        return NULL;
+    }
+    if (!is_directory(resources)) {
+        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from fmuResourceLocation "
+                          "\"%.500s\") does not exist or is not a folder", resources, fmuResourceLocation);
+        return NULL;
+    }
+    Instance *S = (Instance *)calloc(1, sizeof(Instance));
+    if (!S || !(S->name = (char *)malloc(strlen(instanceName) + 1))) {
+        free(S);
+        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    strcpy(S->name, instanceName);
+    S->magic = INSTANCE_MAGIC;
+    S->state = INSTANTIATED;
+    S->logger = functions ? functions->logger : NULL;
+    S->env = functions ? functions->componentEnvironment : NULL;
+    S->logging_on = loggingOn ? 1 : 0;
+    S->last_step_status = fmi2OK;
+    slave_clear(&S->s);
+    return S;
+}
+
+static void free_categories(Instance *S) {
+    for (size_t i = 0; i < S->n_categories; i++) free(S->categories[i]);
+    free(S->categories);
+    S->categories = NULL;
+    S->n_categories = 0;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return;
+    rk_engine_free(S->engine);
+    free_categories(S);
+    S->magic = 0;
+    free(S->name);
+    free(S);
+}
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    BEGIN(SetDebugLogging);
+    if (nCategories > 0) NOT_NULL(SetDebugLogging, categories);
+    for (size_t i = 0; i < nCategories; i++) NOT_NULL(SetDebugLogging, categories[i]);
+    free_categories(S);
+    if (nCategories > 0) {
+        S->categories = (char **)calloc(nCategories, sizeof(char *));
+        if (!S->categories) return fail(S, fmi2Error);
+        for (size_t i = 0; i < nCategories; i++) {
+            S->categories[i] = (char *)malloc(strlen(categories[i]) + 1);
+            if (!S->categories[i]) {
+                S->n_categories = i;
+                return fail(S, fmi2Error);
+            }
+            strcpy(S->categories[i], categories[i]);
+        }
+    }
+    S->n_categories = nCategories;
+    S->logging_on = loggingOn ? 1 : 0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    BEGIN(SetupExperiment);
+    if (!isfinite(startTime)) {
+        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
+        return fail(S, fmi2Error);
+    }
+    if (stopTimeDefined && !(stopTime >= startTime)) {
+        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
+                  stopTime, startTime);
+        return fail(S, fmi2Error);
+    }
+    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
+        return fail(S, fmi2Error);
+    }
+    S->s.t0 = startTime;
+    S->time = startTime;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    BEGIN(EnterInitializationMode);
+    S->state = INITIALIZATION_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    BEGIN(ExitInitializationMode);
+    char why[RK_MSG_LEN + 128];
+    rk_engine *e = create_engine(S->s.values, S->s.t0, why, sizeof why);
+    if (!e) {
+        log_error(S, "fmi2ExitInitializationMode: invalid parameters: %s", why);
+        return fail(S, fmi2Error);
+    }
+    rk_engine_free(S->engine);
+    S->engine = e;
+    S->s.initialized = 1;
+    S->s.t = S->s.t0;
+    /* a rate set before initialization refers to the start of the first communication step */
+    if (S->s.has_rate) S->s.rate_t = S->s.t0;
+    update_outputs(S);
+    S->state = STEP_COMPLETE;
+    S->terminated_flag = 0;
+    S->last_step_status = fmi2OK;
+    return S->worst_logged;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    BEGIN(Terminate);
+    if (S->state == ERROR_STATE) return fmi2OK;
+    S->s.terminated = 1;
+    S->state = TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    BEGIN(Reset);
+    rk_engine_free(S->engine);
+    S->engine = NULL;
+    slave_clear(&S->s);
+    S->state = INSTANTIATED;
+    S->time = 0.0;
+    S->terminated_flag = 0;
+    S->last_step_status = fmi2OK;
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------------------------------------ values */
+/* the variable of reference vr if it has type `type`; else NULL with the problem appended to `problems` */
+static const rk_fmu_var *lookup(fmi2ValueReference vr, int type, char *problems, size_t size) {
+    size_t n = strlen(problems);
+    const char *sep = n ? "; " : "";
+    if (vr >= RK_FMU_N_VARS) {
+        snprintf(problems + n, size - n, "%svalue reference %u is unknown to %s", sep, (unsigned)vr, RK_FMU_NAME);
+        return NULL;
+    }
+    const rk_fmu_var *v = &RK_FMU_VARS[vr];
+    if (v->type != type) {
+        snprintf(problems + n, size - n, "%svalue reference %u is '%s', a %s variable, not %s", sep, (unsigned)vr,
+                 v->name, TYPE_NAMES[v->type], TYPE_NAMES[type]);
+        return NULL;
+    }
+    return v;
+}
+
+static void append(char *problems, size_t size, const char *text) {
+    size_t n = strlen(problems);
+    snprintf(problems + n, size - n, "%s%s", n ? "; " : "", text);
+}
+
+#define PROBLEMS_LEN 4096
+
+static fmi2Status get_values(Instance *S, const char *function, int type, const fmi2ValueReference vr[],
+                             size_t nvr, double *out) {
+    char problems[PROBLEMS_LEN] = "";
+    for (size_t i = 0; i < nvr; i++) {
+        const rk_fmu_var *v = lookup(vr[i], type, problems, sizeof problems);
+        out[i] = v ? S->s.values[vr[i]] : 0.0;
+    }
+    if (problems[0]) {
+        log_error(S, "%s: %s", function, problems);
+        return fail(S, fmi2Error);
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    BEGIN(Get);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(GetReal, vr);
+    NOT_NULL(GetReal, value);
+    return get_values(S, "fmi2GetReal", RK_REAL, vr, nvr, value);
+}
+
+#define INT_GETTER(F, TYPE, KIND, CONVERT)                                                                  \
+    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
+        BEGIN(Get);                                                                                         \
+        if (nvr == 0) return fmi2OK;                                                                        \
+        NOT_NULL(F, vr);                                                                                    \
+        NOT_NULL(F, value);                                                                                 \
+        char problems[PROBLEMS_LEN] = "";                                                                   \
+        for (size_t i = 0; i < nvr; i++) {                                                                  \
+            const rk_fmu_var *v = lookup(vr[i], KIND, problems, sizeof problems);                           \
+            double x = v ? S->s.values[vr[i]] : 0.0;                                                        \
+            value[i] = CONVERT;                                                                             \
+        }                                                                                                   \
+        if (problems[0]) {                                                                                  \
+            log_error(S, "fmi2" #F ": %s", problems);                                                       \
+            return fail(S, fmi2Error);                                                                      \
+        }                                                                                                   \
+        return fmi2OK;                                                                                      \
+    }
+
+INT_GETTER(GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
+INT_GETTER(GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    BEGIN(Get);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(GetString, vr);
+    NOT_NULL(GetString, value);
+    char problems[PROBLEMS_LEN] = "";
+    for (size_t i = 0; i < nvr; i++) {
+        lookup(vr[i], RK_STRING, problems, sizeof problems);
+        value[i] = "";
+    }
+    if (problems[0]) {
+        log_error(S, "fmi2GetString: %s", problems);
+        return fail(S, fmi2Error);
+    }
+    return fmi2OK;
+}
+
+/* RockingSlave._set: every value checked, all set or none */
+static fmi2Status set_values(Instance *S, const char *function, int type, const fmi2ValueReference vr[],
+                             size_t nvr, const double *x) {
+    char problems[PROBLEMS_LEN] = "";
+    for (size_t i = 0; i < nvr; i++) {
+        const rk_fmu_var *v = lookup(vr[i], type, problems, sizeof problems);
+        if (!v) continue;
+        char text[600];
+        if (v->causality == RK_OUTPUT) {
+            snprintf(text, sizeof text, "%s is an output and cannot be set", v->name);
+            append(problems, sizeof problems, text);
+        } else if (v->causality == RK_INPUT && v->type == RK_REAL) {
+            char why[512];
+            if (check_real(v->name, x[i], v, why, sizeof why)) {
+                snprintf(text, sizeof text, "input %s", why);
+                append(problems, sizeof problems, text);
+            }
+        } else if (v->causality == RK_PARAMETER && S->s.initialized && v->fixed) {
+            double old = S->s.values[vr[i]];
+            if (!(x[i] == old || (isnan(x[i]) && isnan(old)))) {
+                char a[40], b[40];
+                if (v->type == RK_REAL) {
+                    py_repr(x[i], a, sizeof a);
+                    py_repr(old, b, sizeof b);
+                } else if (v->type == RK_BOOLEAN) {
+                    snprintf(a, sizeof a, "%s", x[i] != 0.0 ? "True" : "False");
+                    snprintf(b, sizeof b, "%s", old != 0.0 ? "True" : "False");
+                } else {
+                    snprintf(a, sizeof a, "%.0f", x[i]);
+                    snprintf(b, sizeof b, "%.0f", old);
+                }
+                snprintf(text, sizeof text, "parameter %s is 'fixed' and cannot be changed after initialization "
+                         "(requested %s, keeping %s); call fmi2Reset first to change it", v->name, a, b);
+                append(problems, sizeof problems, text);
+            }
+        }
+    }
+    if (problems[0]) {
+        log_error(S, "%s: %s (nothing was set)", function, problems);
+        return fail(S, fmi2Error);
+    }
+    for (size_t i = 0; i < nvr; i++) {
+        S->s.values[vr[i]] = x[i];
+        if (RK_FMU_VARS[vr[i]].role == RK_ROLE_INPUT) S->s.has_rate = 0; /* held until a rate is given again */
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    BEGIN(Set);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(SetReal, vr);
+    NOT_NULL(SetReal, value);
+    return set_values(S, "fmi2SetReal", RK_REAL, vr, nvr, value);
+}
+
+#define INT_SETTER(F, TYPE, KIND, CONVERT)                                                                  \
+    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
+        BEGIN(Set);                                                                                         \
+        if (nvr == 0) return fmi2OK;                                                                        \
+        NOT_NULL(F, vr);                                                                                    \
+        NOT_NULL(F, value);                                                                                 \
+        double *x = (double *)malloc(nvr * sizeof(double));                                                 \
+        if (!x) {                                                                                           \
+            log_error(S, "fmi2" #F ": out of memory");                                                      \
+            return fail(S, fmi2Error);                                                                      \
+        }                                                                                                   \
+        for (size_t i = 0; i < nvr; i++) x[i] = CONVERT;                                                    \
+        fmi2Status status = set_values(S, "fmi2" #F, KIND, vr, nvr, x);                                     \
+        free(x);                                                                                            \
+        return status;                                                                                      \
+    }
+
+INT_SETTER(SetInteger, fmi2Integer, RK_INTEGER, (double)value[i])
+INT_SETTER(SetBoolean, fmi2Boolean, RK_BOOLEAN, value[i] != fmi2False ? 1.0 : 0.0)
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
+    BEGIN(Set);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(SetString, vr);
+    NOT_NULL(SetString, value);
+    char problems[PROBLEMS_LEN] = "";
+    for (size_t i = 0; i < nvr; i++) lookup(vr[i], RK_STRING, problems, sizeof problems);
+    log_error(S, "fmi2SetString: %s (nothing was set)", problems[0] ? problems : "no String variables");
+    return fail(S, fmi2Error);
+}
+
+/* ------------------------------------------------------------------------------------------ stepping */
+static void log_reports(Instance *S) {
+    const rk_reports *r = rk_engine_reports(S->engine);
+    if (!r || r->count <= 0) return;
+    /* report_summary: per kind, how many and the first */
+    char text[4096] = "";
+    static const char *const KIND_TEXT[] = {"inexact contact", "failed step"};
+    for (int kind = 0; kind < 2; kind++) {
+        int n = 0, first = -1;
+        int kept = r->count < RK_MAX_REPORTS ? r->count : RK_MAX_REPORTS;
+        for (int i = 0; i < kept; i++)
+            if ((int)r->items[i].kind == kind) {
+                if (first < 0) first = i;
+                n++;
+            }
+        if (n) {
+            size_t m = strlen(text);
+            snprintf(text + m, sizeof text - m, "%s%d %s report(s), the first: %s", m ? "; " : "", n, KIND_TEXT[kind],
+                     r->items[first].message);
+        }
+    }
+    char t[40];
+    snprintf(t, sizeof t, "%.17g", rk_engine_time(S->engine));
+    log_warning(S, "t = %s s: %s", t, text);
+}
+
+static int has_failed_step(const rk_engine *e, const char **first) {
+    const rk_reports *r = rk_engine_reports(e);
+    int kept = r ? (r->count < RK_MAX_REPORTS ? r->count : RK_MAX_REPORTS) : 0, n = 0;
+    for (int i = 0; i < kept; i++)
+        if (r->items[i].kind == RK_REPORT_FAILED_STEP) {
+            if (!n) *first = r->items[i].message;
+            n++;
+        }
+    return n;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    BEGIN(DoStep);
+    const double t = currentCommunicationPoint, h = communicationStepSize;
+    if (!(h > 0.0) || !isfinite(h)) {
+        log_error(S, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
+        return fail(S, fmi2Error);
+    }
+    if (!isfinite(t) || fabs(t - S->time) > TIME_TOLERANCE * fmax(1.0, fabs(S->time))) {
+        log_error(S, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the time of the instance, "
+                  "%.17g; each step starts where the last one ended (to go back, restore a state saved with "
+                  "fmi2GetFMUstate)", t, S->time);
+        return fail(S, fmi2Error);
+    }
+    const double t_end = t + h;
+    if (!isfinite(t_end)) {
+        log_error(S, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %g is not finite", t_end);
+        return fail(S, fmi2Error);
+    }
+    Slave *s = &S->s;
+    if (s->has_error || !S->engine) {
+        log_error(S, "fmi2DoStep: RuntimeError: step refused after an earlier failure (call fmi2Reset): %s",
+                  s->has_error ? s->error : "no simulator");
+        return fail(S, fmi2Error);
+    }
+    char rt[40], rte[40];
+    py_repr(t, rt, sizeof rt);
+    py_repr(t_end, rte, sizeof rte);
+    int refused = 0;
+    /* the input (held, or a line after fmi2SetRealInputDerivatives) checked as the Python does */
+    const int in = input_index();
+    const rk_fmu_var *iv = &RK_FMU_VARS[in];
+    const double value = s->values[in];
+    char why[1024], rv[40];
+    int bad = check_real(iv->name, value, iv, why, sizeof why);
+    if (!bad && s->has_rate) {
+        char name[128];
+        double end = value + s->rate * (t_end - s->rate_t), start = value + s->rate * (t - s->rate_t);
+        snprintf(name, sizeof name, "%s at the end of the step (rate %g per s)", iv->name, s->rate);
+        bad = check_real(name, end, iv, why, sizeof why);
+        if (!bad) {
+            snprintf(name, sizeof name, "%s at the start of the step (rate %g per s)", iv->name, s->rate);
+            bad = check_real(name, start, iv, why, sizeof why);
+        }
+    }
+    if (bad) {
+        py_repr(value, rv, sizeof rv);
+        log_error(S, "input %s = %s at t = %s is invalid: %s", iv->name, rv, rt, why);
+        refused = 1;
+    } else if (!s->frozen) {
+        rk_engine *e = S->engine;
+        double target = t_end > rk_engine_time(e) ? t_end : rk_engine_time(e);
+        rk_engine_checkpoint(e);
+        rk_status st;
+        if (s->has_rate) {
+            rk_motion m;
+            rk_motion_linear(&m, value, s->rate, s->rate_t);
+            st = rk_engine_advance_motion(e, target, &m, max_steps_of(s));
+        } else {
+            st = rk_engine_advance(e, target, value, 0.0, max_steps_of(s), 0u);
+        }
+        const char *first = NULL;
+        int failures = st == RK_OK ? has_failed_step(e, &first) : 0;
+        if (st == RK_OK && failures) {
+            /* on_report = "raise": a failed step refuses the advance (SolverFailure), the state kept */
+            log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %d failed step(s) in this advance, "
+                      "the first: %s", rt, rte, failures, first);
+            rk_engine_rollback(e);
+            refused = 1;
+        } else if (st == RK_OK) {
+            rk_engine_commit(e);
+            log_reports(S);
+            update_outputs(S);
+        } else {
+            rk_engine_rollback(e); /* the engine restored itself already; this drops our checkpoint */
+            if (st == RK_ERR_VALUE || st == RK_ERR_WORK_LIMIT || st == RK_ERR_NONFINITE || st == RK_ERR_SOLVER) {
+                log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %s", rt, rte, rk_engine_message(e));
+                refused = 1;
+            } else {
+                snprintf(s->error, sizeof s->error, "simulation failed in the step [%s, %s]: %s: %s", rt, rte,
+                         rk_status_name(st), rk_engine_message(e));
+                s->has_error = 1;
+                log_error(S, "fmi2DoStep: RuntimeError: %s", s->error);
+                S->last_step_status = fmi2Error;
+                return fail(S, fmi2Error);
+            }
+        }
+    }
+    fmi2Status status;
+    if (refused) {
+        status = fmi2Discard;
+        S->state = STEP_FAILED;
+        S->terminated_flag = 1;
+    } else {
+        s->t = t_end;
+        status = S->worst_logged;
+        S->state = STEP_COMPLETE;
+        S->terminated_flag = 0;
+        S->time = t_end;
+    }
+    S->last_step_status = status;
+    return status;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return fmi2Error;
+    log_error(S, "fmi2CancelStep: no step is in progress (fmi2DoStep never returns fmi2Pending)");
+    return fail(S, fmi2Error);
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    BEGIN(SetRealInputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    NOT_NULL(SetRealInputDerivatives, vr);
+    NOT_NULL(SetRealInputDerivatives, order);
+    NOT_NULL(SetRealInputDerivatives, value);
+    char problems[PROBLEMS_LEN] = "";
+    int ok_rate = 0;
+    double rate = 0.0;
+    for (size_t i = 0; i < nvr; i++) {
+        char text[600];
+        const rk_fmu_var *v = lookup(vr[i], RK_REAL, problems, sizeof problems);
+        if (!v) continue;
+        if (v->causality != RK_INPUT) {
+            snprintf(text, sizeof text, "value reference %u is '%s', not a Real input", (unsigned)vr[i], v->name);
+            append(problems, sizeof problems, text);
+            continue;
+        }
+        if (order[i] != 1) {
+            snprintf(text, sizeof text, "%s: order = %d is not supported; allowed: 1", v->name, (int)order[i]);
+            append(problems, sizeof problems, text);
+            continue;
+        }
+        char name[128];
+        snprintf(name, sizeof name, "rate of %s", v->name);
+        if (check_real(name, value[i], &RATE_RANGE, text, sizeof text)) {
+            append(problems, sizeof problems, text);
+            continue;
+        }
+        ok_rate = 1;
+        rate = value[i];
+    }
+    if (problems[0]) {
+        log_error(S, "fmi2SetRealInputDerivatives: %s (nothing was set)", problems);
+        return fail(S, fmi2Error);
+    }
+    if (ok_rate) {
+        Slave *s = &S->s;
+        double now = s->initialized ? s->t : s->t0;
+        if (s->has_rate && s->initialized) { /* continue the line: the value at this point */
+            int in = input_index();
+            s->values[in] = s->values[in] + s->rate * (now - s->rate_t);
+        }
+        s->has_rate = 1;
+        s->rate = rate;
+        s->rate_t = now;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    (void)vr; (void)order; (void)value;
+    BEGIN(GetRealOutputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    log_error(S, "fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder "
+              "= 0)");
+    return fail(S, fmi2Error);
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
+    Instance *S = (Instance *)c;
+    if (!valid(S)) return fmi2Error;
+    log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
+    return fail(S, fmi2Error);
+}
+
+/* ------------------------------------------------------------------------------------------ status */
+static fmi2Status unavailable(Instance *S, const char *function, int kind) {
+    logf_(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function, kind);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    BEGIN(Status);
+    NOT_NULL(GetStatus, value);
+    if (s != fmi2DoStepStatus) return unavailable(S, "fmi2GetStatus", (int)s);
+    *value = S->last_step_status;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    BEGIN(Status);
+    NOT_NULL(GetRealStatus, value);
+    if (s != fmi2LastSuccessfulTime) return unavailable(S, "fmi2GetRealStatus", (int)s);
+    *value = S->time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    BEGIN(Status);
+    NOT_NULL(GetIntegerStatus, value);
+    return unavailable(S, "fmi2GetIntegerStatus", (int)s);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    BEGIN(Status);
+    NOT_NULL(GetBooleanStatus, value);
+    if (s != fmi2Terminated) return unavailable(S, "fmi2GetBooleanStatus", (int)s);
+    *value = S->terminated_flag ? fmi2True : fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    BEGIN(Status);
+    NOT_NULL(GetStringStatus, value);
+    return unavailable(S, "fmi2GetStringStatus", (int)s);
+}
+
+/* ------------------------------------------------------------------------------------------ FMU state */
+/* The slave's bytes, field by field (no struct padding, native byte order, little-endian on every FMI
+ * platform this project builds; rocking_model/fmi/standalone.py: decode_state_payload reads them):
+ *   PAYLOAD_MAGIC (28 bytes, its last line the format version), GUID (36),
+ *   int32 n_vars, double values[n_vars] (value-reference order),
+ *   int32 initialized, terminated, frozen, has_rate, has_error,
+ *   double t, t0, rate, rate_t,
+ *   int32 error length, the error text (no NUL),
+ *   int32 has_engine, then (with an engine) its plain-data state (Simulator.get_state's fields,
+ *   rk_plain_state): double t, int32 mode, int32 n_y, double y[RK_MAX_Y], double q[RK_MAX_DOF],
+ *   double v[RK_MAX_DOF], uint32 closed, int64 impacts, int32 overturned, int64 n_steps, double h, double
+ *   shift, double friction_demand, int64 painleve;
+ *   uint32 CRC-32 of all the payload's bytes before it (a corruption inside the payload is refused by itself,
+ *   as the pythonfmu slave's SHA-256 does). The engine's state, not its memory: no cache keys, no
+ *   stepper internals, so two instances in the same state serialize to the same bytes, and setting a state
+ *   goes through rk_engine_set_state, which checks every field as Simulator.set_state does (the pythonfmu
+ *   FMU restores its Simulator the same way). The FMU keeps no impact log (impact_log_size 0). */
+#define PUT(q, x) (memcpy((q), &(x), sizeof(x)), (q) += sizeof(x))
+#define GET(x) (memcpy(&(x), p + off, sizeof(x)), off += sizeof(x))
+
+static size_t fixed_payload_size(void) {
+    return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 5 * 4 + 4 * 8 + 4;
+}
+
+#define PLAIN_SIZE (8 + 4 + 4 + 8 * RK_MAX_Y + 16 * RK_MAX_DOF + 4 + 8 + 4 + 8 + 8 * 3 + 8)
+
+static void put_plain(unsigned char *q, const rk_plain_state *ps) {
+    int32_t mode = ps->mode, n_y = ps->n_y, overturned = ps->overturned;
+    uint32_t closed = ps->closed;
+    int64_t impacts = ps->impacts, n_steps = ps->n_steps, painleve = ps->painleve;
+    PUT(q, ps->t);
+    PUT(q, mode);
+    PUT(q, n_y);
+    memcpy(q, ps->y, sizeof ps->y), q += sizeof ps->y;
+    memcpy(q, ps->q, sizeof ps->q), q += sizeof ps->q;
+    memcpy(q, ps->v, sizeof ps->v), q += sizeof ps->v;
+    PUT(q, closed);
+    PUT(q, impacts);
+    PUT(q, overturned);
+    PUT(q, n_steps);
+    PUT(q, ps->h);
+    PUT(q, ps->shift);
+    PUT(q, ps->friction_demand);
+    PUT(q, painleve);
+}
+
+static void get_plain(const unsigned char *p, rk_plain_state *ps) {
+    size_t off = 0;
+    int32_t mode, n_y, overturned;
+    uint32_t closed;
+    int64_t impacts, n_steps, painleve;
+    memset(ps, 0, sizeof *ps);
+    GET(ps->t);
+    GET(mode);
+    GET(n_y);
+    memcpy(ps->y, p + off, sizeof ps->y), off += sizeof ps->y;
+    memcpy(ps->q, p + off, sizeof ps->q), off += sizeof ps->q;
+    memcpy(ps->v, p + off, sizeof ps->v), off += sizeof ps->v;
+    GET(closed);
+    GET(impacts);
+    GET(overturned);
+    GET(n_steps);
+    GET(ps->h);
+    GET(ps->shift);
+    GET(ps->friction_demand);
+    GET(painleve);
+    ps->mode = mode, ps->n_y = n_y, ps->overturned = overturned, ps->closed = closed;
+    ps->impacts = impacts, ps->n_steps = n_steps, ps->painleve = painleve;
+}
+
+static unsigned char *encode_slave(Instance *S, size_t *n) {
+    const Slave *sl = &S->s;
+    int32_t has_engine = S->engine != NULL;
+    int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
+    int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
+    double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
+    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
+    unsigned char *p = (unsigned char *)calloc(1, *n);
+    if (!p) return NULL;
+    unsigned char *q = p;
+    memcpy(q, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE);
+    q += PAYLOAD_MAGIC_SIZE;
+    memcpy(q, RK_FMU_GUID, GUID_SIZE);
+    q += GUID_SIZE;
+    PUT(q, n_vars);
+    memcpy(q, sl->values, sizeof sl->values);
+    q += sizeof sl->values;
+    PUT(q, flags);
+    PUT(q, times);
+    PUT(q, len);
+    memcpy(q, sl->error, (size_t)len);
+    q += len;
+    PUT(q, has_engine);
+    if (has_engine) {
+        rk_plain_state ps;
+        memset(&ps, 0, sizeof ps);
+        rk_engine_get_state(S->engine, &ps);
+        put_plain(q, &ps);
+        q += PLAIN_SIZE;
+    }
+    uint32_t crc = crc32_update(0, p, *n - 4);
+    memcpy(q, &crc, 4);
+    return p;
+}
+
+/* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
+static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
+    if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
+        snprintf(why, size, "bad header: the %zu bytes are not a state of the C engine FMU (format version 1)", n);
+        return -1;
+    }
+    uint32_t crc;
+    memcpy(&crc, p + n - 4, 4);
+    if (crc != crc32_update(0, p, n - 4)) {
+        snprintf(why, size, "the engine FMU state is corrupted (CRC-32 mismatch of its %zu payload bytes)", n - 4);
+        return -1;
+    }
+    n -= 4;
+    if (memcmp(p + PAYLOAD_MAGIC_SIZE, RK_FMU_GUID, GUID_SIZE) != 0) {
+        snprintf(why, size, "the state belongs to another FMU (or to another version of its variables), not to '%s'",
+                 RK_FMU_NAME);
+        return -1;
+    }
+    size_t off = PAYLOAD_MAGIC_SIZE + GUID_SIZE;
+    int32_t n_vars, flags[5], len, has_engine;
+    double times[4];
+    Slave s;
+    memset(&s, 0, sizeof s);
+    GET(n_vars);
+    if (n_vars != RK_FMU_N_VARS) {
+        snprintf(why, size, "the state has %d variables, %s has %d", (int)n_vars, RK_FMU_NAME, RK_FMU_N_VARS);
+        return -1;
+    }
+    memcpy(s.values, p + off, sizeof s.values);
+    off += sizeof s.values;
+    GET(flags);
+    GET(times);
+    GET(len);
+    if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 4 > n) {
+        snprintf(why, size, "state field slave.error has an invalid length");
+        return -1;
+    }
+    memcpy(s.error, p + off, (size_t)len);
+    off += (size_t)len;
+    s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_rate = flags[3];
+    s.has_error = flags[4];
+    s.t = times[0], s.t0 = times[1], s.rate = times[2], s.rate_t = times[3];
+    GET(has_engine);
+    if (!(has_engine == 0 || has_engine == 1) || n - off != (has_engine ? (size_t)PLAIN_SIZE : 0)) {
+        snprintf(why, size, "the engine state has %zu bytes, expected %d", n - off, has_engine ? PLAIN_SIZE : 0);
+        return -1;
+    }
+    int flags_ok = (s.initialized == 0 || s.initialized == 1) && (s.terminated == 0 || s.terminated == 1) &&
+                   (s.frozen == 0 || s.frozen == 1) && (s.has_rate == 0 || s.has_rate == 1) &&
+                   (s.has_error == 0 || s.has_error == 1);
+    if (!flags_ok || !isfinite(s.t) || !isfinite(s.t0) || !isfinite(s.rate) || !isfinite(s.rate_t) ||
+        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX) {
+        snprintf(why, size, "state fields of the slave are invalid");
+        return -1;
+    }
+    for (int i = 0; i < RK_FMU_N_VARS; i++) {
+        const rk_fmu_var *v = &RK_FMU_VARS[i];
+        double x = s.values[i];
+        int okv = v->type == RK_REAL ||
+                  (v->type == RK_INTEGER && x == floor(x) && x >= -2147483648.0 && x <= 2147483647.0) ||
+                  (v->type == RK_BOOLEAN && (x == 0.0 || x == 1.0));
+        if (!okv) {
+            snprintf(why, size, "state value of %s = %g is not a %s", v->name, x, TYPE_NAMES[v->type]);
+            return -1;
+        }
+    }
+    rk_engine *e = NULL;
+    if (has_engine) {
+        char reason[RK_MSG_LEN + 128];
+        rk_plain_state ps;
+        get_plain(p + off, &ps);
+        e = create_engine(s.values, s.t0, reason, sizeof reason);
+        if (!e) {
+            snprintf(why, size, "%s", reason);
+            return -1;
+        }
+        if (rk_engine_set_state(e, &ps, NULL, 0, NULL, 0) != RK_OK) {
+            snprintf(why, size, "%s", rk_engine_message(e));
+            rk_engine_free(e);
+            return -1;
+        }
+    } else if (s.initialized && !s.has_error) {
+        snprintf(why, size, "state field simulator is null in an initialized state without an error");
+        return -1;
+    }
+    rk_engine_free(S->engine);
+    S->engine = e;
+    S->s = s;
+    return 0;
+}
+
+static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
+    SavedState *st = (SavedState *)p;
+    if (!st || st->magic != STATE_MAGIC || !st->payload) {
+        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
+        return NULL;
+    }
+    return st;
+}
+
+static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, unsigned char *payload, size_t n,
+                             const SavedState *fields, fmi2FMUstate *out) {
+    if (!payload) {
+        log_error(S, "%s: out of memory", function);
+        return fmi2Error;
+    }
+    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
+    if (!st) {
+        log_error(S, "%s: out of memory", function);
+        free(payload);
+        return fmi2Error;
+    }
+    free(st->payload);
+    *st = *fields;
+    st->magic = STATE_MAGIC;
+    st->payload = payload;
+    st->n = n;
+    *out = st;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    BEGIN(GetFMUstate);
+    NOT_NULL(GetFMUstate, FMUstate);
+    SavedState *st = NULL;
+    if (*FMUstate) {
+        st = saved(S, "fmi2GetFMUstate", *FMUstate);
+        if (!st) return fail(S, fmi2Error);
+    }
+    size_t n = 0;
+    unsigned char *payload = encode_slave(S, &n);
+    const SavedState fields = {0, S->state, S->time, S->terminated_flag, S->last_step_status, 0, NULL};
+    if (keep_state(S, "fmi2GetFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error) return fail(S, fmi2Error);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    BEGIN(SetFMUstate);
+    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    char why[2048];
+    if (decode_slave(S, st->payload, st->n, why, sizeof why) != 0) {
+        log_error(S, "fmi2SetFMUstate: state rejected, the instance keeps its current state: %s", why);
+        return fail(S, fmi2Error);
+    }
+    S->state = st->instance_state;
+    S->time = st->time;
+    S->terminated_flag = st->terminated_flag;
+    S->last_step_status = st->last_step_status;
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    BEGIN(FreeFMUstate);
+    if (!FMUstate || !*FMUstate) return fmi2OK;
+    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    free(st->payload);
+    st->payload = NULL;
+    st->magic = 0;
+    free(st);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(SerializedFMUstateSize, size);
+    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    *size = SERIAL_HEADER_SIZE + st->n;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(SerializeFMUstate, serializedState);
+    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
+    if (!st) return fail(S, fmi2Error);
+    if (size != SERIAL_HEADER_SIZE + st->n) {
+        log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zu (from "
+                  "fmi2SerializedFMUstateSize)", size, SERIAL_HEADER_SIZE + st->n);
+        return fail(S, fmi2Error);
+    }
+    char *p = serializedState;
+    int32_t fields[3] = {st->instance_state, st->terminated_flag, (int32_t)st->last_step_status};
+    memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
+    memcpy(p + SERIAL_MAGIC_SIZE, &st->time, 8);
+    memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
+    memcpy(p + SERIAL_HEADER_SIZE, st->payload, st->n);
+    uint32_t crc = serial_crc((const unsigned char *)p, st->payload, st->n);
+    memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    BEGIN(SetFMUstate);
+    NOT_NULL(DeSerializeFMUstate, serializedState);
+    NOT_NULL(DeSerializeFMUstate, FMUstate);
+    int32_t header[3];
+    double time;
+    if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
+        log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
+        return fail(S, fmi2Error);
+    }
+    uint32_t crc;
+    memcpy(&crc, serializedState + SERIAL_CRC_OFFSET, 4);
+    if (crc != serial_crc((const unsigned char *)serializedState,
+                          (const unsigned char *)serializedState + SERIAL_HEADER_SIZE, size - SERIAL_HEADER_SIZE)) {
+        log_error(S, "fmi2DeSerializeFMUstate: state rejected, the instance keeps its current state: the %zu "
+                  "bytes are corrupted (CRC-32 mismatch)", size);
+        return fail(S, fmi2Error);
+    }
+    memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);
+    memcpy(header, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof header);
+    const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
+    int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
+    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
+        header[2] < fmi2OK || header[2] > fmi2Discard) {
+        log_error(S, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
+        return fail(S, fmi2Error);
+    }
+    SavedState *st = NULL;
+    if (*FMUstate) {
+        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
+        if (!st) return fail(S, fmi2Error);
+    }
+    size_t n = size - SERIAL_HEADER_SIZE;
+    unsigned char *payload = (unsigned char *)malloc(n ? n : 1);
+    if (payload) memcpy(payload, serializedState + SERIAL_HEADER_SIZE, n);
+    const SavedState fields = {0, header[0], time, header[1], (fmi2Status)header[2], 0, NULL};
+    if (keep_state(S, "fmi2DeSerializeFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error)
+        return fail(S, fmi2Error);
+    return fmi2OK;
+}
