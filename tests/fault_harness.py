@@ -2012,14 +2012,31 @@ def _bundled(module: str):
             if name.startswith("rocking_model_") and name.endswith("." + module)]
 
 
+class _PythonEngine:
+    """Instances initialized inside run the Python reference engine (ROCKING_FMU_ENGINE=python, read when the
+    FMU builds its simulator): the cases that force a failure into the bundled Python stepper or solvers. The
+    compiled engine's handling of the same reports is tested at its boundary in tests/test_fmu_engine.py."""
+
+    def __enter__(self):
+        self.previous = os.environ.get("ROCKING_FMU_ENGINE")
+        os.environ["ROCKING_FMU_ENGINE"] = "python"
+
+    def __exit__(self, *exc):
+        if self.previous is None:
+            os.environ.pop("ROCKING_FMU_ENGINE", None)
+        else:
+            os.environ["ROCKING_FMU_ENGINE"] = self.previous
+
+
 def failed_step(h: Harness, fmu: str):
     """A Runge-Kutta step accepted only at the smallest step size with its error above tolerance (forced here by
     flagging the bundled stepper once, issue 14): the FMU refuses the step (fmi2Discard, a message naming the
     failed step), the state is kept, and the retry goes on like a control instance."""
     s = h.instance(fmu)
     ctrl = h.instance(fmu, "control")
-    for inst in (s, ctrl):
-        inst.init(phi_0=0.05)
+    with _PythonEngine():
+        for inst in (s, ctrl):
+            inst.init(phi_0=0.05)
     mods = _bundled("integrators.rk")
     h.check("status", "the FMU's bundled stepper module is loaded in this process", bool(mods), None)
     if not mods:
@@ -2054,7 +2071,8 @@ def inexact_contact_is_a_warning(h: Harness):
     passed silently and not refused. Since the mu -> inf limit filled the hole of the sticking law (issue 15)
     no scene of the models has one: the bundled contact solvers are made to flag their solutions here."""
     s = h.instance(RIGID)
-    s.init(phi_0=0.05)
+    with _PythonEngine():
+        s.init(phi_0=0.05)
     mods = _bundled("contact")
     h.check("status", "the FMU's bundled contact module is loaded in this process", bool(mods), None)
     if not mods:
