@@ -610,3 +610,14 @@ def test_system_example_with_the_standalone_fmus(standalone, built_fmus, tmp_pat
             else:
                 assert np.max(np.abs(g - w)) < ROUNDOFF * max(1.0, np.max(np.abs(w))), name
         assert np.max(np.abs(np.asarray(got["block.phi"]))) > 1e-4
+
+
+def test_rocking_build_fmu_builds_both_kinds(tmp_path):
+    """`rocking build-fmu` (build_fmu.main) writes the pythonfmu FMU and the standalone one of a model."""
+    from rocking_model.cli import main
+
+    assert main(["build-fmu", "--dest", str(tmp_path), "--no-cross-check", RIGID]) == 0
+    assert (tmp_path / f"{RIGID}.fmu").is_file()
+    sa = tmp_path / "standalone" / f"{RIGID}.fmu"
+    assert read_model_description(str(sa)).coSimulation.needsExecutionTool is False
+    assert not (tmp_path / "standalone" / f"{FLEX}.fmu").exists()
