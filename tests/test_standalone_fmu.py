@@ -315,7 +315,8 @@ BAD_PARAMETERS = {"b_negative": ("Real", "b", -1.0), "b_nan": ("Real", "b", math
                   "mu": ("Real", "mu", -1.0), "phi_0": ("Real", "phi_0", 2.0)}
 
 
-@pytest.mark.parametrize("case", ["bad_input", "fixed", "unknown_vr", "bad_rate", *BAD_PARAMETERS])
+@pytest.mark.parametrize("case", ["bad_input", "fixed", "unknown_vr", "bad_rate", "work_limit", "time_mismatch",
+                                  "overturn", *BAD_PARAMETERS])
 def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_unzipped, case):
     def action(f, vr):
         f.setupExperiment(startTime=0.0)
@@ -323,7 +324,19 @@ def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_u
         if case in BAD_PARAMETERS:
             kind, name, value = BAD_PARAMETERS[case]
             (f.setInteger if kind == "Integer" else f.setReal)([vr[name]], [value])
+        if case == "work_limit":
+            f.setInteger([vr["max_steps"], vr["scheme"]], [3, 0])
         f.exitInitializationMode() if case != "bad_rate" else None
+        if case == "work_limit":
+            f.setReal([vr["ag"]], [3.0])
+            f.doStep(0.0, 0.1)
+            f.doStep(0.0, 0.30000000000000004)
+        if case == "time_mismatch":
+            f.doStep(0.5, 0.1)
+        if case == "overturn":
+            f.setReal([vr["ag"]], [9.0])
+            for k in range(100):
+                f.doStep(k * 0.01, 0.01)
         if case == "bad_input":
             f.setReal([vr["ag"]], [1e4])
         if case == "fixed":

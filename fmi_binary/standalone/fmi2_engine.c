@@ -175,8 +175,8 @@ static void py_repr(double x, char *out, size_t size) {
     char digits[24];
     int nd = 0, neg = buf[0] == '-';
     const char *c = buf + neg;
-    for (; *c && *c != 'e'; c++)
-        if (*c != '.') digits[nd++] = *c;
+    for (; *c && *c != 'e'; c++) /* the digits only (a host's locale may write the point as a comma) */
+        if (*c >= '0' && *c <= '9') digits[nd++] = *c;
     digits[nd] = 0;
     int e = atoi(c + 1);
     while (nd > 1 && digits[nd - 1] == '0') digits[--nd] = 0;
@@ -862,7 +862,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         } else {
             rk_engine_rollback(e); /* the engine restored itself already; this drops our checkpoint */
             if (st == RK_ERR_VALUE || st == RK_ERR_WORK_LIMIT || st == RK_ERR_NONFINITE || st == RK_ERR_SOLVER) {
-                log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %s", rt, rte, rk_engine_message(e));
+                /* RockingSlave._describe: a ValueError by its text, other exceptions with their class name */
+                log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %s%s", rt, rte,
+                          st == RK_ERR_WORK_LIMIT ? "WorkLimitError: " : "", rk_engine_message(e));
                 refused = 1;
             } else {
                 snprintf(s->error, sizeof s->error, "simulation failed in the step [%s, %s]: %s: %s", rt, rte,
