@@ -634,3 +634,36 @@ def test_rocking_build_fmu_builds_both_kinds(tmp_path):
     sa = tmp_path / "standalone" / f"{RIGID}.fmu"
     assert read_model_description(str(sa)).coSimulation.needsExecutionTool is False
     assert not (tmp_path / "standalone" / f"{FLEX}.fmu").exists()
+
+
+def test_overflowing_motion_refused_with_the_simulators_message(standalone, unzipped):
+    """A valid but huge state (the column deflected by 1e148 m while rocking: its motion overflows within a
+    step, as in test_simulator_state) set through a crafted FMU state: the step is refused (fmi2Discard) with
+    Simulator._diverged's message, word for word, and the state kept."""
+    import struct
+    import zlib
+
+    from rocking_model.models import FlexibleOscillator
+    from rocking_model.simulation import Simulator
+
+    r = Run(standalone[FLEX], unzipped[FLEX], "huge")
+    blob = bytearray(r.f.serializeFMUstate(r.f.getFMUstate()))
+    n_vars = len(r.md.modelVariables)
+    off = 46 + 28 + 36 + 4 + 8 * n_vars + 20 + 32 + 4 + 4          # the engine's plain state (no error text)
+    struct.pack_into("<ii4d", blob, off + 8, 1, 4, 1e148, 0.01, 0.0, 0.1)   # mode LEFT, y = [u, phi, u', phi']
+    blob[-4:] = zlib.crc32(bytes(blob[46:-4])).to_bytes(4, "little")
+    blob[42:46] = zlib.crc32(bytes(blob[:42]) + bytes(blob[46:])).to_bytes(4, "little")
+    r.f.setFMUstate(r.f.deSerializeFMUstate(bytes(blob)))
+    before = r.row()
+    with pytest.raises(Exception):
+        r.f.doStep(0.0, 0.01)
+    assert r.row() == before
+    sim = Simulator(FlexibleOscillator(), "event_driven", engine="c", impact_log_size=0)
+    state = sim.get_state()
+    state.update(mode=1, y=[1e148, 0.01, 0.0, 0.1])
+    sim.set_state(state)
+    sim.on_report = "raise"
+    with pytest.raises(ValueError, match="Likely cause") as info:
+        sim.advance(0.01, 0.0)
+    assert [t for _, _, t in r.sink if "refused" in t] == [
+        f"step [0.0, 0.01] refused, the FMU state is unchanged: {info.value}"]
