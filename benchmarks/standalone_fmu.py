@@ -3,11 +3,13 @@ through fmpy, printed (never asserted: timing depends on the machine).
 
     python -m benchmarks.standalone_fmu [--dest dist] [--repeat 20]
 
-Builds dist/standalone/*.fmu if they are missing (build_fmu.build_standalone). Cold start: a fresh copy of
+Builds dist/standalone/*.fmu if they are missing (build_fmu.build_standalone). The do-nothing FMU is the
+standalone FMU's own sources/ compiled with RK_FMU_NULL_STEP (fmi2DoStep without the engine). Cold start: a fresh copy of
 the extracted FMU each time (so the loader really loads the binary), then load + fmi2Instantiate +
 setup/initialization + the first fmi2DoStep, in this process, median of ``--repeat``. Step cost: the
-benchmark record of the rigid block (30 s synthetic record, 3000 steps of 10 ms) through fmpy's FMU2Slave
-(setReal, doStep, getReal per step), for the standalone FMU and, when it is built, the pythonfmu FMU.
+benchmark record of the rigid block (30 s synthetic record, 3000 steps of 10 ms) and the flexible
+oscillator's soft-column pulse through fmpy's FMU2Slave (setReal, doStep, getReal per step), for the
+standalone FMU, its do-nothing build and, when it is built, the pythonfmu FMU (rigid).
 """
 from __future__ import annotations
 
@@ -63,23 +65,45 @@ def cold_start(fmu: Path, repeat: int) -> float:
     return statistics.median(times)
 
 
-def step_cost(fmu: Path) -> float:
-    """Seconds per communication step of the rigid record scene through fmpy (setReal, doStep, getReal)."""
+def null_binary(fmu: Path, unzip: Path) -> None:
+    """Recompile the FMU's own sources/ (as buildDescription.xml lists them, the build's portable flags) with
+    RK_FMU_NULL_STEP into the extracted ``unzip``: the same FMI layer and calls, fmi2DoStep without the engine
+    (the do-nothing C FMU of the issue's targets)."""
+    import xml.etree.ElementTree as ET
+
+    sys.path.insert(0, str(ROOT))
+    import build_fmu
+
+    src = unzip / "sources"
+    bd = ET.parse(src / "buildDescription.xml").getroot()
+    files = [e.get("name") for e in bd.iter("SourceFile")]
+    defines = [f"-D{e.get('name')}={e.get('value')}" for e in bd.iter("PreprocessorDefinition")]
+    so = unzip / "binaries" / "linux64" / f"{fmu.stem}.so"
+    subprocess.run([build_fmu.find_compiler(), "-shared", *build_fmu.PORTABLE_CFLAGS, "-I.", *defines,
+                    "-DRK_FMU_NULL_STEP", *files, "-o", str(so), "-lm"], check=True, cwd=src)
+
+
+def step_cost(fmu: Path, null: bool = False, scene_name: str = "record") -> float:
+    """Seconds per communication step of the rigid record scene through fmpy (setReal, doStep, getReal);
+    ``null``: the do-nothing build of the same FMU (`null_binary`)."""
     import numpy as np
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
     sys.path.insert(0, str(ROOT))
-    from benchmarks.scenes import rigid_scenes
+    from benchmarks.scenes import flexible_scenes, rigid_scenes
+    from rocking_model.ground_motion import as_ground_motion
 
-    scene = [s for s in rigid_scenes() if s.name == "record"][0]
+    scene = [s for s in rigid_scenes() + flexible_scenes() if s.name == scene_name][0]
     dt = 0.01
     n = int(round(scene.t_end / dt))
-    t_rec, a_rec = scene.motion[1], scene.motion[2]
-    ag = np.interp(dt * np.arange(n), t_rec, a_rec)
+    gm = as_ground_motion(scene.ground_motion())
+    ag = np.array([gm(k * dt) for k in range(n)])
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     unzip = extract(str(fmu))
+    if null:
+        null_binary(fmu, Path(unzip))
     f = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                   instanceName="steps")
     f.instantiate()
@@ -116,7 +140,16 @@ def main(argv=None) -> int:
                 out = subprocess.run(["ldd", so], capture_output=True, text=True).stdout
                 print("  ldd:", "; ".join(line.strip() for line in out.splitlines()))
         print(f"  cold start (load, instantiate, initialize, first step): {cold_start(fmu, args.repeat) * 1e3:.2f} ms")
-    print(f"rigid record, 3000 steps of 10 ms through fmpy: standalone {step_cost(fmus[NAMES[0]]) * 1e6:.1f} us/step")
+    # the same loop, best of 3 each, in one run (the issue's target: at most 2x the do-nothing C FMU)
+    real = min(step_cost(fmus[NAMES[0]]) for _ in range(3))
+    null = min(step_cost(fmus[NAMES[0]], null=True) for _ in range(3))
+    print(f"rigid record, 3000 steps of 10 ms through fmpy (event-driven, tolerance 1e-8): standalone "
+          f"{real * 1e6:.1f} us/step, do-nothing build of the same FMU {null * 1e6:.1f} us/step, ratio "
+          f"{real / null:.2f}")
+    real = min(step_cost(fmus[NAMES[1]], scene_name="flex_soft") for _ in range(3))
+    null = min(step_cost(fmus[NAMES[1]], null=True, scene_name="flex_soft") for _ in range(3))
+    print(f"flexible soft-column pulse, 500 steps of 10 ms through fmpy (event-driven, tolerance 1e-8): "
+          f"standalone {real * 1e6:.1f} us/step, do-nothing build {null * 1e6:.1f} us/step, ratio {real / null:.2f}")
     py = Path(args.dest) / f"{NAMES[0]}.fmu"
     if py.is_file():
         print(f"  pythonfmu FMU (Python engine, default): {step_cost(py) * 1e6:.1f} us/step")

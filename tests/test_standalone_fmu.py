@@ -315,7 +315,8 @@ BAD_PARAMETERS = {"b_negative": ("Real", "b", -1.0), "b_nan": ("Real", "b", math
                   "mu": ("Real", "mu", -1.0), "phi_0": ("Real", "phi_0", 2.0)}
 
 
-@pytest.mark.parametrize("case", ["bad_input", "fixed", "unknown_vr", "bad_rate", *BAD_PARAMETERS])
+@pytest.mark.parametrize("case", ["bad_input", "fixed", "unknown_vr", "bad_rate", "work_limit", "time_mismatch",
+                                  "overturn", *BAD_PARAMETERS])
 def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_unzipped, case):
     def action(f, vr):
         f.setupExperiment(startTime=0.0)
@@ -323,7 +324,19 @@ def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_u
         if case in BAD_PARAMETERS:
             kind, name, value = BAD_PARAMETERS[case]
             (f.setInteger if kind == "Integer" else f.setReal)([vr[name]], [value])
+        if case == "work_limit":
+            f.setInteger([vr["max_steps"], vr["scheme"]], [3, 0])
         f.exitInitializationMode() if case != "bad_rate" else None
+        if case == "work_limit":
+            f.setReal([vr["ag"]], [3.0])
+            f.doStep(0.0, 0.1)
+            f.doStep(0.0, 0.30000000000000004)
+        if case == "time_mismatch":
+            f.doStep(0.5, 0.1)
+        if case == "overturn":
+            f.setReal([vr["ag"]], [9.0])
+            for k in range(100):
+                f.doStep(k * 0.01, 0.01)
         if case == "bad_input":
             f.setReal([vr["ag"]], [1e4])
         if case == "fixed":
@@ -610,3 +623,63 @@ def test_system_example_with_the_standalone_fmus(standalone, built_fmus, tmp_pat
             else:
                 assert np.max(np.abs(g - w)) < ROUNDOFF * max(1.0, np.max(np.abs(w))), name
         assert np.max(np.abs(np.asarray(got["block.phi"]))) > 1e-4
+
+
+def test_rocking_build_fmu_builds_both_kinds(tmp_path):
+    """`rocking build-fmu` (build_fmu.main) writes the pythonfmu FMU and the standalone one of a model."""
+    from rocking_model.cli import main
+
+    assert main(["build-fmu", "--dest", str(tmp_path), "--no-cross-check", RIGID]) == 0
+    assert (tmp_path / f"{RIGID}.fmu").is_file()
+    sa = tmp_path / "standalone" / f"{RIGID}.fmu"
+    assert read_model_description(str(sa)).coSimulation.needsExecutionTool is False
+    assert not (tmp_path / "standalone" / f"{FLEX}.fmu").exists()
+
+
+def test_overflowing_motion_refused_with_the_simulators_message(standalone, unzipped):
+    """A valid but huge state (the column deflected by 1e148 m while rocking: its motion overflows within a
+    step, as in test_simulator_state) set through a crafted FMU state: the step is refused (fmi2Discard) with
+    Simulator._diverged's message, word for word, and the state kept."""
+    import struct
+    import zlib
+
+    from rocking_model.models import FlexibleOscillator
+    from rocking_model.simulation import Simulator
+
+    r = Run(standalone[FLEX], unzipped[FLEX], "huge")
+    blob = bytearray(r.f.serializeFMUstate(r.f.getFMUstate()))
+    n_vars = len(r.md.modelVariables)
+    off = 46 + 28 + 36 + 4 + 8 * n_vars + 20 + 32 + 4 + 4          # the engine's plain state (no error text)
+    struct.pack_into("<ii4d", blob, off + 8, 1, 4, 1e148, 0.01, 0.0, 0.1)   # mode LEFT, y = [u, phi, u', phi']
+    blob[-4:] = zlib.crc32(bytes(blob[46:-4])).to_bytes(4, "little")
+    blob[42:46] = zlib.crc32(bytes(blob[:42]) + bytes(blob[46:])).to_bytes(4, "little")
+    r.f.setFMUstate(r.f.deSerializeFMUstate(bytes(blob)))
+    before = r.row()
+    with pytest.raises(Exception):
+        r.f.doStep(0.0, 0.01)
+    assert r.row() == before
+    sim = Simulator(FlexibleOscillator(), "event_driven", engine="c", impact_log_size=0)
+    state = sim.get_state()
+    state.update(mode=1, y=[1e148, 0.01, 0.0, 0.1])
+    sim.set_state(state)
+    sim.on_report = "raise"
+    with pytest.raises(ValueError, match="Likely cause") as info:
+        sim.advance(0.01, 0.0)
+    assert [t for _, _, t in r.sink if "refused" in t] == [
+        f"step [0.0, 0.01] refused, the FMU state is unchanged: {info.value}"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_c_host_under_valgrind_has_no_invalid_access_nor_leak(host, standalone, unzipped, name):
+    """The C host runs 0.5 s of a rocking motion under valgrind: no invalid read or write, no use of an
+    uninitialized value, no definite leak in the FMU (instantiate ... free, dlclose)."""
+    valgrind = shutil.which("valgrind")
+    if valgrind is None:
+        pytest.skip("no valgrind")
+    md = read_model_description(str(standalone[name]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    proc = subprocess.run([valgrind, "--error-exitcode=9", "--leak-check=full", "--errors-for-leak-kinds=definite",
+                           "-q", str(host), unzipped[name], md.coSimulation.modelIdentifier, md.guid, str(vr["ag"]),
+                           str(vr["phi"]), "5.0", "0.5", "0.01"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert len(proc.stdout.splitlines()) == 50

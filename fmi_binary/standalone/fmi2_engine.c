@@ -175,8 +175,8 @@ static void py_repr(double x, char *out, size_t size) {
     char digits[24];
     int nd = 0, neg = buf[0] == '-';
     const char *c = buf + neg;
-    for (; *c && *c != 'e'; c++)
-        if (*c != '.') digits[nd++] = *c;
+    for (; *c && *c != 'e'; c++) /* the digits only (a host's locale may write the point as a comma) */
+        if (*c >= '0' && *c <= '9') digits[nd++] = *c;
     digits[nd] = 0;
     int e = atoi(c + 1);
     while (nd > 1 && digits[nd - 1] == '0') digits[--nd] = 0;
@@ -744,6 +744,41 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     return fail(S, fmi2Error);
 }
 
+/* the value of the variable called `name` (a model parameter of every rocking model: g, e_N), or `fallback` */
+static double value_of(const Slave *s, const char *name, double fallback) {
+    for (int i = 0; i < RK_FMU_N_VARS; i++)
+        if (strcmp(RK_FMU_VARS[i].name, name) == 0) return s->values[i];
+    return fallback;
+}
+
+/* Simulator._diverged: the message of an advance whose motion overflowed (the engine restored its state):
+ * where, and the likely cause. `peak`: the bound of |ag| over the step (GroundMotion.peak_bound). */
+static void diverged(Instance *S, rk_status st, double t_end, double peak, char *out, size_t size) {
+    rk_engine *e = S->engine;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], qmax = 0.0, vmax = 0.0;
+    int n = rk_engine_full_state(e, q, v);
+    for (int i = 0; i < n; i++) {
+        qmax = fmax(qmax, fabs(q[i]));
+        vmax = fmax(vmax, fabs(v[i]));
+    }
+    const double g = value_of(&S->s, "g", 9.81), e_N = value_of(&S->s, "e_N", 0.0), t = rk_engine_time(e);
+    char causes[1024] = "";
+    size_t m;
+    if (peak > 10.0 * g)
+        snprintf(causes, sizeof causes, "the ground acceleration (|ag| up to %g m/s2, %.3g g); or ", peak, peak / g);
+    if (e_N > 0.0) {
+        m = strlen(causes);
+        snprintf(causes + m, sizeof causes - m, "energy created at impacts by e_N = %g with sticking (physics "
+                 "notes, section 6); or ", e_N);
+    }
+    m = strlen(causes);
+    snprintf(causes + m, sizeof causes - m, "a state far outside the model's range (|q| up to %.3g, |v| up to %.3g "
+             "at t = %.17g s)", qmax, vmax, t);
+    snprintf(out, size, "the motion is not finite in the step from t = %.17g s to t_end = %.17g s (at t = %.17g s: "
+             "%s: %s); the step was refused and the state kept. Likely cause: %s", t, t_end, rk_engine_fail_time(e),
+             st == RK_ERR_SOLVER ? "LinAlgError" : "FloatingPointError", rk_engine_message(e), causes);
+}
+
 /* ------------------------------------------------------------------------------------------ stepping */
 static void log_reports(Instance *S) {
     const rk_reports *r = rk_engine_reports(S->engine);
@@ -817,9 +852,11 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     const double value = s->values[in];
     char why[1024], rv[40];
     int bad = check_real(iv->name, value, iv, why, sizeof why);
+    double peak = fabs(value); /* the bound of |ag| over the step (GroundMotion.peak_bound) */
     if (!bad && s->has_rate) {
         char name[128];
         double end = value + s->rate * (t_end - s->rate_t), start = value + s->rate * (t - s->rate_t);
+        peak = fmax(fabs(start), fabs(end));
         snprintf(name, sizeof name, "%s at the end of the step (rate %g per s)", iv->name, s->rate);
         bad = check_real(name, end, iv, why, sizeof why);
         if (!bad) {
@@ -831,7 +868,11 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         py_repr(value, rv, sizeof rv);
         log_error(S, "input %s = %s at t = %s is invalid: %s", iv->name, rv, rt, why);
         refused = 1;
+#ifdef RK_FMU_NULL_STEP
+    } else if (0) { /* benchmarks/standalone_fmu.py: the do-nothing FMU (the FMI layer without the engine) */
+#else
     } else if (!s->frozen) {
+#endif
         rk_engine *e = S->engine;
         double target = t_end > rk_engine_time(e) ? t_end : rk_engine_time(e);
         rk_engine_checkpoint(e);
@@ -858,7 +899,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         } else {
             rk_engine_rollback(e); /* the engine restored itself already; this drops our checkpoint */
             if (st == RK_ERR_VALUE || st == RK_ERR_WORK_LIMIT || st == RK_ERR_NONFINITE || st == RK_ERR_SOLVER) {
-                log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %s", rt, rte, rk_engine_message(e));
+                /* RockingSlave._describe: a ValueError by its text, other exceptions with their class name */
+                char text[3072];
+                if (st == RK_ERR_NONFINITE || st == RK_ERR_SOLVER)
+                    diverged(S, st, target, peak, text, sizeof text);
+                else
+                    snprintf(text, sizeof text, "%s%s", st == RK_ERR_WORK_LIMIT ? "WorkLimitError: " : "",
+                             rk_engine_message(e));
+                log_error(S, "step [%s, %s] refused, the FMU state is unchanged: %s", rt, rte, text);
                 refused = 1;
             } else {
                 snprintf(s->error, sizeof s->error, "simulation failed in the step [%s, %s]: %s: %s", rt, rte,
