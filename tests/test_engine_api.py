@@ -553,3 +553,23 @@ def test_numpy_numbers_take_the_same_path_and_messages(t_end, ag):
         except ValueError as exc:
             out.append(str(exc))
     assert out[0] == out[1]
+
+
+@needs_ed
+def test_raw_engine_calls_with_broken_motions_end_with_an_error_not_a_hang():
+    """Found by fuzzing the Engine type: a plain callable without GroundMotion methods, a NaN factor or value,
+    a callable returning NaN: each call ends (the work bounded) with a ValueError, the state unchanged."""
+    params = [0.2, 1.0, 1.0, 9.81, 0.5, 0.0, math.inf]
+    for scheme in (0, 1):
+        eng = _engine.Engine("rigid", params, [0.05, 0.0], scheme=scheme)
+        eng.advance(0.3, 0.0)
+        before = eng.get_state()
+        eng.advance_motion(0.4, ("callback", lambda t: -1.0, False, 0.0), 5000)   # no breakpoints: runs
+        eng.restore(eng.snapshot())
+        for spec in (("scaled", float("nan"), ("ricker", 1.0, 2.0, 0.0)), ("constant", float("nan")),
+                     ("linear", 1.0, float("inf"), 0.0), ("callback", lambda t: float("nan"), False, 0.0)):
+            eng2 = _engine.Engine("rigid", params, [0.05, 0.0], scheme=scheme)
+            eng2.advance(0.3, 0.0)
+            with pytest.raises(ValueError):
+                eng2.advance_motion(0.5, spec, 5000)
+            assert eng2.get_state() == before

@@ -162,6 +162,15 @@ static double cb_eval(void *ctx, double t, int *failed, char *msg)
         *failed = 1;
         return NAN;
     }
+    if (!isfinite(x)) {   /* checked_value's refusal (a GroundMotion's values are checked before they get here) */
+        char text[160];
+        snprintf(text, sizeof(text), "ag(%.17g) = %s is not finite; allowed range [-1000, 1000] m/s2 (AG_MAX)", t,
+                 x != x ? "nan" : x > 0 ? "inf" : "-inf");
+        PyErr_SetString(PyExc_ValueError, text);
+        cb_store(c, msg);
+        *failed = 1;
+        return NAN;
+    }
     return x;
 }
 
@@ -356,8 +365,9 @@ static int parse_motion(motion_holder *h, PyObject *spec, int depth)
         memset(m, 0, sizeof(*m));
         m->kind = RK_MOTION_CALLBACK;
         m->fn = cb_eval;
-        m->fn_breakpoint = cb_breakpoint;
-        m->fn_continuous = cb_continuous;
+        /* a plain callable (no GroundMotion methods): no breakpoints, not continuous (GroundMotion's defaults) */
+        m->fn_breakpoint = PyObject_HasAttrString(c->motion, "next_breakpoint") ? cb_breakpoint : NULL;
+        m->fn_continuous = PyObject_HasAttrString(c->motion, "continuous_at") ? cb_continuous : NULL;
         m->ctx = c;
         m->constant = constant;
         m->value = value;

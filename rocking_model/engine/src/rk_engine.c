@@ -661,12 +661,38 @@ rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope
     return advance_impl(e, t_end, &m, max_steps, flags);
 }
 
+/** The numbers a motion is made of are finite (the constructors check theirs; a hand-filled CONSTANT, LINEAR
+ *  or SCALED is checked here): a NaN input would make every event test false. */
+static int motion_finite(const rk_motion *m)
+{
+    int depth;
+    for (depth = 0; m != NULL && depth < 16; depth++) {
+        switch (m->kind) {
+        case RK_MOTION_CONSTANT:
+            return isfinite(m->value);
+        case RK_MOTION_LINEAR:
+            return isfinite(m->value) && isfinite(m->rate) && isfinite(m->t_ref);
+        case RK_MOTION_SCALED:
+            if (!isfinite(m->factor))
+                return 0;
+            m = m->inner;
+            break;
+        default:
+            return 1;
+        }
+    }
+    return m != NULL;
+}
+
 rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, long long max_steps)
 {
     rk_error_clear(&e->error);
     e->fail_t = rk_engine_time(e);
     if (ag == NULL)
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
+    if (!motion_finite(ag))
+        return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion's value, rate and factor must be finite; "
+                       "allowed range (-inf, inf)");
     if (check_t_end(e, t_end) != RK_OK)
         return e->error.status;
     return advance_impl(e, t_end, ag, max_steps, 0u);
@@ -696,6 +722,9 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, lon
     e->fail_t = t;
     if (ag == NULL)
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
+    if (!motion_finite(ag))
+        return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion's value, rate and factor must be finite; "
+                       "allowed range (-inf, inf)");
     if (n_times < 1)
         return rk_fail(&e->error, RK_ERR_VALUE, "times must hold at least one time after the current one");
     for (i = 0; i < n_times; i++) {

@@ -259,7 +259,9 @@ double rk_motion_next_breakpoint(rk_motion *m, double t)
             int bad = 0;
             char msg[RK_MSG_LEN];
             double tb = m->fn_breakpoint(m->ctx, t, &bad, msg);
-            return bad ? NAN : tb;
+            /* a failed (or NaN) answer is no breakpoint: the call still ends within its work budget, and the
+             * extension re-raises the callback's exception with the state restored */
+            return (bad || tb != tb) ? INFINITY : tb;
         }
         return INFINITY;
     }

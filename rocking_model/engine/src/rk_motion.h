@@ -45,7 +45,7 @@ struct rk_motion {
     const rk_motion *inner;             /**< SCALED */
     /** CALLBACK: ag(t); set *failed = 1 and write msg (RK_MSG_LEN) on failure */
     double (*fn)(void *ctx, double t, int *failed, char *msg);
-    /** CALLBACK: next breakpoint after t (INFINITY: none); NULL: none. A failure returns NAN from
+    /** CALLBACK: next breakpoint after t (INFINITY: none); NULL: none. A failure (or a NaN) is read as none by
      *  rk_motion_next_breakpoint (the extension then re-raises the Python exception with the state restored) */
     double (*fn_breakpoint)(void *ctx, double t, int *failed, char *msg);
     /** CALLBACK: continuity at a breakpoint; NULL: not continuous (GroundMotion.continuous_at's default, a
