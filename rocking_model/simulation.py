@@ -18,6 +18,9 @@ from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 
+#: the engine of `Simulator` and `simulate` unless told otherwise (the FMUs read ROCKING_FMU_ENGINE)
+DEFAULT_ENGINE = "c"
+
 class SolverWarning(UserWarning):
     """An advance completed, but something in it needs the user's attention (a `Report`): a contact LCP
     without an exact solution under the sticking law, or an adaptive step accepted at the smallest step size
@@ -92,9 +95,9 @@ class Simulator:
         answer, are only kept in ``last_reports`` for the caller: the FMUs log them), or "ignore".
         ``last_reports`` keeps the reports of the last advance in every case.
     t0 : [s] start time.
-    engine : "python" (default: the reference implementation in Python) or "c" (the compiled engine of
-        `rocking_model.engine`: the same algorithms, steps and results to round-off, the same state format both
-        ways, much faster).
+    engine : "c" (default: the compiled engine of `rocking_model.engine`) or "python" (the reference
+        implementation in Python, which the compiled engine is pinned to by tests: the same algorithms, steps
+        and results to round-off, the same state format both ways; the compiled one is 10-100x faster).
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
 
@@ -103,14 +106,15 @@ class Simulator:
     `get_state` / `set_state` save and load the state as a flat dict of plain values.
     """
 
-    #: "python" or "c" (set by __init__; the class default reads simulators pickled before the engine switch)
+    #: "python" or "c" (set by __init__; this class default reads simulators pickled before the engine switch,
+    #: which were all Python)
     engine = "python"
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
                  method: str = "DOP853", impact_log_size: int | None = 10000,
                  max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
-                 on_report: str = "warn", engine: str = "python", **initial):
+                 on_report: str = "warn", engine: str = DEFAULT_ENGINE, **initial):
         if not isinstance(model, RockingModel):
             raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
         self.model = model

@@ -137,13 +137,15 @@ def test_inexact_contact_solve_is_warned(monkeypatch):
         def inexact(*args, _original=original, **kwargs):
             return dataclasses.replace(_original(*args, **kwargs), exact=False, violation=0.5)
         monkeypatch.setattr(contact, name, inexact)
+    # (the Python reference engine, whose solvers are patched here; the compiled engine's reports are pinned to
+    # it in tests/test_engine_api.py and tests/test_fmu_engine.py)
     with pytest.warns(SolverWarning, match=r"inexact contact report\(s\), the first: the (uplift|impact) LCP") as rec:
-        simulate(**PULSE_ABOVE)
+        simulate(**PULSE_ABOVE, engine="python")
     reports = rec[0].message.reports
     assert reports and all(r.kind == "inexact_contact" and 0.0 < r.t <= 4.0 for r in reports)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        simulate(**PULSE_ABOVE, on_report="ignore")           # silenced on request
+        simulate(**PULSE_ABOVE, on_report="ignore", engine="python")           # silenced on request
 
 
 def test_failed_step_warns_or_refuses(monkeypatch):
@@ -160,11 +162,11 @@ def test_failed_step_warns_or_refuses(monkeypatch):
         if calls["n"] == 3:
             self.failed, self.failure = True, "DOP853: forced failure for the test"
     monkeypatch.setattr(rk.ExplicitRK, "step", step)
-    sim = Simulator(RigidBlock(), phi_0=0.1)
+    sim = Simulator(RigidBlock(), phi_0=0.1, engine="python")     # (its stepper is patched)
     with pytest.warns(SolverWarning, match="1 failed step report"):
         sim.advance(0.5, 0.0)
     calls["n"] = 0
-    sim = Simulator(RigidBlock(), phi_0=0.1, on_report="raise")
+    sim = Simulator(RigidBlock(), phi_0=0.1, on_report="raise", engine="python")
     before = sim.get_state()
     with pytest.raises(SolverFailure, match="forced failure for the test"):
         sim.advance(0.5, 0.0)

@@ -798,15 +798,17 @@ ENGINE_VARIABLE = "ROCKING_FMU_ENGINE"
 
 
 def fmu_engine() -> str:
-    """The engine the model FMUs run: `ENGINE_VARIABLE` ("c" when unset or empty, or "python")."""
+    """The engine the model FMUs run: `ENGINE_VARIABLE` (unset or empty: the Simulator's default, "c"; or
+    "python")."""
     import os
 
     from ..engine import ENGINES
+    from ..simulation import DEFAULT_ENGINE
 
-    value = os.environ.get(ENGINE_VARIABLE, "").strip() or "c"
+    value = os.environ.get(ENGINE_VARIABLE, "").strip() or DEFAULT_ENGINE
     if value not in ENGINES:
         raise ValueError(f"environment variable {ENGINE_VARIABLE} = {value!r} is invalid; allowed values "
-                         f"{', '.join(sorted(ENGINES))} (unset: c)")
+                         f"{', '.join(sorted(ENGINES))} (unset: {DEFAULT_ENGINE})")
     return value
 
 
