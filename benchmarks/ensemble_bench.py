@@ -57,6 +57,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance" / "ensemble.md"))
+    ap.add_argument("--json", default=None, help="also write the figures as JSON here (python -m benchmarks)")
     args = ap.parse_args(argv)
     cases = grid(args.quick)
     info = machine()
@@ -134,7 +135,16 @@ def main(argv=None) -> int:
         "per run.",
         "",
     ]
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    if args.json:
+        import json
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps({
+            "cases": len(cases), "python_cases": n_py, "python_serial": base, "compiled_serial": serial_c,
+            "best": best, "best_over_python": best / base,
+            "rows": [{"engine": e, "workers": w, "batch_size": b, "throughput": s["throughput"],
+                      "wall_time": s["wall_time"], "setup_time": s["setup_time"], "cases": n,
+                      "identical": None if same is None else list(same)}
+                     for e, w, s, b, cpu, same, _, n in results]}, indent=1))
     Path(args.out).write_text("\n".join(lines))
     print(f"wrote {args.out}")
     return 0

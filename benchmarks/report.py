@@ -8,7 +8,7 @@ import numpy as np
 
 LEVELS = ("1e-02", "1e-03", "1e-04", "1e-05", "1e-06", "1e-07", "1e-08")
 COLORS = {"package Moreau-Jean": "tab:blue", "package event-driven": "tab:red", "solve_ivp DOP853": "tab:green",
-          "Siconos Moreau-Jean": "tab:purple"}
+          "Siconos Moreau-Jean": "tab:purple", "compiled Moreau-Jean": "tab:cyan", "compiled event-driven": "tab:orange"}
 
 
 # ------------------------------------------------------------------------------------------------ formatting
@@ -271,6 +271,8 @@ def write_report(res, docs: Path) -> Path:
     w("")
     _scenes_section(res, w, imgs)
     _orders_section(res, w, imgs)
+    _compiled_section(res, w)
+    _ensemble_section(res, w)
     _fmu_section(res, w)
     _memory_section(res, w, imgs)
     _checks_section(res, w)
@@ -311,11 +313,36 @@ def _targets(res):
             txt += f"; package does not reach {len(nr)} pair(s)"
         return txt, ("yes" if len(met) == len(ratios) else "**no**")
 
+    ratios_cb, ratios_cmj = [], []
+    for sc in res["scenes"].values():
+        if sc.get("kind") != "rigid":
+            continue
+        for lvl, row in sc.get("equal_error", {}).items():
+            if "ratio_c_baseline" in row:
+                ratios_cb.append((sc["name"], lvl, row["ratio_c_baseline"]))
+            # the levels Siconos reaches (elsewhere it has no time to compare); nan: the compiled MJ does not
+            sic = row.get("siconos")
+            if "ratio_cmj_siconos" in row and sic and not math.isnan(sic["time"]):
+                ratios_cmj.append((sc["name"], lvl, row["ratio_cmj_siconos"]))
+    m, ok = summary(ratios_cb, 50.0)
+    out.append(("issue 21: compiled engine's best scheme ≥ 50× faster than the solve_ivp baseline at equal max "
+                "error, every level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
+    if ratios_cmj:
+        met = [r for r in ratios_cmj if r[2] > 1]
+        finite = [r for r in ratios_cmj if not math.isnan(r[2])]
+        worst = min(finite, key=lambda r: r[2]) if finite else None
+        nr = len(ratios_cmj) - len(finite)
+        out.append(("issue 21: compiled Moreau-Jean faster than Siconos' Moreau-Jean at equal error (the levels "
+                    "Siconos reaches, rigid scenes)", f"met at {len(met)} of {len(ratios_cmj)} (scene, level) pairs"
+                    + (f"; worst {fr(worst[2])} ({worst[0]}, {worst[1]} rad)" if worst else "")
+                    + (f"; the compiled Moreau-Jean does not reach {nr} of them" if nr else ""),
+                    "yes" if len(met) == len(ratios_cmj) else "**no**"))
+    out += _compiled_targets(res)
     m, ok = summary(ratios_b, 5.0)
-    out.append(("package's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
+    out.append(("Python engine's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
                 "level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
     m, ok = summary(ratios_s, 10.0)
-    out.append(("≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
+    out.append(("Python engine ≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
     fmu = res.get("fmu", {})
     for key, name in (("rigid", "rigid"), ("flexible", "flexible")):
         c = fmu.get(key, {})
@@ -362,6 +389,109 @@ def _targets(res):
         ok = all(o["order_fixed_vs_h"][0] >= 4 for o in orders.values())
         out.append(("event-driven order ≥ 4 before reaching its tolerance", txt, "yes" if ok else "**no**"))
     return out
+
+
+def _compiled_targets(res):
+    """Issue 21's targets measured by benchmarks/compiled_bench.py, memory.py (engine c), ensemble_bench.py."""
+    out = []
+    comp = res.get("compiled", {})
+    rows = {(r["kind"], r["scheme"]): r for r in comp.get("per_step", {}).get("rows", [])}
+    for (kind, scheme), lim, what in ((("rigid", "event_driven"), 1.0, "per communication step"),
+                                      (("flexible", "event_driven"), 5.0, "per communication step"),
+                                      (("rigid", "moreau_jean"), 1.0, "per Moreau-Jean time step")):
+        r = rows.get((kind, scheme))
+        if not r:
+            continue
+        v = r["raw_us_per_internal_step"] if scheme == "moreau_jean" else r["raw_us"]
+        api = r["api_us"] / (r["internal_steps"] / r["steps"]) if scheme == "moreau_jean" else r["api_us"]
+        out.append((f"issue 21: compiled {scheme.replace('_', '-')}, {kind}, ≤ {lim:g} µs {what} on the "
+                    f"{r['steps'] * r['dt']:g} s record (impacts included)",
+                    f"{v:.2f} µs raw engine loop, {api:.2f} µs through `Simulator.advance` ({r['impacts']} impacts)",
+                    "yes" if v <= lim else f"**no** ({v / lim:.1f}×)"))
+    cold = comp.get("cold", {})
+    if "import_to_first_step" in cold:
+        v = cold["import_to_first_step"]
+        out.append(("issue 21: cold start of the compiled engine from Python (import → first step) < 50 ms",
+                    f"{ft(v)} (numpy's import {ft(cold['numpy_import'])} of it; the package's import "
+                    f"{ft(cold['package_import'])}; Simulator + first step {ft(cold['first_step'])})",
+                    "yes" if v < 0.05 else f"**no** ({v / 0.05:.1f}×)"))
+    mem = res.get("memory_c", {})
+    if "samples" in mem:
+        s = mem["samples"]
+        r0, r1 = s[1]["rss_mib"], s[-1]["rss_mib"]
+        out.append(("issue 21: memory flat over a 10-minute record (compiled engine)",
+                    f"RSS {r0:.2f} MiB after 30 s, {r1:.2f} at {s[-1]['t']:.0f} s ({s[-1]['impacts']} impacts; "
+                    f"impact log bounded at {mem['impact_log_len']} rows)",
+                    "yes" if r1 <= r0 * 1.005 else "**no**"))
+    ens = res.get("ensemble", {})
+    if "best" in ens:
+        v = ens["best_over_python"]
+        out.append(("issue 21: ensembles ≥ 50× the cases per second of the Python engine's serial run "
+                    "(docs/performance/ensemble.md)",
+                    f"{ens['best']:.0f} cases/s against {ens['python_serial']:.0f} ({v:.0f}×; compiled serial "
+                    f"{ens['compiled_serial']:.0f} cases/s)", "yes" if v >= 50 else f"**no** ({v:.0f}×)"))
+    return out
+
+
+def _compiled_section(res, w):
+    comp = res.get("compiled")
+    if not comp:
+        return
+    w("## Compiled engine: per communication step and cold start")
+    w("")
+    if "error" in comp:
+        w("Compiled-engine benchmark failed:\n\n```\n" + comp["error"][-2000:] + "\n```\n")
+        return
+    ps = comp.get("per_step", {})
+    if ps.get("rows"):
+        r0 = ps["rows"][0]
+        w(f"The first {r0['steps'] * r0['dt']:g} s of the {ps['record']} in {r0['dt']:g} s communication steps "
+          f"({r0['steps']} steps), `ag` held over each step, the outputs read after each (`benchmarks/compiled_bench.py`; "
+          "fastest of 3 runs, the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
+          "`Engine.output_row()` on `rocking_model._engine.Engine`; *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
+          "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
+          "`Simulator.advance` loop on the Python engine. |Δφ|: max difference of φ after each step between the "
+          "compiled and the Python engine (same algorithm, same steps).")
+        w("")
+        w("| model | scheme, settings | record PGA | impacts | raw [µs/step] | API [µs/step] | simulate [µs/step] | "
+          "Python [µs/step] | Python / raw | internal steps | raw per internal step [µs] | max |Δφ| C vs Python [rad] |")
+        w("|" + " --- |" * 12)
+        for r in ps["rows"]:
+            w(f"| {r['kind']} | {r['scheme']}, {fsetting(r['settings'])} | {r['pga_g']:.2g} g | {r['impacts']} | "
+              f"{r['raw_us']:.2f} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {r['python_us']:.1f} | "
+              f"{fr(r['python_over_raw'])} | {r['internal_steps']} | {r['raw_us_per_internal_step']:.2f} | "
+              f"{fe(r['max_dphi_c_python'])} |")
+        w("")
+    cold = comp.get("cold", {})
+    if "import_to_first_step" in cold:
+        w(f"Cold start (fresh interpreter, median of {len(cold['samples'])}): from `import numpy` / `import "
+          f"rocking_model` to the end of the first 0.01 s step of `Simulator(RigidBlock(b=0.4, h=2.0), engine=\"c\")`: "
+          f"**{ft(cold['import_to_first_step'])}** = numpy's import {ft(cold['numpy_import'])} + the package's "
+          f"import {ft(cold['package_import'])} + Simulator and first step {ft(cold['first_step'])}.")
+        w("")
+    elif "error" in cold:
+        w(f"Cold start failed: {failure_line(cold['error'])}")
+        w("")
+    w("MuJoCo's rollout is not measured: the `mujoco` distribution that the package registry here serves is a "
+      "pure-Python wheel without the simulator's binary, so MuJoCo cannot be installed on this machine.")
+    w("")
+
+
+def _ensemble_section(res, w):
+    ens = res.get("ensemble")
+    if not ens:
+        return
+    w("## Ensembles")
+    w("")
+    if "error" in ens:
+        w(f"Ensemble benchmark failed: {failure_line(ens['error'])}")
+        w("")
+        return
+    w(f"`benchmarks/ensemble_bench.py` (its page: [ensemble.md](performance/ensemble.md)): {ens['cases']} one-sine "
+      f"pulse cases on the compiled engine, best {ens['best']:.0f} cases/s, {ens['best_over_python']:.0f}× the "
+      f"Python engine's serial run ({ens['python_serial']:.0f} cases/s on its first {ens['python_cases']} cases); "
+      f"compiled serially {ens['compiled_serial']:.0f} cases/s.")
+    w("")
 
 
 def _mj_orders(res):
@@ -419,22 +549,27 @@ def _scenes_section(res, w, imgs):
     w("")
     w("Time each contender needs for a given max |φ − φ_ref| (linear interpolation in log-log on its "
       "work-precision front; *≤* = its cheapest run is already below the level, so the time is an upper bound; "
-      "n/r = not reached by any setting). Ratio = contender time / package's best time (> 1: the package is "
-      "faster).")
+      "n/r = not reached by any setting). *C* = the compiled engine (`simulate(..., engine=\"c\")`), *Python* = the "
+      "Python engine (the reference implementation, `engine=\"python\"`), each at its best scheme at that level; "
+      "ratio = the other's time / that engine's time (> 1: the engine is faster); *Siconos / C MJ* compares the two "
+      "Moreau-Jean implementations.")
     w("")
     for sc in res["scenes"].values():
         ee = sc.get("equal_error")
         if not ee:
             continue
-        names = {"package": "package best", "package Moreau-Jean": "MJ", "package event-driven": "ED",
+        names = {"compiled": "compiled best", "compiled Moreau-Jean": "C MJ", "compiled event-driven": "C ED",
+                 "package": "Python best", "package Moreau-Jean": "Py MJ", "package event-driven": "Py ED",
                  "baseline": "solve_ivp (best variant)", "siconos": "Siconos"}
         fams = [f for f in names if f in ee[LEVELS[0]]]
         w(f"**{sc['title']}**")
         w("")
         head = ["error [rad]"] + [names[f] for f in fams]
-        has_b = "ratio_baseline" in ee[LEVELS[0]]
-        has_s = "ratio_siconos" in ee[LEVELS[0]]
-        head += (["vs solve_ivp"] if has_b else []) + (["vs Siconos"] if has_s else [])
+        ratio_cols = [(k, t) for k, t in (("ratio_c_baseline", "solve_ivp / C"), ("ratio_c_siconos", "Siconos / C"),
+                                          ("ratio_cmj_siconos", "Siconos / C MJ"), ("ratio_c_package", "Python / C"),
+                                          ("ratio_baseline", "solve_ivp / Python"), ("ratio_siconos", "Siconos / Python"))
+                      if k in ee[LEVELS[0]]]
+        head += [t for _, t in ratio_cols]
         w("| " + " | ".join(head) + " |")
         w("|" + " --- |" * len(head))
         for lvl in LEVELS:
@@ -443,10 +578,7 @@ def _scenes_section(res, w, imgs):
             for f in fams:
                 t, how = row[f]["time"], row[f]["how"]
                 cells.append(("≤ " if how == "cheapest" else "") + ft(t) if how != "not reached" else "n/r")
-            if has_b:
-                cells.append(fr(row["ratio_baseline"]))
-            if has_s:
-                cells.append(fr(row["ratio_siconos"]))
+            cells += [fr(row[k]) for k, _ in ratio_cols]
             w("| " + " | ".join(cells) + " |")
         w("")
     w("### All runs")
@@ -596,6 +728,18 @@ def _memory_section(res, w, imgs):
     w("")
     if imgs.get("memory"):
         w("![memory](performance/memory.png)")
+        w("")
+    mc = res.get("memory_c")
+    if mc and "samples" in mc:
+        s = mc["samples"]
+        w(f"The same record through `Simulator(engine=\"c\")` (fresh interpreter, wall {ft(mc['wall_s'])}): RSS "
+          f"{s[0]['rss_mib']:.2f} MiB at start, {s[1]['rss_mib']:.2f} after 30 s, {s[-1]['rss_mib']:.2f} at "
+          f"{s[-1]['t']:.0f} s after {s[-1]['impacts']} impacts: the engine's impact log is a bounded ring "
+          f"({mc['impact_log_len']} rows held; `impact_times` {mc['impact_times_len']} entries, bounded by "
+          "`impact_log_size`).")
+        w("")
+    elif mc and "error" in mc:
+        w(f"Memory (compiled engine) failed: {failure_line(mc['error'])}")
         w("")
 
 
