@@ -252,14 +252,15 @@ def write_report(res, docs: Path) -> Path:
     w(f"- Library commit: {info['commit']}")
     w(f"- Timing: median of up to {res['repeats']} repeats per setting (fewer once a setting's runs took "
       f"{res['budget']:g} s; the count is in the tables), single process, one contender at a time, "
-      "`time.perf_counter` around the whole public call (`simulate(...)` for the package, the full restart loop "
-      "for the baseline, the stepping loop incl. model set-up for Siconos).")
+      "`time.perf_counter` around the whole public call (`simulate(...)` for the package, on the Python engine and "
+      "on the compiled one with `engine=\"c\"`, whose runs get at least 9 repeats within the same budget; the full "
+      "restart loop for the baseline, the stepping loop incl. model set-up for Siconos).")
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
     w("")
     w("How to run: `python -m benchmarks` (full, regenerates this page and `docs/performance/*.png`) "
       "or `python -m benchmarks --quick` (smoke run, written to `benchmarks/results/quick/`). Options: "
-      "`--skip-siconos --skip-fmu --skip-memory --repeats N --scenes free record ...`.")
+      "`--skip-siconos --skip-fmu --skip-memory --skip-ensemble --skip-friction --repeats N --scenes free record ...`.")
     w("")
     verdicts = _targets(res)
     w("## Targets")
@@ -802,7 +803,7 @@ def _method_section(w):
       "a soft and a stiff column.")
     w("- Errors: |φ(T) − φ_ref(T)|; max over the 0.01 s grid of |φ − φ_ref| (the headline measure); max error of "
       "the first three impact times; for the flexible oscillator also the top displacement.")
-    w("- Contenders: `simulate(...)` with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
+    w("- Contenders: `simulate(...)` on each engine (the compiled one, `engine=\"c\"`, and the Python reference) with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
       "event-driven scheme); a solve_ivp baseline (`benchmarks/baseline.py`: Housner's single-DOF equation, DOP853, "
       "terminal events for impact and overturning, Housner's r at each impact, restart loop, the same Zeno "
       "threshold; for the record also with max_step = the sampling step); Siconos' MoreauJeanOSI + "
@@ -811,6 +812,6 @@ def _method_section(w):
       "its impact outcome needs the impact LCP with the u-dependent coupling (the paper's appendix, Eqs. 48–55), i.e. the "
       "package's own machinery.")
     w("- Equal-error comparison: each contender's (median time, error) points are reduced to their Pareto "
-      "front and interpolated linearly in log-log; the package's best time at a level is the faster of its two "
+      "front and interpolated linearly in log-log; an engine's best time at a level is the faster of its two "
       "schemes.")
     w("")
