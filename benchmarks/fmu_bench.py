@@ -133,3 +133,91 @@ def cold_start(fmu_path, repeats: int = 3) -> dict:
             return {"error": r.stderr.strip()[-2000:]}
         samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
     return {k: sorted(s[k] for s in samples)[len(samples) // 2] for k in samples[0]} | {"samples": samples}
+
+
+def engine_rows(fmus: dict, null, t, ag, dt, cases, rounds: int = 7) -> dict:
+    """Per-step cost of the model FMUs on each engine (ROCKING_FMU_ENGINE = "c", the default, and "python", the
+    reference) against the do-nothing FMU, all driven by `Master.run` in interleaved rounds in one process (the
+    minimum of the rounds: the least disturbed by other load). ``cases``: {label: (FMU name, start values)}.
+    Returns {"null_us": ..., label: {"c_us", "python_us", "ratio_c", "ratio_python", "phi_err_c"}}: µs per
+    communication step (setReal + doStep + getReal) and the largest |phi| difference from the zero-order-hold
+    run of `simulate` at tolerance 1e-12 (compiled engine) [rad]."""
+    import os
+
+    from rocking_model import FlexibleOscillator, RigidBlock, simulate
+
+    models = {"RigidRockingBlock": RigidBlock, "FlexibleRockingOscillator": FlexibleOscillator}
+    masters = {name: Master(fmus[name]) for name, _ in cases.values()}
+    m0 = Master(null)
+    n = len(ag) - 1
+    times = {"null": []}
+    phis = {}
+    previous = os.environ.get("ROCKING_FMU_ENGINE")
+    try:
+        for _ in range(rounds):
+            times["null"].append(m0.run(ag, dt, output="y")[0])
+            for label, (name, sv) in cases.items():
+                for engine in ("c", "python"):
+                    os.environ["ROCKING_FMU_ENGINE"] = engine    # read when the FMU builds its simulator
+                    el, phi = masters[name].run(ag, dt, sv)
+                    times.setdefault((label, engine), []).append(el)
+                    phis[(label, engine)] = phi
+    finally:
+        if previous is None:
+            os.environ.pop("ROCKING_FMU_ENGINE", None)
+        else:
+            os.environ["ROCKING_FMU_ENGINE"] = previous
+    null_us = min(times["null"]) / n * 1e6
+    out = {"null_us": null_us, "steps": n, "rounds": rounds}
+    for label, (name, sv) in cases.items():
+        model_kw = {k: v for k, v in sv.items() if k in {p.name for p in models[name].parameters()}}
+        scheme = "event_driven" if sv.get("scheme", 1) == 1 else "moreau_jean"
+        ref = simulate(models[name](**model_kw), (t, ag), t_end=float(t[-1]), scheme=scheme, output_interval=dt,
+                       hold="zoh", tolerance=1e-12, dt_max=sv.get("dt_max", 0.0), engine="c")
+        row = {}
+        for engine in ("c", "python"):
+            us = min(times[(label, engine)]) / n * 1e6
+            row[f"{engine}_us"], row[f"ratio_{engine}"] = us, us / null_us
+        row["phi_err_c"] = float(np.max(np.abs(phis[(label, "c")] - ref["phi"])))
+        out[label] = row
+    return out
+
+
+def main(argv=None) -> int:
+    """Per-step cost of the FMUs on each engine against the do-nothing FMU (`engine_rows`) on the benchmark
+    record (the first --duration seconds, 10 ms steps); prints one line per case."""
+    import argparse
+
+    from benchmarks import scenes as S
+
+    parser = argparse.ArgumentParser(description=main.__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=8.0)
+    parser.add_argument("--rounds", type=int, default=7)
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
+    import build_fmu
+
+    with tempfile.TemporaryDirectory() as tmp:
+        fmus = {p.stem: p for p in build_fmu.build_all(Path(tmp) / "built", ["RigidRockingBlock",
+                                                                             "FlexibleRockingOscillator"])}
+        null = build_null_fmu(Path(tmp) / "null")
+        t, a = S.synthetic_record()
+        n = int(round(args.duration / 0.01)) + 1
+        rigid = dict(S.RECORD_BLOCK)
+        cases = {f"rigid event-driven tol {tol:g}": ("RigidRockingBlock", dict(rigid, scheme=1, tolerance=tol,
+                                                                                dt_max=1e3))
+                 for tol in (1e-4, 1e-6)}
+        cases |= {f"flexible event-driven tol {tol:g}": ("FlexibleRockingOscillator",
+                                                          dict(scheme=1, tolerance=tol, dt_max=1e3))
+                  for tol in (1e-6, 1e-8)}
+        res = engine_rows(fmus, null, t[:n], a[:n], 0.01, cases, rounds=args.rounds)
+    print(f"{res['steps']} steps, min of {res['rounds']} interleaved rounds; null FMU {res['null_us']:.2f} µs/step")
+    for label in cases:
+        r = res[label]
+        print(f"  {label:<34} C {r['c_us']:6.2f} µs ({r['ratio_c']:.2f}x null, max|phi err| {r['phi_err_c']:.1e} "
+              f"rad)   Python engine {r['python_us']:6.2f} µs ({r['ratio_python']:.1f}x)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

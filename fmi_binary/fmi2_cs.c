@@ -101,6 +101,7 @@ typedef struct {
     PyObject *host;    /* the fmi2_pyhost.Host */
     PyObject *slave;
     PyObject *methods[N_METHODS]; /* NULL where the slave lacks the method */
+    PyObject *log_name; /* the str "log_queue", made once: drain_log runs after every call */
     PyObject *strings; /* the last fmi2GetString result: keeps the returned UTF-8 buffers alive */
     double time;       /* [s] the slave's communication point */
     int terminated_flag;
@@ -173,16 +174,19 @@ static void logf_(const Instance *S, fmi2Status status, const char *category, co
  * among them, capped at fmi2Warning (a slave reports failures by raising or by do_step returning False). */
 static fmi2Status drain_log(Instance *S) {
     if (!S->slave) return fmi2OK;
-    PyObject *queue = py.Object_GetAttrString(S->slave, "log_queue");
+    /* looked up on every call (a slave may replace its list), by a name object made once */
+    PyObject *queue = S->log_name ? py.Object_GetAttr(S->slave, S->log_name)
+                                  : py.Object_GetAttrString(S->slave, "log_queue");
     if (!queue) {
         py.Err_Clear();
         return fmi2OK;
     }
     fmi2Status worst = fmi2OK;
     Py_ssize_t n = py.List_Size(queue);
-    if (n < 0) {
-        py.Err_Clear();
-        n = 0;
+    if (n <= 0) {                   /* the usual case: nothing logged */
+        if (n < 0) py.Err_Clear();
+        py.DecRef(queue);
+        return fmi2OK;
     }
     for (Py_ssize_t i = 0; i < n; i++) {
         PyObject *item = py.List_GetItem(queue, i); /* borrowed */
@@ -265,6 +269,8 @@ static void release_slave(Instance *S) {
     S->strings = NULL;
     if (S->slave) py.DecRef(S->slave);
     S->slave = NULL;
+    if (S->log_name) py.DecRef(S->log_name);
+    S->log_name = NULL;
 }
 
 /* Take the host's current slave and bind its methods; -1 with the exception pending on failure. */
@@ -272,6 +278,8 @@ static int bind_slave(Instance *S) {
     release_slave(S);
     S->slave = py.Object_GetAttrString(S->host, "slave");
     if (!S->slave) return -1;
+    S->log_name = py.Unicode_DecodeUTF8("log_queue", 9, "strict");
+    if (!S->log_name) return -1;
     for (int i = 0; i < N_METHODS; i++) {
         if (py.Object_HasAttrString(S->slave, method_names[i])) {
             S->methods[i] = py.Object_GetAttrString(S->slave, method_names[i]);
@@ -289,15 +297,19 @@ static PyObject *call_slave(Instance *S, const char *function, int m, ...) {
         log_error(S, "%s: the slave %s has no method %s", function, S->name, method_names[m]);
         return NULL;
     }
-    PyObject *args[4] = {NULL, NULL, NULL, NULL};
+    /* vectorcall: no argument tuple built; slot 0 stays free for the bound method's self
+     * (PY_VECTORCALL_ARGUMENTS_OFFSET), so that the call allocates nothing */
+    PyObject *args[5] = {NULL, NULL, NULL, NULL, NULL};
+    size_t nargs = 0;
     va_list ap;
     va_start(ap, m);
-    for (int i = 0; i < 4; i++) {
-        args[i] = va_arg(ap, PyObject *);
-        if (!args[i]) break;
+    while (nargs < 4) {
+        PyObject *a = va_arg(ap, PyObject *);
+        if (!a) break;
+        args[1 + nargs++] = a;
     }
     va_end(ap);
-    PyObject *result = py.Object_CallFunctionObjArgs(S->methods[m], args[0], args[1], args[2], args[3], NULL);
+    PyObject *result = py.Object_Vectorcall(S->methods[m], args + 1, nargs | PY_VECTORCALL_ARGUMENTS_OFFSET, NULL);
     if (!result) log_exception(S, function);
     return result;
 }

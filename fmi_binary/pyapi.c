@@ -55,6 +55,8 @@ static int resolve(Lookup lookup, void *library, const char *where, char *why, s
     RESOLVE(Object_GetAttrString, "PyObject_GetAttrString");
     RESOLVE(Object_HasAttrString, "PyObject_HasAttrString");
     RESOLVE(Object_CallFunctionObjArgs, "PyObject_CallFunctionObjArgs");
+    RESOLVE(Object_Vectorcall, "PyObject_Vectorcall");   /* a function since Python 3.9 */
+    RESOLVE(Object_GetAttr, "PyObject_GetAttr");
     RESOLVE(Object_Str, "PyObject_Str");
     RESOLVE(Object_IsTrue, "PyObject_IsTrue");
     RESOLVE(List_New, "PyList_New");

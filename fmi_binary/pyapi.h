@@ -42,6 +42,8 @@ typedef struct {
     PyObject *(*Object_GetAttrString)(PyObject *, const char *);
     int (*Object_HasAttrString)(PyObject *, const char *);
     PyObject *(*Object_CallFunctionObjArgs)(PyObject *, ...);
+    PyObject *(*Object_Vectorcall)(PyObject *, PyObject *const *, size_t, PyObject *);
+    PyObject *(*Object_GetAttr)(PyObject *, PyObject *);
     PyObject *(*Object_Str)(PyObject *);
     int (*Object_IsTrue)(PyObject *);
     PyObject *(*List_New)(Py_ssize_t);

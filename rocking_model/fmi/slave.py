@@ -1,5 +1,19 @@
 """The slave and its state machine: `RockingSlave`, the generic pythonfmu slave around a `Simulator` that
-the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call)."""
+the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call).
+
+Engine. The model FMUs (`ModelSlave`) run the compiled engine (`Simulator(engine="c")`); the environment
+variable ``ROCKING_FMU_ENGINE=python`` (`ENGINE_VARIABLE`, read when the simulator is built: at
+fmi2ExitInitializationMode and fmi2SetFMUstate) selects the Python reference engine instead, with the same
+results to the engine's pinning tolerance and the same state format. It is not an FMU parameter: the
+engine is a property of the installation, not of the model.
+
+Per-step path on the compiled engine (`RockingSlave._bind`): fmi2SetReal of the input is one range comparison,
+fmi2DoStep is one `Engine.advance` between the engine's checkpoint and commit (a refused step is rolled back
+in C: fmi2Discard, the state bit-identical), and fmi2GetReal reads the engine's output row, fetched once per
+step when the importer first asks; nothing is copied per step. Every call that does not fit (an input rate,
+several inputs, a frozen or failed instance, a value or time that fails a check) takes the checked path,
+which words the messages.
+"""
 from __future__ import annotations
 
 import hashlib
@@ -82,10 +96,25 @@ class RockingSlave(Fmi2Slave):
         # what every do_step reads, resolved once
         self._inputs = [(s.name, s.min, s.max) for s in self.variables if s.causality == "input"]
         self._outputs = [(s.name, _PY_TYPES[s.type]) for s in self.variables if s.causality == "output"]
+        # the lean per-step path (see _bind): Real inputs by reference -> (name, lo, hi), finite bounds, so
+        # that one chained comparison checks the range, finiteness and nan as check_real does
+        big = sys.float_info.max
+        self._fast_inputs = {self._vr_of[s.name]: (s.name, -big if s.min is None else float(s.min),
+                                                   big if s.max is None else float(s.max))
+                             for s in self.variables if s.causality == "input" and s.type == "Real"}
+        # outputs by reference -> (name, FMI type, Python type)
+        self._output_vrs = {self._vr_of[s.name]: (s.name, s.type, _PY_TYPES[s.type])
+                            for s in self.variables if s.causality == "output"}
 
     def _clear_state(self) -> None:
         # the FMU state (fmi2GetFMUstate / fmi2SetFMUstate): these flags, the variable values and the simulator
         self._sim = None
+        self._eng = None                         # the compiled engine of _sim (the lean path), or None
+        self._row = None                         # the engine's output_row() now, or None: read on demand
+        self._lean = None                        # (input name, lo, hi) of the lean do_step path, or None
+        self._real_out: Dict[int, int] = {}      # Real output reference -> position in the engine's row
+        self._freeze_overturned = self._freeze_other = False
+        self._reported = False                   # the Simulator's last_reports are not empty (lean path)
         self._initialized = False
         self._terminated = False
         self._error: Optional[str] = None        # permanent failure (an integrator crash), until reset
@@ -122,7 +151,19 @@ class RockingSlave(Fmi2Slave):
         return Boolean(spec.name, **kwargs)
 
     def _getter(self, name: str):
+        if self._specs[name].causality == "output":
+            return lambda: self._output_value(name)
         return lambda: self._values[name]
+
+    def _output_value(self, name: str):
+        """An output now: read from the compiled engine on demand (once per state), else the value copied at
+        the end of the last step."""
+        if self._eng is None:
+            return self._values[name]
+        row = self._row
+        if row is None:
+            row = self._row = self._eng.output_row()
+        return _PY_TYPES[self._specs[name].type](row[self._out_pos[name]])
 
     def _setter(self, spec: Var):
         # pythonfmu's own path to a variable (the importer's calls go through _set)
@@ -247,6 +288,7 @@ class RockingSlave(Fmi2Slave):
         # a rate set before initialization refers to the start of the first communication step (FMI 2.0
         # section 4.2.1): the start time, whatever the time known when it was set
         self._rates = {name: (rate, self._t0) for name, (rate, _) in self._rates.items()}
+        self._bind()
         self._update_outputs()
 
     def terminate(self):
@@ -254,7 +296,74 @@ class RockingSlave(Fmi2Slave):
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         """Advance to ``current_time + step_size``; False (fmi2Discard) when the step is refused with the state
-        unchanged; raises ValueError on an invalid call (fmi2Error)."""
+        unchanged; raises ValueError on an invalid call (fmi2Error).
+
+        The lean path (a compiled engine, one input held constant, not frozen, no earlier failure): the same
+        checks as `_do_step` as comparisons that pass, then one call into C between the engine's checkpoint
+        and commit. Anything else, including every check that fails, goes through `_do_step`, which
+        words the message."""
+        lean = self._lean
+        if lean is not None and type(current_time) is float and type(step_size) is float and not self._rates \
+                and not self._frozen and self._error is None and not self._terminated:
+            t, t_now = current_time, self._t
+            t_end = t + step_size
+            ag = self._values[lean[0]]
+            # t_now within time_tolerance of t (relative beyond 1 s), as _do_step words it
+            lim = t_now if t_now >= 1.0 else (-t_now if t_now <= -1.0 else 1.0)
+            if 0.0 < step_size <= _BIG and -_BIG <= t_end <= _BIG and lean[1] <= ag <= lean[2] and \
+                    (t == t_now or -self.time_tolerance * lim <= t - t_now <= self.time_tolerance * lim):
+                eng = self._eng
+                t_sim = eng.t
+                eng.checkpoint()
+                try:
+                    eng.advance(t_end if t_end >= t_sim else t_sim, ag, 0.0, self._max_steps)
+                except BaseException as exc:
+                    eng.rollback()
+                    return self._step_failed(exc, t, t_end, ag)
+                if eng.report_count:
+                    if not self._step_reports(t, t_end):
+                        return False
+                elif self._reported:              # the Simulator's last_reports: this step's (none)
+                    self._sim.last_reports = self._sim.integrator.reports = []
+                    self._reported = False
+                eng.commit()
+                self._row = None
+                if self._freeze_overturned:
+                    if eng.overturned:
+                        self._freeze()
+                elif self._freeze_other:
+                    self._update_outputs()
+                self._t = t_end
+                return True
+        return self._do_step(current_time, step_size)
+
+    def _step_failed(self, exc, t: float, t_end: float, ag: float) -> bool:
+        """A failed engine advance (state restored) as `_do_step` treats it: refused (fmi2Discard) or a
+        permanent failure (raises)."""
+        try:
+            self._sim._c_failed(exc, t_end, ag)     # the Simulator's exception types and messages
+        except (WorkLimitError, ValueError) as err:
+            return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(err)}")
+        except Exception as err:
+            self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(err)}"
+            raise RuntimeError(self._error) from None
+        raise AssertionError("unreachable: _c_failed always raises")  # pragma: no cover
+
+    def _step_reports(self, t: float, t_end: float) -> bool:
+        """Reports of a lean step: a failed internal step refuses it (rolled back, False); the others are
+        logged as warnings (True)."""
+        eng = self._eng
+        self._reported = True
+        try:
+            self._sim._c_reports(eng)               # raises SolverFailure (a ValueError) on a failed step
+        except ValueError as exc:
+            eng.rollback()
+            return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(exc)}")
+        self._log_reports()
+        return True
+
+    def _do_step(self, current_time: float, step_size: float) -> bool:
+        """do_step with every check worded and any input (several, interpolated, frozen outputs)."""
         t, dt = float(current_time), float(step_size)
         if self._terminated:
             raise ValueError("fmi2DoStep called after fmi2Terminate (call fmi2Reset to start again)")
@@ -301,7 +410,39 @@ class RockingSlave(Fmi2Slave):
         self._t = t_end
         return True
 
+    def _bind(self) -> None:
+        """Set up the lean per-step path on the compiled engine of the simulator (`Simulator(engine="c")`):
+        do_step is one advance of the engine between its checkpoint and commit, and the outputs are read from
+        the engine when the importer asks for them (`rocking_model.engine`'s output_row, cached until the next
+        step), nothing copied per step. Any other simulator (the Python engine, a MotionSource) keeps the
+        checked path: outputs copied from ``outputs()`` after every step."""
+        sim, eng = self._sim, None
+        self._real_out = {}
+        if isinstance(sim, Simulator) and sim.engine == "c":
+            eng = sim.integrator._engine
+            keys = [*eng.output_names, "contact", "impacts", "overturned", "friction_demand", "painleve"]
+            pos = {k: i for i, k in enumerate(keys)}
+            for name, _ in self._outputs:
+                if name not in pos:
+                    raise KeyError(f"Simulator.outputs() has no entry {name!r}")
+            self._out_pos = {name: pos[name] for name, _ in self._outputs}
+            self._real_out = {vr: pos[name] for vr, (name, kind, _) in self._output_vrs.items() if kind == "Real"}
+        self._eng, self._row, self._reported = eng, None, False
+        self._max_steps = None if eng is None else sim.max_steps
+        self._freeze_overturned = eng is not None and self.freeze_output == "overturned"
+        self._freeze_other = eng is not None and self.freeze_output not in (None, "overturned")
+        # the single Real input of an FMU that keeps the default `advance`: stepped by the lean path
+        lean = None
+        if eng is not None and len(self._inputs) == 1 and type(self).advance is RockingSlave.advance:
+            lean = self._fast_inputs.get(self._vr_of[self._inputs[0][0]])
+        self._lean = lean
+
     def _update_outputs(self) -> None:
+        if self._eng is not None:             # read on demand (_output_value); only the freeze is decided now
+            self._row = None
+            if self.freeze_output is not None and not self._frozen and self._output_value(self.freeze_output):
+                self._freeze()
+            return
         out = self._sim.outputs()
         values = self._values
         for name, py in self._outputs:
@@ -309,9 +450,12 @@ class RockingSlave(Fmi2Slave):
                 raise KeyError(f"Simulator.outputs() has no entry {name!r}")
             values[name] = py(out[name])
         if self.freeze_output is not None and out.get(self.freeze_output) and not self._frozen:
-            self._frozen = True
-            self.log(f"{self.freeze_output} at t = {self._sim.t:.6g} s: the outputs are frozen from now on",
-                     Fmi2Status.warning)
+            self._freeze()
+
+    def _freeze(self) -> None:
+        self._frozen = True
+        self.log(f"{self.freeze_output} at t = {self._sim.t:.6g} s: the outputs are frozen from now on",
+                 Fmi2Status.warning)
 
     def _fail(self, msg: str) -> bool:
         self.log(msg, Fmi2Status.error)
@@ -348,6 +492,9 @@ class RockingSlave(Fmi2Slave):
 
     def _state_document(self) -> Dict[str, Any]:
         values = dict(self._values)
+        if self._eng is not None:             # the outputs now (read from the engine, not copied per step)
+            for name, _ in self._outputs:
+                values[name] = self._output_value(name)
         return {"fmu": type(self).__name__, "signature": self._state_signature(),
                 "slave": {"initialized": self._initialized, "terminated": self._terminated,
                           "frozen": self._frozen, "t": self._t, "t0": self._t0, "error": self._error,
@@ -401,6 +548,7 @@ class RockingSlave(Fmi2Slave):
         self._t, self._t0 = float(slave["t"]), float(slave["t0"])
         self._error = slave["error"]
         self._rates = {k: (float(v[0]), float(v[1])) for k, v in rates.items()}
+        self._bind()
 
     # ------------------------------------------------------------------ value references
     # A call with a bad reference (unknown, of another type, an output set), a value that cannot be converted,
@@ -518,6 +666,25 @@ class RockingSlave(Fmi2Slave):
             self._rates[name] = (rate, now)
 
     def get_real(self, vrs):
+        # lean path: Real outputs read from the engine's row (one call into C per state); anything else, and
+        # every bad reference, through _get
+        where = self._real_out
+        if where and type(vrs) is list:
+            try:
+                if len(vrs) == 1:             # the usual request: one output
+                    i = where[vrs[0]]
+                    row = self._row
+                    if row is None:
+                        row = self._row = self._eng.output_row()
+                    return [row[i]]
+                pos = [where[vr] for vr in vrs]
+            except (KeyError, TypeError):
+                pass
+            else:
+                row = self._row
+                if row is None:
+                    row = self._row = self._eng.output_row()
+                return [row[i] for i in pos]
         return self._get(vrs, "Real")
 
     def get_integer(self, vrs):
@@ -530,6 +697,19 @@ class RockingSlave(Fmi2Slave):
         return self._get(vrs, "String")
 
     def set_real(self, vrs, values):
+        # lean path: one Real input set to a float inside its declared range (the check of _check_assignment as
+        # one comparison: nan and inf fail it); anything else, and every message, through _set
+        if type(vrs) is list and type(values) is list and len(vrs) == 1 == len(values):
+            try:
+                spec = self._fast_inputs.get(vrs[0])
+            except TypeError:
+                spec = None
+            value = values[0]
+            if spec is not None and type(value) is float and spec[1] <= value <= spec[2]:
+                self._values[spec[0]] = value
+                if self._rates:
+                    self._rates.pop(spec[0], None)
+                return
         self._set(vrs, values, "Real")
 
     def set_integer(self, vrs, values):
@@ -563,6 +743,9 @@ def _var_type(var) -> str:
 #: [unit/s] largest input rate accepted by fmi2SetRealInputDerivatives: AG_MAX reached from 0 in 1 ms, far
 #: beyond any recorded ground motion (a steeper ramp is a step, which a zero-order hold represents)
 INPUT_RATE_MAX = AG_MAX / 1e-3
+
+#: the largest finite double: ``-_BIG <= x <= _BIG`` is math.isfinite(x) as one comparison (nan fails it)
+_BIG = sys.float_info.max
 
 #: [characters] longest text kept in a state or accepted for a String variable (a file path, a message)
 _MAX_TEXT = 4096
@@ -602,6 +785,25 @@ def _check_value(name: str, type_: str, value):
         return value
     if not isinstance(value, str) or len(value) > _MAX_TEXT:
         raise ValueError(f"state value of {name} is not a String of at most {_MAX_TEXT} characters")
+    return value
+
+
+#: environment variable that chooses the engine of the model FMUs (`ModelSlave`): "c" (default, the compiled
+#: engine: each doStep one call into C) or "python" (the reference implementation); read when the simulator
+#: is built (fmi2ExitInitializationMode, fmi2SetFMUstate), not an FMU parameter
+ENGINE_VARIABLE = "ROCKING_FMU_ENGINE"
+
+
+def fmu_engine() -> str:
+    """The engine the model FMUs run: `ENGINE_VARIABLE` ("c" when unset or empty, or "python")."""
+    import os
+
+    from ..engine import ENGINES
+
+    value = os.environ.get(ENGINE_VARIABLE, "").strip() or "c"
+    if value not in ENGINES:
+        raise ValueError(f"environment variable {ENGINE_VARIABLE} = {value!r} is invalid; allowed values "
+                         f"{', '.join(sorted(ENGINES))} (unset: c)")
     return value
 
 
@@ -661,7 +863,8 @@ class ModelSlave(RockingSlave):
         try:
             model = cls(**{q.name: p[q.name] for q in cls.parameters() if q.fmu})
             # impact_log_size = 0: the FMU keeps no impact log (memory flat over any run; the count is kept)
-            return Simulator(model, t0=t0, impact_log_size=0, max_steps=max_steps, **options, **initial)
+            return Simulator(model, t0=t0, impact_log_size=0, max_steps=max_steps, engine=fmu_engine(),
+                             **options, **initial)
         except ArithmeticError as exc:
             # guard: a value inside its declared range whose derived quantities overflow (a subnormal number
             # has an infinite reciprocal): refused here with the values at the edge of the floating-point range
