@@ -344,9 +344,13 @@ def bench_fmu(args) -> dict:
         t0 = time.perf_counter()
         simulate(model, (t, a), dur, scheme=scheme, output_interval=dt, hold="zoh", **kw)
         py = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        simulate(model, (t, a), dur, scheme=scheme, output_interval=dt, hold="zoh", engine="c", **kw)
+        py_c = time.perf_counter() - t0
         e2e = F.simulate_fmu_time(fmus[fmu_name], m.unzipdir, t, a, dt, sv_best)
         e2e_null = F.simulate_fmu_time(null, m0.unzipdir, t, a, dt, {}, output=("y",))
-        return {"rows": rows, "best": best, "target": target, "python_same_settings": py, "pga_g": 0.4 * scale,
+        return {"rows": rows, "best": best, "target": target, "python_same_settings": py,
+                "c_same_settings": py_c, "pga_g": 0.4 * scale,
                 "simulate_fmu": e2e, "simulate_fmu_null": e2e_null, "ref_phi_absmax": float(np.max(np.abs(ref["phi"])))}
 
     rigid_kw = dict(S.RECORD_BLOCK)
@@ -357,7 +361,7 @@ def bench_fmu(args) -> dict:
         ("event-driven tol 1e-8, dt_max uncapped", {"scheme": 1, "tolerance": 1e-8, "dt_max": big}),
         ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
         ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
-    ], rigid_kw, 2.0)
+    ], rigid_kw, 1.2)
     if "FlexibleRockingOscillator" in fmus:
         from fmpy import read_model_description
 
@@ -375,10 +379,28 @@ def bench_fmu(args) -> dict:
             ("event-driven tol 1e-10, dt_max uncapped", {"scheme": 1, "tolerance": 1e-10, "dt_max": big}),
             ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
             ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
-        ], flex_kw, 4.0, scale=0.75)
+        ], flex_kw, 1.4, scale=0.75)
         res["flexible"]["model"] = flex_kw
     else:
         res["flexible"] = {"skipped": "no FlexibleRockingOscillator FMU"}
+    if hasattr(F, "engine_rows"):
+        # the FMUs on each engine (ROCKING_FMU_ENGINE = c, the default, and python, the reference) in
+        # interleaved rounds, the minimum of the rounds (least disturbed by other load)
+        log("  FMUs on each engine")
+        rounds = 2 if args.quick else 5
+        try:
+            res["engines"] = {"rigid": F.engine_rows(fmus, null, t, a_full, dt, {
+                f"rigid event-driven tol {tol:g}": ("RigidRockingBlock", dict(rigid_kw, scheme=1, tolerance=tol,
+                                                                              dt_max=big)) for tol in (1e-6, 1e-8)},
+                rounds=rounds)}
+            if "FlexibleRockingOscillator" in fmus:
+                res["engines"]["flexible"] = F.engine_rows(fmus, null, t, a_full * 0.75, dt, {
+                    f"flexible event-driven tol {tol:g} (record at 0.3 g)": (
+                        "FlexibleRockingOscillator", dict(flex_kw, scheme=1, tolerance=tol, dt_max=big))
+                    for tol in (1e-8, 1e-10)}, rounds=rounds)
+        except Exception:
+            import traceback
+            res["engines"] = {"error": traceback.format_exc()}
     log("  cold starts")
     res["cold"] = {"NullSlave": F.cold_start(null, 3 if not args.quick else 1)}
     for name, p in fmus.items():
