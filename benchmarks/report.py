@@ -253,7 +253,7 @@ def write_report(res, docs: Path) -> Path:
     w(f"- Timing: median of up to {res['repeats']} repeats per setting (fewer once a setting's runs took "
       f"{res['budget']:g} s; the count is in the tables), single process, one contender at a time, "
       "`time.perf_counter` around the whole public call (`simulate(...)` for the package, on the Python engine and "
-      "on the compiled one with `engine=\"c\"`, whose runs get at least 9 repeats within the same budget; the full "
+      "on the compiled one with `engine=\"c\"`, whose runs get at least 9 repeats within a budget of 2 s; the full "
       "restart loop for the baseline, the stepping loop incl. model set-up for Siconos).")
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
