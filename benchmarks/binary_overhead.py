@@ -4,7 +4,10 @@ binary (build_fmu.compile_binary + install_binary), both driven by fmpy's FMU2Sl
 setReal(ag) + doStep + getReal(y) per step, and each call alone. Rounds alternate between the binaries and
 the median of the rounds is reported, so both see the same machine state.
 
-Usage: python -m benchmarks.binary_overhead [--steps 20000] [--rounds 7]
+With --models, the same calls on the rigid and flexible FMUs (project binary, compiled engine) at rest (ag =
+1 m/s2, below uplift): what the slave and one call into the engine add to each FMI call over the null slave.
+
+Usage: python -m benchmarks.binary_overhead [--steps 20000] [--rounds 7] [--models]
 """
 from __future__ import annotations
 
@@ -37,12 +40,13 @@ def build(dest: Path) -> dict:
 
 
 class Driver:
-    def __init__(self, fmu: Path, name: str):
+    def __init__(self, fmu: Path, name: str, output: str = "y"):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
         md = read_model_description(str(fmu))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.vr["y"] = self.vr[output]
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)),
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate()
@@ -80,10 +84,17 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=20000)
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--models", action="store_true",
+                        help="also the rigid and flexible FMUs (project binary) at rest")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         fmus = build(Path(tmp))
         drivers = {k: Driver(p, k) for k, p in fmus.items()}
+        models = {}
+        if args.models:
+            import build_fmu
+            built = build_fmu.build_all(Path(tmp) / "models", ["RigidRockingBlock", "FlexibleRockingOscillator"])
+            models = {p.stem: Driver(p, p.stem, output="phi") for p in built}
         check = {k: (d.fmu.setReal([d.vr["ag"]], [2.5]), d.fmu.doStep(d.t, 1e-3), d.fmu.getReal([d.vr["y"]])[0])[2]
                  for k, d in drivers.items()}
         for d in drivers.values():
@@ -95,10 +106,13 @@ def main(argv=None) -> int:
             for _ in range(args.rounds):
                 for k, d in drivers.items():
                     times[k].append(d.run(args.steps, what))
+                for k, d in models.items():
+                    times.setdefault(k, []).append(d.run(args.steps, what))
             med = {k: statistics.median(v) for k, v in times.items()}
             print(f"  {what:<13} pythonfmu 0.7 {med['pythonfmu']:7.2f}   project {med['project']:7.2f}   "
-                  f"ratio project/pythonfmu {med['project'] / med['pythonfmu']:.2f}")
-        for d in drivers.values():
+                  f"ratio project/pythonfmu {med['project'] / med['pythonfmu']:.2f}"
+                  + "".join(f"   {k} {med[k]:7.2f} ({med[k] / med['pythonfmu']:.2f}x)" for k in models))
+        for d in [*drivers.values(), *models.values()]:
             d.fmu.terminate()
             d.fmu.freeInstance()
     return 0

@@ -253,3 +253,24 @@ def test_bad_input_and_bad_times_keep_their_messages_on_the_lean_path(monkeypatc
     with pytest.raises(ValueError, match=r"communicationStepSize = inf is invalid"):
         slave.do_step(0.0, math.inf)
     assert slave.do_step(0.0, DT) and slave._t == DT
+
+
+def test_after_overturning_the_time_moves_on_and_the_engine_is_not_called(monkeypatch):
+    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
+    slave, vr = started(RIGID)
+    k = 0
+    while not slave.get_boolean([vr["overturned"]])[0]:
+        slave.set_real([vr["ag"]], [15.0])                # 1.5 g held: the block overturns within a second
+        assert slave.do_step(k * DT, DT)
+        k += 1
+        assert k < 200
+    assert slave._frozen
+    names = output_names(RIGID)
+    frozen, t_engine = outputs(slave, vr, names), slave._eng.t
+    for j in range(k, k + 5):
+        slave.set_real([vr["ag"]], [-15.0])
+        assert slave.do_step(j * DT, DT)
+        assert outputs(slave, vr, names) == frozen and slave._eng.t == t_engine
+    assert slave._t == (k + 4) * DT + DT
+    with pytest.raises(ValueError, match="does not match the FMU time"):   # the checks still hold
+        slave.do_step(0.0, DT)

@@ -298,13 +298,13 @@ class RockingSlave(Fmi2Slave):
         """Advance to ``current_time + step_size``; False (fmi2Discard) when the step is refused with the state
         unchanged; raises ValueError on an invalid call (fmi2Error).
 
-        The lean path (a compiled engine, one input held constant, not frozen, no earlier failure): the same
-        checks as `_do_step` as comparisons that pass, then one call into C between the engine's checkpoint
-        and commit. Anything else, including every check that fails, goes through `_do_step`, which
-        words the message."""
+        The lean path (a compiled engine, one input held constant, no earlier failure): the same checks as
+        `_do_step` as comparisons that pass, then one call into C between the engine's checkpoint and commit
+        (none once the outputs are frozen). Anything else, including every check that fails, goes through
+        `_do_step`, which words the message."""
         lean = self._lean
         if lean is not None and type(current_time) is float and type(step_size) is float and not self._rates \
-                and not self._frozen and self._error is None and not self._terminated:
+                and self._error is None and not self._terminated:
             t, t_now = current_time, self._t
             t_end = t + step_size
             ag = self._values[lean[0]]
@@ -312,6 +312,9 @@ class RockingSlave(Fmi2Slave):
             lim = t_now if t_now >= 1.0 else (-t_now if t_now <= -1.0 else 1.0)
             if 0.0 < step_size <= _BIG and -_BIG <= t_end <= _BIG and lean[1] <= ag <= lean[2] and \
                     (t == t_now or -self.time_tolerance * lim <= t - t_now <= self.time_tolerance * lim):
+                if self._frozen:                  # overturned: the outputs stay, the time goes on
+                    self._t = t_end
+                    return True
                 eng = self._eng
                 t_sim = eng.t
                 eng.checkpoint()
