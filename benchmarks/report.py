@@ -456,9 +456,9 @@ def _compiled_section(res, w):
     ps = comp.get("per_step", {})
     if ps.get("rows"):
         r0 = ps["rows"][0]
-        w(f"The first {r0['steps'] * r0['dt']:g} s of the {ps['record']} in {r0['dt']:g} s communication steps "
-          f"({r0['steps']} steps), `ag` held over each step, the outputs read after each (`benchmarks/compiled_bench.py`; "
-          "fastest of 3 runs, the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
+        w(f"The first {r0['steps'] * r0['dt']:g} s of the synthetic record (`benchmarks.scenes.synthetic_record`) in "
+          f"{r0['dt']:g} s communication steps ({r0['steps']} steps), `ag` held over each step, the outputs read after "
+          "each (`benchmarks/compiled_bench.py`; fastest of 5 runs, 3 in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
           "`Engine.output_row()` on `rocking_model._engine.Engine`; *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
           "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
           "`Simulator.advance` loop on the Python engine. |Δφ|: max difference of φ after each step between the "
