@@ -326,14 +326,14 @@ def _targets(res):
             if "ratio_cmj_siconos" in row and sic and not math.isnan(sic["time"]):
                 ratios_cmj.append((sc["name"], lvl, row["ratio_cmj_siconos"]))
     m, ok = summary(ratios_cb, 50.0)
-    out.append(("issue 21: compiled engine's best scheme ≥ 50× faster than the solve_ivp baseline at equal max "
+    out.append(("compiled engine's best scheme ≥ 50× faster than the solve_ivp baseline at equal max "
                 "error, every level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
     if ratios_cmj:
         met = [r for r in ratios_cmj if r[2] > 1]
         finite = [r for r in ratios_cmj if not math.isnan(r[2])]
         worst = min(finite, key=lambda r: r[2]) if finite else None
         nr = len(ratios_cmj) - len(finite)
-        out.append(("issue 21: compiled Moreau-Jean faster than Siconos' Moreau-Jean at equal error (the levels "
+        out.append(("compiled Moreau-Jean faster than Siconos' Moreau-Jean at equal error (the levels "
                     "Siconos reaches, rigid scenes)", f"met at {len(met)} of {len(ratios_cmj)} (scene, level) pairs"
                     + (f"; worst {fr(worst[2])} ({worst[0]}, {worst[1]} rad)" if worst else "")
                     + (f"; the compiled Moreau-Jean does not reach {nr} of them" if nr else ""),
@@ -415,14 +415,14 @@ def _compiled_targets(res):
             continue
         v = r["raw_us_per_internal_step"] if scheme == "moreau_jean" else r["raw_us"]
         api = r["api_us"] / (r["internal_steps"] / r["steps"]) if scheme == "moreau_jean" else r["api_us"]
-        out.append((f"issue 21: compiled {scheme.replace('_', '-')}, {kind}, ≤ {lim:g} µs {what} on the "
+        out.append((f"compiled {scheme.replace('_', '-')}, {kind}, ≤ {lim:g} µs {what} on the "
                     f"{r['steps'] * r['dt']:g} s record (impacts included)",
                     f"{v:.2f} µs raw engine loop, {api:.2f} µs through `Simulator.advance` ({r['impacts']} impacts)",
                     "yes" if v <= lim else f"**no** ({v / lim:.1f}×)"))
     cold = comp.get("cold", {})
     if "import_to_first_step" in cold:
         v = cold["import_to_first_step"]
-        out.append(("issue 21: cold start of the compiled engine from Python (import → first step) < 50 ms",
+        out.append(("cold start of the compiled engine from Python (import → first step) < 50 ms",
                     f"{ft(v)} (numpy's import {ft(cold['numpy_import'])} of it; the package's import "
                     f"{ft(cold['package_import'])}; Simulator + first step {ft(cold['first_step'])})",
                     "yes" if v < 0.05 else f"**no** ({v / 0.05:.1f}×)"))
@@ -430,14 +430,14 @@ def _compiled_targets(res):
     if "samples" in mem:
         s = mem["samples"]
         r0, r1 = s[1]["rss_mib"], s[-1]["rss_mib"]
-        out.append(("issue 21: memory flat over a 10-minute record (compiled engine)",
+        out.append(("memory flat over a 10-minute record (compiled engine)",
                     f"RSS {r0:.2f} MiB after 30 s, {r1:.2f} at {s[-1]['t']:.0f} s ({s[-1]['impacts']} impacts; "
                     f"impact log bounded at {mem['impact_log_len']} rows)",
                     "yes" if r1 <= r0 * 1.005 else "**no**"))
     ens = res.get("ensemble", {})
     if "best" in ens:
         v = ens["best_over_python"]
-        out.append(("issue 21: ensembles ≥ 50× the cases per second of the Python engine's serial run "
+        out.append(("ensembles ≥ 50× the cases per second of the Python engine's serial run "
                     "(docs/performance/ensemble.md)",
                     f"{ens['best']:.0f} cases/s against {ens['python_serial']:.0f} ({v:.0f}×; compiled serial "
                     f"{ens['compiled_serial']:.0f} cases/s)", "yes" if v >= 50 else f"**no** ({v:.0f}×)"))
