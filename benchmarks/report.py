@@ -38,6 +38,12 @@ def fr(r) -> str:
     return f"{r:.2g}×" if r < 10 else f"{r:.0f}×"
 
 
+def shown_label(label: str) -> str:
+    """A contender's label as the pages show it: "package ..." (the results' name of the Python engine's runs)
+    as "Python engine ...", next to "compiled ..."."""
+    return "Python engine" + label[len("package"):] if label.startswith("package ") else label
+
+
 def fsetting(s: dict) -> str:
     return ", ".join(f"{k} {v:g}" for k, v in s.items())
 
@@ -73,7 +79,7 @@ def plot_work_precision(res, path: Path):
             style = "--" if "max_step" in lab else "-"
             # an error below the reference's own accuracy is not measured: drawn on the floor, hollow
             shown = np.maximum(err, floor)
-            line, = ax.loglog(t, shown, style, lw=1.0, label=lab, color=color)
+            line, = ax.loglog(t, shown, style, lw=1.0, label=shown_label(lab), color=color)
             low = err <= floor
             at_floor += int(low.sum())
             ax.loglog(np.array(t)[~low], shown[~low], "o", ms=4, color=line.get_color())
@@ -606,7 +612,7 @@ def _scenes_section(res, w, imgs):
         w("|" + " --- |" * len(head))
         for e in sc["entries"]:
             er = e["errors"]
-            cells = [e["label"], fsetting(e["setting"]), ft(e["time"]), str(len(e["times"])), str(e["n_steps"]),
+            cells = [shown_label(e["label"]), fsetting(e["setting"]), ft(e["time"]), str(len(e["times"])), str(e["n_steps"]),
                      fe(er.get("phi_end")), fe(er.get("phi_max")), fe(er.get("impact3"))]
             if flex:
                 cells += [fe(er.get("top_displacement_end")), fe(er.get("top_displacement_max"))]
