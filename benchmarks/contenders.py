@@ -61,10 +61,11 @@ def _outputs(res) -> dict:
     return out
 
 
-def run_package(scene: Scene, scheme: str, **settings) -> dict:
-    """One run of ``simulate`` (the public API) on the scene's grid."""
+def run_package(scene: Scene, scheme: str, engine: str = "python", **settings) -> dict:
+    """One run of ``simulate`` (the public API) on the scene's grid, on the Python engine (the reference
+    implementation) or the compiled one (``engine="c"``)."""
     res = simulate(scene.model(), scene.ground_motion(), scene.t_end, scheme=scheme, output_interval=scene.grid,
-                   hold="exact", **scene.initial, **settings)
+                   hold="exact", engine=engine, **scene.initial, **settings)
     return _outputs(res)
 
 

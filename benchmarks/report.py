@@ -8,7 +8,7 @@ import numpy as np
 
 LEVELS = ("1e-02", "1e-03", "1e-04", "1e-05", "1e-06", "1e-07", "1e-08")
 COLORS = {"package Moreau-Jean": "tab:blue", "package event-driven": "tab:red", "solve_ivp DOP853": "tab:green",
-          "Siconos Moreau-Jean": "tab:purple"}
+          "Siconos Moreau-Jean": "tab:purple", "compiled Moreau-Jean": "tab:cyan", "compiled event-driven": "tab:orange"}
 
 
 # ------------------------------------------------------------------------------------------------ formatting
@@ -36,6 +36,12 @@ def fr(r) -> str:
     if math.isinf(r):
         return "∞"
     return f"{r:.2g}×" if r < 10 else f"{r:.0f}×"
+
+
+def shown_label(label: str) -> str:
+    """A contender's label as the pages show it: "package ..." (the results' name of the Python engine's runs)
+    as "Python engine ...", next to "compiled ..."."""
+    return "Python engine" + label[len("package"):] if label.startswith("package ") else label
 
 
 def fsetting(s: dict) -> str:
@@ -73,7 +79,7 @@ def plot_work_precision(res, path: Path):
             style = "--" if "max_step" in lab else "-"
             # an error below the reference's own accuracy is not measured: drawn on the floor, hollow
             shown = np.maximum(err, floor)
-            line, = ax.loglog(t, shown, style, lw=1.0, label=lab, color=color)
+            line, = ax.loglog(t, shown, style, lw=1.0, label=shown_label(lab), color=color)
             low = err <= floor
             at_floor += int(low.sum())
             ax.loglog(np.array(t)[~low], shown[~low], "o", ms=4, color=line.get_color())
@@ -252,14 +258,15 @@ def write_report(res, docs: Path) -> Path:
     w(f"- Library commit: {info['commit']}")
     w(f"- Timing: median of up to {res['repeats']} repeats per setting (fewer once a setting's runs took "
       f"{res['budget']:g} s; the count is in the tables), single process, one contender at a time, "
-      "`time.perf_counter` around the whole public call (`simulate(...)` for the package, the full restart loop "
-      "for the baseline, the stepping loop incl. model set-up for Siconos).")
+      "`time.perf_counter` around the whole public call (`simulate(...)` for the package, on the Python engine and "
+      "on the compiled one with `engine=\"c\"`, whose runs get at least 9 repeats within a budget of 2 s; the full "
+      "restart loop for the baseline, the stepping loop incl. model set-up for Siconos).")
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
     w("")
     w("How to run: `python -m benchmarks` (full, regenerates this page and `docs/performance/*.png`) "
       "or `python -m benchmarks --quick` (smoke run, written to `benchmarks/results/quick/`). Options: "
-      "`--skip-siconos --skip-fmu --skip-memory --repeats N --scenes free record ...`.")
+      "`--skip-siconos --skip-fmu --skip-memory --skip-ensemble --skip-friction --repeats N --scenes free record ...`.")
     w("")
     verdicts = _targets(res)
     w("## Targets")
@@ -271,6 +278,8 @@ def write_report(res, docs: Path) -> Path:
     w("")
     _scenes_section(res, w, imgs)
     _orders_section(res, w, imgs)
+    _compiled_section(res, w)
+    _ensemble_section(res, w)
     _fmu_section(res, w)
     _memory_section(res, w, imgs)
     _checks_section(res, w)
@@ -311,11 +320,36 @@ def _targets(res):
             txt += f"; package does not reach {len(nr)} pair(s)"
         return txt, ("yes" if len(met) == len(ratios) else "**no**")
 
+    ratios_cb, ratios_cmj = [], []
+    for sc in res["scenes"].values():
+        if sc.get("kind") != "rigid":
+            continue
+        for lvl, row in sc.get("equal_error", {}).items():
+            if "ratio_c_baseline" in row:
+                ratios_cb.append((sc["name"], lvl, row["ratio_c_baseline"]))
+            # the levels Siconos reaches (elsewhere it has no time to compare); nan: the compiled MJ does not
+            sic = row.get("siconos")
+            if "ratio_cmj_siconos" in row and sic and not math.isnan(sic["time"]):
+                ratios_cmj.append((sc["name"], lvl, row["ratio_cmj_siconos"]))
+    m, ok = summary(ratios_cb, 50.0)
+    out.append(("compiled engine's best scheme ≥ 50× faster than the solve_ivp baseline at equal max "
+                "error, every level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
+    if ratios_cmj:
+        met = [r for r in ratios_cmj if r[2] > 1]
+        finite = [r for r in ratios_cmj if not math.isnan(r[2])]
+        worst = min(finite, key=lambda r: r[2]) if finite else None
+        nr = len(ratios_cmj) - len(finite)
+        out.append(("compiled Moreau-Jean faster than Siconos' Moreau-Jean at equal error (the levels "
+                    "Siconos reaches, rigid scenes)", f"met at {len(met)} of {len(ratios_cmj)} (scene, level) pairs"
+                    + (f"; worst {fr(worst[2])} ({worst[0]}, {worst[1]} rad)" if worst else "")
+                    + (f"; the compiled Moreau-Jean does not reach {nr} of them" if nr else ""),
+                    "yes" if len(met) == len(ratios_cmj) else "**no**"))
+    out += _compiled_targets(res)
     m, ok = summary(ratios_b, 5.0)
-    out.append(("package's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
+    out.append(("Python engine's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
                 "level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
     m, ok = summary(ratios_s, 10.0)
-    out.append(("≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
+    out.append(("Python engine ≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
     fmu = res.get("fmu", {})
     for key, name in (("rigid", "rigid"), ("flexible", "flexible")):
         c = fmu.get(key, {})
@@ -324,11 +358,21 @@ def _targets(res):
             if b:
                 m = (f"{fr(b['ratio_null'])} the do-nothing FMU ({ft(b['time'])} vs {ft(fmu['null']['time'])} for "
                      f"{fmu['steps']} steps; cheapest setting with error ≤ 1e-4: {b['label']}, error {fe(b['phi_max_err'])})")
-                ok = "yes" if b["ratio_null"] <= c["target"] else f"**no** ({b['ratio_null'] / c['target']:.0f}× over)"
+                ok = "yes" if b["ratio_null"] <= c["target"] else f"**no** ({b['ratio_null'] / c['target']:.1f}× over)"
             else:
                 m, ok = "no setting reached max |φ| error ≤ 1e-4", "**no**"
         else:
             m, ok = c.get("skipped", fmu.get("error", "not measured")), "–"
+        group = fmu.get("engines", {}).get(key)
+        if group and "rows" in c:
+            # the verdict from the interleaved rounds (the FMU and the do-nothing FMU measured side by side)
+            good = [(lab, r) for lab, r in group.items() if isinstance(r, dict) and r["phi_err_c"] <= 1e-4]
+            if good:
+                lab, r = min(good, key=lambda x: x[1]["ratio_c"])
+                m = (f"{fr(r['ratio_c'])} the do-nothing FMU ({r['c_us']:.2f} µs vs {group['null_us']:.2f} µs per "
+                     f"step, fastest of {group['rounds']} interleaved rounds; {lab}, error {fe(r['phi_err_c'])}; "
+                     f"the Python engine's FMU {fr(r['ratio_python'])})")
+                ok = "yes" if r["ratio_c"] <= c["target"] else f"**no** ({r['ratio_c'] / c['target']:.2f}× over)"
         pga = c.get("pga_g", 0.4)
         out.append((f"FMU ({name}) over the {fmu.get('duration', 30):g} s record"
                     + (f" (scaled to PGA {pga:.2g} g)" if abs(pga - 0.4) > 1e-9 else "")
@@ -362,6 +406,109 @@ def _targets(res):
         ok = all(o["order_fixed_vs_h"][0] >= 4 for o in orders.values())
         out.append(("event-driven order ≥ 4 before reaching its tolerance", txt, "yes" if ok else "**no**"))
     return out
+
+
+def _compiled_targets(res):
+    """Issue 21's targets measured by benchmarks/compiled_bench.py, memory.py (engine c), ensemble_bench.py."""
+    out = []
+    comp = res.get("compiled", {})
+    rows = {(r["kind"], r["scheme"]): r for r in comp.get("per_step", {}).get("rows", [])}
+    for (kind, scheme), lim, what in ((("rigid", "event_driven"), 1.0, "per communication step"),
+                                      (("flexible", "event_driven"), 5.0, "per communication step"),
+                                      (("rigid", "moreau_jean"), 1.0, "per Moreau-Jean time step")):
+        r = rows.get((kind, scheme))
+        if not r:
+            continue
+        v = r["raw_us_per_internal_step"] if scheme == "moreau_jean" else r["raw_us"]
+        api = r["api_us"] / (r["internal_steps"] / r["steps"]) if scheme == "moreau_jean" else r["api_us"]
+        out.append((f"compiled {scheme.replace('_', '-')}, {kind}, ≤ {lim:g} µs {what} on the "
+                    f"{r['steps'] * r['dt']:g} s record (impacts included)",
+                    f"{v:.2f} µs raw engine loop, {api:.2f} µs through `Simulator.advance` ({r['impacts']} impacts)",
+                    "yes" if v <= lim else f"**no** ({v / lim:.1f}×)"))
+    cold = comp.get("cold", {})
+    if "import_to_first_step" in cold:
+        v = cold["import_to_first_step"]
+        out.append(("cold start of the compiled engine from Python (import → first step) < 50 ms",
+                    f"{ft(v)} (numpy's import {ft(cold['numpy_import'])} of it; the package's import "
+                    f"{ft(cold['package_import'])}; Simulator + first step {ft(cold['first_step'])})",
+                    "yes" if v < 0.05 else f"**no** ({v / 0.05:.1f}×)"))
+    mem = res.get("memory_c", {})
+    if "samples" in mem:
+        s = mem["samples"]
+        r0, r1 = s[1]["rss_mib"], s[-1]["rss_mib"]
+        out.append(("memory flat over a 10-minute record (compiled engine)",
+                    f"RSS {r0:.2f} MiB after 30 s, {r1:.2f} at {s[-1]['t']:.0f} s ({s[-1]['impacts']} impacts; "
+                    f"impact log bounded at {mem['impact_log_len']} rows)",
+                    "yes" if r1 <= r0 * 1.005 else "**no**"))
+    ens = res.get("ensemble", {})
+    if "best" in ens:
+        v = ens["best_over_python"]
+        out.append(("ensembles ≥ 50× the cases per second of the Python engine's serial run "
+                    "(docs/performance/ensemble.md)",
+                    f"{ens['best']:.0f} cases/s against {ens['python_serial']:.0f} ({v:.0f}×; compiled serial "
+                    f"{ens['compiled_serial']:.0f} cases/s)", "yes" if v >= 50 else f"**no** ({v:.0f}×)"))
+    return out
+
+
+def _compiled_section(res, w):
+    comp = res.get("compiled")
+    if not comp:
+        return
+    w("## Compiled engine: per communication step and cold start")
+    w("")
+    if "error" in comp:
+        w("Compiled-engine benchmark failed:\n\n```\n" + comp["error"][-2000:] + "\n```\n")
+        return
+    ps = comp.get("per_step", {})
+    if ps.get("rows"):
+        r0 = ps["rows"][0]
+        w(f"The first {r0['steps'] * r0['dt']:g} s of the synthetic record (`benchmarks.scenes.synthetic_record`) in "
+          f"{r0['dt']:g} s communication steps ({r0['steps']} steps), `ag` held over each step, the outputs read after "
+          "each (`benchmarks/compiled_bench.py`; fastest of 5 runs, 3 in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
+          "`Engine.output_row()` on `rocking_model._engine.Engine`; *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
+          "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
+          "`Simulator.advance` loop on the Python engine. |Δφ|: max difference of φ after each step between the "
+          "compiled and the Python engine (same algorithm, same steps).")
+        w("")
+        w("| model | scheme, settings | record PGA | impacts | raw [µs/step] | API [µs/step] | simulate [µs/step] | "
+          "Python [µs/step] | Python / raw | internal steps | raw per internal step [µs] | max |Δφ| C vs Python [rad] |")
+        w("|" + " --- |" * 12)
+        for r in ps["rows"]:
+            w(f"| {r['kind']} | {r['scheme']}, {fsetting(r['settings'])} | {r['pga_g']:.2g} g | {r['impacts']} | "
+              f"{r['raw_us']:.2f} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {r['python_us']:.1f} | "
+              f"{fr(r['python_over_raw'])} | {r['internal_steps']} | {r['raw_us_per_internal_step']:.2f} | "
+              f"{fe(r['max_dphi_c_python'])} |")
+        w("")
+    cold = comp.get("cold", {})
+    if "import_to_first_step" in cold:
+        w(f"Cold start (fresh interpreter, median of {len(cold['samples'])}): from `import numpy` / `import "
+          f"rocking_model` to the end of the first 0.01 s step of `Simulator(RigidBlock(b=0.4, h=2.0), engine=\"c\")`: "
+          f"**{ft(cold['import_to_first_step'])}** = numpy's import {ft(cold['numpy_import'])} + the package's "
+          f"import {ft(cold['package_import'])} + Simulator and first step {ft(cold['first_step'])}.")
+        w("")
+    elif "error" in cold:
+        w(f"Cold start failed: {failure_line(cold['error'])}")
+        w("")
+    w("MuJoCo's rollout is not measured: the `mujoco` distribution that the package registry here serves is a "
+      "pure-Python wheel without the simulator's binary, so MuJoCo cannot be installed on this machine.")
+    w("")
+
+
+def _ensemble_section(res, w):
+    ens = res.get("ensemble")
+    if not ens:
+        return
+    w("## Ensembles")
+    w("")
+    if "error" in ens:
+        w(f"Ensemble benchmark failed: {failure_line(ens['error'])}")
+        w("")
+        return
+    w(f"`benchmarks/ensemble_bench.py` (its page: [ensemble.md](performance/ensemble.md)): {ens['cases']} one-sine "
+      f"pulse cases on the compiled engine, best {ens['best']:.0f} cases/s, {ens['best_over_python']:.0f}× the "
+      f"Python engine's serial run ({ens['python_serial']:.0f} cases/s on its first {ens['python_cases']} cases); "
+      f"compiled serially {ens['compiled_serial']:.0f} cases/s.")
+    w("")
 
 
 def _mj_orders(res):
@@ -419,22 +566,27 @@ def _scenes_section(res, w, imgs):
     w("")
     w("Time each contender needs for a given max |φ − φ_ref| (linear interpolation in log-log on its "
       "work-precision front; *≤* = its cheapest run is already below the level, so the time is an upper bound; "
-      "n/r = not reached by any setting). Ratio = contender time / package's best time (> 1: the package is "
-      "faster).")
+      "n/r = not reached by any setting). *C* = the compiled engine (`simulate(..., engine=\"c\")`), *Python* = the "
+      "Python engine (the reference implementation, `engine=\"python\"`), each at its best scheme at that level; "
+      "ratio = the other's time / that engine's time (> 1: the engine is faster); *Siconos / C MJ* compares the two "
+      "Moreau-Jean implementations.")
     w("")
     for sc in res["scenes"].values():
         ee = sc.get("equal_error")
         if not ee:
             continue
-        names = {"package": "package best", "package Moreau-Jean": "MJ", "package event-driven": "ED",
+        names = {"compiled": "compiled best", "compiled Moreau-Jean": "C MJ", "compiled event-driven": "C ED",
+                 "package": "Python best", "package Moreau-Jean": "Py MJ", "package event-driven": "Py ED",
                  "baseline": "solve_ivp (best variant)", "siconos": "Siconos"}
         fams = [f for f in names if f in ee[LEVELS[0]]]
         w(f"**{sc['title']}**")
         w("")
         head = ["error [rad]"] + [names[f] for f in fams]
-        has_b = "ratio_baseline" in ee[LEVELS[0]]
-        has_s = "ratio_siconos" in ee[LEVELS[0]]
-        head += (["vs solve_ivp"] if has_b else []) + (["vs Siconos"] if has_s else [])
+        ratio_cols = [(k, t) for k, t in (("ratio_c_baseline", "solve_ivp / C"), ("ratio_c_siconos", "Siconos / C"),
+                                          ("ratio_cmj_siconos", "Siconos / C MJ"), ("ratio_c_package", "Python / C"),
+                                          ("ratio_baseline", "solve_ivp / Python"), ("ratio_siconos", "Siconos / Python"))
+                      if k in ee[LEVELS[0]]]
+        head += [t for _, t in ratio_cols]
         w("| " + " | ".join(head) + " |")
         w("|" + " --- |" * len(head))
         for lvl in LEVELS:
@@ -443,10 +595,7 @@ def _scenes_section(res, w, imgs):
             for f in fams:
                 t, how = row[f]["time"], row[f]["how"]
                 cells.append(("≤ " if how == "cheapest" else "") + ft(t) if how != "not reached" else "n/r")
-            if has_b:
-                cells.append(fr(row["ratio_baseline"]))
-            if has_s:
-                cells.append(fr(row["ratio_siconos"]))
+            cells += [fr(row[k]) for k, _ in ratio_cols]
             w("| " + " | ".join(cells) + " |")
         w("")
     w("### All runs")
@@ -463,7 +612,7 @@ def _scenes_section(res, w, imgs):
         w("|" + " --- |" * len(head))
         for e in sc["entries"]:
             er = e["errors"]
-            cells = [e["label"], fsetting(e["setting"]), ft(e["time"]), str(len(e["times"])), str(e["n_steps"]),
+            cells = [shown_label(e["label"]), fsetting(e["setting"]), ft(e["time"]), str(len(e["times"])), str(e["n_steps"]),
                      fe(er.get("phi_end")), fe(er.get("phi_max")), fe(er.get("impact3"))]
             if flex:
                 cells += [fe(er.get("top_displacement_end")), fe(er.get("top_displacement_max"))]
@@ -546,10 +695,31 @@ def _fmu_section(res, w):
         b = c.get("best")
         if b:
             w(f"Cheapest setting at error ≤ 1e-4: {b['label']}. The same run through the Python API "
-              f"(`simulate(..., hold='zoh')`): {ft(c['python_same_settings'])}; end-to-end `fmpy.simulate_fmu` "
+              f"(`simulate(..., hold='zoh')`): {ft(c['python_same_settings'])} on the Python engine, "
+              f"{ft(c.get('c_same_settings'))} on the compiled one; end-to-end `fmpy.simulate_fmu` "
               f"(FMU already extracted): {ft(c['simulate_fmu'])} vs {ft(c['simulate_fmu_null'])} for the do-nothing "
               "FMU.")
             w("")
+    eng = fmu.get("engines")
+    if eng and "error" in eng:
+        w(f"FMUs on each engine failed: {failure_line(eng['error'])}")
+        w("")
+    elif eng:
+        w("**The FMUs on each engine** (`benchmarks/fmu_bench.py` `engine_rows`: the same fmpy loop, the FMU's engine "
+          "chosen by `ROCKING_FMU_ENGINE` = c, the default, or python, the reference; each FMU and the do-nothing FMU "
+          "in interleaved rounds, the fastest round of each; error: max |φ| difference from `simulate(..., "
+          "hold='zoh', tolerance=1e-12)`)")
+        w("")
+        w("| FMU setting | steps | do-nothing FMU [µs/step] | compiled engine [µs/step] | × do-nothing | Python engine "
+          "[µs/step] | × do-nothing | max |φ err| compiled [rad] |")
+        w("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        for group in eng.values():
+            for label, r in group.items():
+                if not isinstance(r, dict):
+                    continue
+                w(f"| {label} | {group['steps']} | {group['null_us']:.2f} | {r['c_us']:.2f} | {fr(r['ratio_c'])} | "
+                  f"{r['python_us']:.2f} | {fr(r['ratio_python'])} | {fe(r['phi_err_c'])} |")
+        w("")
     cold = fmu.get("cold", {})
     if cold:
         w("Cold start, fresh interpreter per sample (median of 3): `FMU2Slave()` + instantiate + setup + "
@@ -596,6 +766,18 @@ def _memory_section(res, w, imgs):
     w("")
     if imgs.get("memory"):
         w("![memory](performance/memory.png)")
+        w("")
+    mc = res.get("memory_c")
+    if mc and "samples" in mc:
+        s = mc["samples"]
+        w(f"The same record through `Simulator(engine=\"c\")` (fresh interpreter, wall {ft(mc['wall_s'])}): RSS "
+          f"{s[0]['rss_mib']:.2f} MiB at start, {s[1]['rss_mib']:.2f} after 30 s, {s[-1]['rss_mib']:.2f} at "
+          f"{s[-1]['t']:.0f} s after {s[-1]['impacts']} impacts: the engine's impact log is a bounded ring "
+          f"({mc['impact_log_len']} rows held; `impact_times` {mc['impact_times_len']} entries, bounded by "
+          "`impact_log_size`).")
+        w("")
+    elif mc and "error" in mc:
+        w(f"Memory (compiled engine) failed: {failure_line(mc['error'])}")
         w("")
 
 
@@ -658,7 +840,7 @@ def _method_section(w):
       "a soft and a stiff column.")
     w("- Errors: |φ(T) − φ_ref(T)|; max over the 0.01 s grid of |φ − φ_ref| (the headline measure); max error of "
       "the first three impact times; for the flexible oscillator also the top displacement.")
-    w("- Contenders: `simulate(...)` with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
+    w("- Contenders: `simulate(...)` on each engine (the compiled one, `engine=\"c\"`, and the Python reference) with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
       "event-driven scheme); a solve_ivp baseline (`benchmarks/baseline.py`: Housner's single-DOF equation, DOP853, "
       "terminal events for impact and overturning, Housner's r at each impact, restart loop, the same Zeno "
       "threshold; for the record also with max_step = the sampling step); Siconos' MoreauJeanOSI + "
@@ -667,6 +849,6 @@ def _method_section(w):
       "its impact outcome needs the impact LCP with the u-dependent coupling (the paper's appendix, Eqs. 48–55), i.e. the "
       "package's own machinery.")
     w("- Equal-error comparison: each contender's (median time, error) points are reduced to their Pareto "
-      "front and interpolated linearly in log-log; the package's best time at a level is the faster of its two "
+      "front and interpolated linearly in log-log; an engine's best time at a level is the faster of its two "
       "schemes.")
     w("")

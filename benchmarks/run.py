@@ -64,7 +64,7 @@ def _entry(contender, label, setting, times, sol, ref, names, window):
     return {"contender": contender, "label": label, "setting": setting, "times": times,
             "time": C.median(times), "n_steps": int(sol.get("n_steps", 0) or 0),
             "errors": analysis.errors(sol, ref, names, window), "overturned": bool(sol.get("overturned", False)),
-            "wrong_side": C.wrong_side(sol) if contender == "event_driven" else None}
+            "wrong_side": C.wrong_side(sol) if contender in ("event_driven", "c_event_driven") else None}
 
 
 def bench_scene(scene: S.Scene, args) -> dict:
@@ -113,6 +113,20 @@ def bench_scene(scene: S.Scene, args) -> dict:
         out["entries"].append(_entry("event_driven", "package event-driven", {"tolerance": tol}, times, sol, ref,
                                      names, window))
     log(f"  package sweeps done ({time.perf_counter() - t0:.0f} s)")
+    # the compiled engine (issue 21): the same schemes and settings through simulate(engine="c")
+    # (finer Moreau-Jean steps too: cheap on the compiled engine, they extend its curve to smaller errors; more
+    # repeats within the same budget: its runs last about a millisecond, where one run's noise is large)
+    c_reps, c_budget = max(reps, 9), min(budget, 2.0)
+    for dt in tuple(scene.mj_dts) + (() if args.quick else (1e-4, 5e-5, 2e-5)):
+        sol, times = C.timed(lambda: C.run_package(scene, "moreau_jean", engine="c", dt_max=dt), c_reps, c_budget)
+        out["entries"].append(_entry("c_moreau_jean", "compiled Moreau-Jean", {"dt_max": dt}, times, sol, ref,
+                                     names, window))
+    for tol in scene.ed_tols:
+        sol, times = C.timed(lambda: C.run_package(scene, "event_driven", engine="c", tolerance=tol), c_reps,
+                             c_budget)
+        out["entries"].append(_entry("c_event_driven", "compiled event-driven", {"tolerance": tol}, times, sol,
+                                     ref, names, window))
+    log(f"  compiled sweeps done ({time.perf_counter() - t0:.0f} s)")
     if scene.kind == "rigid":
         for tol in scene.base_tols:
             sol, times = C.timed(lambda: C.run_baseline(scene, tol), reps, budget)
@@ -146,12 +160,16 @@ def bench_scene(scene: S.Scene, args) -> dict:
 def equal_error(entries, measure: str = "phi_max") -> dict:
     """Time of each contender at each error level: linear interpolation in log-log on the work-precision front
     of each curve (one curve per label: a scheme, or a baseline variant). The package's best time is the faster
-    of its schemes at that level, the baseline's the faster of its variants; ratios = other / package."""
+    of its schemes at that level (family "package": the Python engine, "compiled": the C engine), the
+    baseline's the faster of its variants; ratios = other / package, and ratio_c_* = other / compiled
+    (ratio_c_package: the Python engine against the compiled one; ratio_cmj_siconos: Siconos' Moreau-Jean
+    against the compiled Moreau-Jean)."""
     curves: dict[str, list] = {}
     family = {}
     for e in entries:
         curves.setdefault(e["label"], []).append((e["time"], e["errors"].get(measure, math.nan)))
-        family[e["label"]] = {"moreau_jean": "package", "event_driven": "package"}.get(e["contender"], e["contender"])
+        family[e["label"]] = {"moreau_jean": "package", "event_driven": "package", "c_moreau_jean": "compiled",
+                              "c_event_driven": "compiled"}.get(e["contender"], e["contender"])
         family[e["contender"]] = family[e["label"]]
     res = {}
     for lvl in LEVELS:
@@ -178,6 +196,18 @@ def equal_error(entries, measure: str = "phi_max") -> dict:
                 else:
                     ratio = to / tp
                 row[f"ratio_{other}"] = ratio
+
+        def ratio(num, den):
+            if num not in row or den not in row:
+                return None
+            a, b = row[num]["time"], row[den]["time"]
+            return math.nan if math.isnan(b) else math.inf if math.isnan(a) else a / b
+        for key, num, den in (("ratio_c_baseline", "baseline", "compiled"), ("ratio_c_siconos", "siconos", "compiled"),
+                              ("ratio_c_package", "package", "compiled"),
+                              ("ratio_cmj_siconos", "siconos", "compiled Moreau-Jean")):
+            r = ratio(num, den)
+            if r is not None:
+                row[key] = r
         res[f"{lvl:.0e}"] = row
     return res
 
@@ -314,9 +344,13 @@ def bench_fmu(args) -> dict:
         t0 = time.perf_counter()
         simulate(model, (t, a), dur, scheme=scheme, output_interval=dt, hold="zoh", **kw)
         py = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        simulate(model, (t, a), dur, scheme=scheme, output_interval=dt, hold="zoh", engine="c", **kw)
+        py_c = time.perf_counter() - t0
         e2e = F.simulate_fmu_time(fmus[fmu_name], m.unzipdir, t, a, dt, sv_best)
         e2e_null = F.simulate_fmu_time(null, m0.unzipdir, t, a, dt, {}, output=("y",))
-        return {"rows": rows, "best": best, "target": target, "python_same_settings": py, "pga_g": 0.4 * scale,
+        return {"rows": rows, "best": best, "target": target, "python_same_settings": py,
+                "c_same_settings": py_c, "pga_g": 0.4 * scale,
                 "simulate_fmu": e2e, "simulate_fmu_null": e2e_null, "ref_phi_absmax": float(np.max(np.abs(ref["phi"])))}
 
     rigid_kw = dict(S.RECORD_BLOCK)
@@ -327,7 +361,7 @@ def bench_fmu(args) -> dict:
         ("event-driven tol 1e-8, dt_max uncapped", {"scheme": 1, "tolerance": 1e-8, "dt_max": big}),
         ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
         ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
-    ], rigid_kw, 2.0)
+    ], rigid_kw, 1.2)
     if "FlexibleRockingOscillator" in fmus:
         from fmpy import read_model_description
 
@@ -345,10 +379,28 @@ def bench_fmu(args) -> dict:
             ("event-driven tol 1e-10, dt_max uncapped", {"scheme": 1, "tolerance": 1e-10, "dt_max": big}),
             ("event-driven tol 1e-8, dt_max uncapped (FMU defaults)", {}),
             ("Moreau-Jean dt_max 1e-3 (scheme 0, other FMU defaults)", {"scheme": 0}),
-        ], flex_kw, 4.0, scale=0.75)
+        ], flex_kw, 1.4, scale=0.75)
         res["flexible"]["model"] = flex_kw
     else:
         res["flexible"] = {"skipped": "no FlexibleRockingOscillator FMU"}
+    if hasattr(F, "engine_rows"):
+        # the FMUs on each engine (ROCKING_FMU_ENGINE = c, the default, and python, the reference) in
+        # interleaved rounds, the minimum of the rounds (least disturbed by other load)
+        log("  FMUs on each engine")
+        rounds = 2 if args.quick else 5
+        try:
+            res["engines"] = {"rigid": F.engine_rows(fmus, null, t, a_full, dt, {
+                f"rigid event-driven tol {tol:g}": ("RigidRockingBlock", dict(rigid_kw, scheme=1, tolerance=tol,
+                                                                              dt_max=big)) for tol in (1e-6, 1e-8)},
+                rounds=rounds)}
+            if "FlexibleRockingOscillator" in fmus:
+                res["engines"]["flexible"] = F.engine_rows(fmus, null, t, a_full * 0.75, dt, {
+                    f"flexible event-driven tol {tol:g} (record at 0.3 g)": (
+                        "FlexibleRockingOscillator", dict(flex_kw, scheme=1, tolerance=tol, dt_max=big))
+                    for tol in (1e-8, 1e-10)}, rounds=rounds)
+        except Exception:
+            import traceback
+            res["engines"] = {"error": traceback.format_exc()}
     log("  cold starts")
     res["cold"] = {"NullSlave": F.cold_start(null, 3 if not args.quick else 1)}
     for name, p in fmus.items():
@@ -365,6 +417,41 @@ def bench_memory(args) -> dict:
     if r.returncode != 0:
         return {"error": r.stderr.strip()[-800:]}
     return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def bench_memory_c(args) -> dict:
+    """The same record through `Simulator(engine="c")` (fresh interpreter)."""
+    minutes = 1.0 if args.quick else 10.0
+    log(f"memory: {minutes:g} simulated minutes through Simulator(engine='c') (fresh interpreter)")
+    r = subprocess.run([sys.executable, "-m", "benchmarks.memory", str(minutes), "event_driven", "c"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=1800)
+    if r.returncode != 0:
+        return {"error": r.stderr.strip()[-800:]}
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+# ------------------------------------------------------------------------------------------------ compiled
+def bench_compiled(args) -> dict:
+    """The compiled engine per communication step and its cold start (benchmarks/compiled_bench.py)."""
+    from benchmarks import compiled_bench
+
+    log("compiled engine: per communication step, cold start")
+    return compiled_bench.main(args.quick)
+
+
+def bench_ensemble(args) -> dict:
+    """Ensemble throughput on Dask (benchmarks/ensemble_bench.py, its own page docs/performance/ensemble.md
+    and a JSON summary); run in a fresh interpreter, as a user runs it."""
+    log("ensembles: throughput on Dask")
+    out = ROOT / "benchmarks" / "results" / ("quick/ensemble.json" if args.quick else "ensemble.json")
+    page = (ROOT / "benchmarks" / "results" / "quick" / "ensemble.md" if args.quick
+            else ROOT / "docs" / "performance" / "ensemble.md")
+    cmd = [sys.executable, str(ROOT / "benchmarks" / "ensemble_bench.py"), "--out", str(page), "--json", str(out)]
+    r = subprocess.run(cmd + (["--quick"] if args.quick else []), cwd=ROOT, capture_output=True, text=True,
+                       timeout=1800)
+    if r.returncode != 0 or not out.exists():
+        return {"error": (r.stderr or r.stdout).strip()[-800:]}
+    return json.loads(out.read_text())
 
 
 # ------------------------------------------------------------------------------------------------ checks
@@ -478,6 +565,8 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-siconos", action="store_true")
     ap.add_argument("--skip-fmu", action="store_true")
     ap.add_argument("--skip-memory", action="store_true")
+    ap.add_argument("--skip-ensemble", action="store_true",
+                    help="skip the ensemble throughput (ensemble_bench.py, which writes docs/performance/ensemble.md)")
     ap.add_argument("--skip-friction", action="store_true",
                     help="skip the friction reports (friction_performance.py; siconos_friction.py where Siconos is "
                          "installed), which write docs/performance/friction*.md themselves")
@@ -533,10 +622,21 @@ def main(argv=None) -> int:
             import traceback
             res["fmu"] = {"error": traceback.format_exc()}
             log("FMU benchmark FAILED:\n" + res["fmu"]["error"])
+    try:
+        res["compiled"] = bench_compiled(args)
+    except Exception:
+        import traceback
+        res["compiled"] = {"error": traceback.format_exc()}
+        log("compiled-engine benchmark FAILED:\n" + res["compiled"]["error"])
     if args.skip_memory:
         res["skipped"]["memory"] = "--skip-memory"
     else:
         res["memory"] = bench_memory(args)
+        res["memory_c"] = bench_memory_c(args)
+    if args.skip_ensemble:
+        res["skipped"]["ensemble"] = "--skip-ensemble"
+    else:
+        res["ensemble"] = bench_ensemble(args)
     if args.skip_friction:
         res["skipped"]["friction"] = "--skip-friction"
     else:

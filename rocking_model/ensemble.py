@@ -210,10 +210,21 @@ def case_motion(case: dict):
 
 def case_model(case: dict):
     """The model of a case: the registered ``case["model"]`` (`rocking_model.models.MODELS`) with the case's
-    b, h, e_N and mu (inf where a file of an earlier version has none)."""
+    b, h, e_N and mu (inf where a file of an earlier version has none). The models are immutable, so one made
+    for the same (model, b, h, e_N, mu) of plain floats is reused (an ensemble has few geometries and many
+    motions; building and checking a model is a third of a compiled case's Python work)."""
     mu = case.get("mu", math.inf)
-    return model_class(case["model"])(b=case["b"], h=case["h"], e_N=case["e_N"],
-                                      mu=math.inf if mu != mu else mu)
+    mu = math.inf if mu != mu else mu
+    name, b, h, e_N = case["model"], case["b"], case["h"], case["e_N"]
+    if type(name) is str and type(b) is float and type(h) is float and type(e_N) is float and type(mu) is float:
+        return _cached_model(name, b, h, e_N, mu)
+    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu)
+
+
+@functools.lru_cache(maxsize=256)
+def _cached_model(name: str, b: float, h: float, e_N: float, mu: float):
+    """A model of plain float parameters (a failed check raises and is not cached)."""
+    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu)
 
 
 def run_case(case: dict) -> dict:
@@ -242,6 +253,11 @@ def run_case(case: dict) -> dict:
     return row
 
 
+#: the engine the cases run on (`Simulator`'s ``engine``): the compiled one; the benchmark sets "python" for its
+#: reference row
+ENGINE = "c"
+
+
 def _simulate_case(case: dict) -> dict:
     """The result fields of one case (raises on a bad case; `run_case` records it)."""
     import numpy as np
@@ -257,7 +273,7 @@ def _simulate_case(case: dict) -> dict:
     if case.get("dt_max") is not None and not math.isnan(float(case["dt_max"])):
         kw["dt_max"] = case["dt_max"]
     res = simulate(model, case_motion(case), case["t_end"], scheme=case["scheme"],
-                   output_interval=case["output_interval"], **kw)
+                   output_interval=case["output_interval"], engine=ENGINE, **kw)
     phi = np.abs(res.phi)
     over = np.asarray(res.overturned, dtype=bool)
     return dict(alpha=alpha, p=p, max_abs_phi=float(phi.max()),
@@ -706,6 +722,19 @@ _WORKER_CHECK = 0.25
 MAX_DEATHS_WITHOUT_PROGRESS = 8
 
 
+def _wait_for_ready(ac) -> None:
+    """Wait at most `_POLL` for a batch to finish: woken by as_completed's condition as soon as one does (a
+    plain sleep would add up to `_POLL` per task, more than a task of compiled cases costs), a sleep where
+    the as_completed has no such condition."""
+    cond = getattr(ac, "thread_condition", None)
+    if cond is None or not hasattr(ac, "has_ready"):
+        time.sleep(_POLL)
+        return
+    with cond:
+        if not ac.has_ready():
+            cond.wait(timeout=_POLL)
+
+
 def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> None:
     """Hand each batch's rows to ``take`` as it finishes; raise `WorkersLost` when the cluster has had no
     worker for ``no_workers_timeout`` seconds, when `MAX_DEATHS_WITHOUT_PROGRESS` workers died while no batch
@@ -733,7 +762,7 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
             no_worker_since = None
             deaths = 0
             continue
-        time.sleep(_POLL)
+        _wait_for_ready(ac)
         if time.monotonic() - t_check < _WORKER_CHECK:
             continue
         t_check = time.monotonic()
@@ -756,6 +785,19 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
                               "(fewer --workers, or --batch-size 1, need less memory)")
 
 
+#: [tasks] Dask tasks per worker by default: enough to balance cases of unequal cost, few enough that a task's
+#: scheduling and round trip (a few ms) stay small against its cases (0.1-1 ms each on the compiled engine)
+TASKS_PER_WORKER = 4
+#: [cases] the largest default batch (a batch's rows are written when it finishes)
+MAX_BATCH = 2000
+
+
+def default_batch_size(n_cases: int, n_workers: int) -> int:
+    """Cases per Dask task when ``batch_size`` is not given: about `TASKS_PER_WORKER` tasks per worker, at
+    most `MAX_BATCH` cases each."""
+    return max(1, min(MAX_BATCH, -(-n_cases // (TASKS_PER_WORKER * max(1, n_workers)))))
+
+
 def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str | None = None,
                  resume: bool = True, progress: bool = True, batch_size: int | None = None, processes: bool = True,
                  on_row: Callable[[dict], None] | None = None,
@@ -768,7 +810,7 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
         The workers need rocking_model installed (and the record files at the same paths).
     resume: skip the case ids already in ``out``; otherwise ``out`` must not exist yet.
     batch_size: cases per Dask task; larger batches amortize the few ms of scheduling and round trip per
-        task; default: about 20 tasks per worker, at most 20 cases each (rows are still written per task).
+        task; default: `default_batch_size` (about 4 tasks per worker; rows are written per task).
     no_workers_timeout: [s] a cluster without any worker for this long ends the run (`WorkersLost`;
         default `NO_WORKERS_TIMEOUT`).
 
@@ -851,7 +893,7 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
             t0 = time.perf_counter()
             n_w = max(1, len(client.scheduler_info().get("workers", {})))
             if batch_size is None:
-                batch_size = max(1, min(20, len(todo) // (20 * n_w)))
+                batch_size = default_batch_size(len(todo), n_w)
             summary["batch_size"] = batch_size
             batches = [todo[i:i + batch_size] for i in range(0, len(todo), batch_size)]
             _collect(client, client.map(run_batch, batches, pure=False), take, no_workers_timeout, out)

@@ -155,3 +155,50 @@ def test_friction_cases_and_ids():
     assert row["max_abs_phi"] == 0.0 and not row["overturned"]
     row = run_case(inf)
     assert not row["error"] and row["max_abs_slip"] == 0.0 and 0.3 < row["friction_demand"] < 0.6
+
+
+def test_cases_run_on_the_compiled_engine_with_the_python_engines_outcomes(monkeypatch):
+    """Issue 21: the cases run on the compiled engine (`ENGINE`), each row as simulate(engine="c") gives it;
+    the Python engine (the reference) gives the same outcome (overturned, impact count) and max |phi| within
+    the scheme's tolerance on cases far from the overturning boundary."""
+    from rocking_model import ensemble
+
+    assert ensemble.ENGINE == "c"
+    cases = pulse_cases("sine", amplitude_ratios=[1.5, 6.0], frequency_ratios=[2.0, 10.0])
+    rows = [run_case(c) for c in cases]
+    for c, row in zip(cases, rows):
+        assert row["error"] == ""
+        r = simulate(RigidBlock(b=0.2, h=1.0), SinePulse(c["A"], c["omega_p"]), c["t_end"], engine="c",
+                     tolerance=c["tolerance"], output_interval=c["output_interval"])
+        assert row["max_abs_phi"] == float(np.max(np.abs(r.phi))) and row["impacts"] == int(r.impacts[-1])
+    monkeypatch.setattr(ensemble, "ENGINE", "python")
+    for c, row in zip(cases, rows):
+        py = run_case(c)
+        assert (py["overturned"], py["impacts"]) == (row["overturned"], row["impacts"])
+        assert py["max_abs_phi"] == pytest.approx(row["max_abs_phi"], abs=1e-6)
+
+
+def test_models_are_shared_between_cases_and_bad_ones_still_refused():
+    """The immutable model of a (model, b, h, e_N, mu) of floats is built once per process; a bad value is
+    still refused with its message (and not cached), a value of another type is not shared."""
+    from rocking_model.ensemble import case_model
+
+    c = pulse_cases("sine", amplitude_ratios=[2.0], frequency_ratios=[4.0])[0]
+    assert case_model(c) is case_model(dict(c))
+    assert case_model(dict(c, b=1)) is not case_model(c) and case_model(dict(c, b=1)).b == 1
+    for _ in range(2):
+        row = run_case(dict(c, case_id="bad", b=-0.2))
+        assert "b = -0.2 is out of range" in row["error"], row["error"]
+
+
+def test_default_batches_are_a_few_per_worker():
+    """Few large tasks by default (a Dask round trip costs more than a compiled case): about 4 per worker,
+    at least one case each."""
+    from rocking_model.ensemble import MAX_BATCH, TASKS_PER_WORKER, default_batch_size
+
+    assert default_batch_size(2000, 2) == 2000 // (2 * TASKS_PER_WORKER)
+    assert default_batch_size(3, 2) == 1 and default_batch_size(1, 8) == 1
+    assert default_batch_size(10 ** 7, 1) == MAX_BATCH
+    n, w = 1001, 2
+    size = default_batch_size(n, w)
+    assert math.ceil(n / size) <= TASKS_PER_WORKER * w

@@ -31,13 +31,21 @@ def _rows_per_line(path):
 
 
 def _records(tmp_path):
-    """A short record (0.5 s: a Moreau-Jean case of about 0.3 s) and a long one (200 s: about 13 s),
-    both below uplift or rocking mildly, so no case overturns early and stops."""
+    """A short record (0.5 s) and a long one (200 s), both below uplift or rocking mildly, so no case
+    overturns early and stops. On the compiled engine (about 0.5 us per Moreau-Jean step) the tests that need
+    a run still going pass their own small dt_max (`SLOW_DT_SHORT`, `SLOW_DT_LONG`)."""
     t = np.arange(0, 0.5001, 0.01)
     short = write_csv(tmp_path / "short.csv", t, 0.3 * 9.80665 * np.sin(4 * np.pi * t), units="g")
     t = np.arange(0, 200.0001, 0.01)
     long = write_csv(tmp_path / "long.csv", t, 0.1 * 9.80665 * np.sin(4 * np.pi * t), units="g")
     return str(short), str(long)
+
+
+#: [s] Moreau-Jean steps that keep a run going on the compiled engine: a short-record case (5.5 s) then takes
+#: 4.4e6 steps (about 2.5 s; 8000 per 0.01 s output interval, within the default max_steps = 10000 of an
+#: advance), a long-record case (205 s) 2e7 steps of SLOW_DT_LONG (about 10 s)
+SLOW_DT_SHORT = 1.25e-6
+SLOW_DT_LONG = 1e-5
 
 
 def _cli(*args):
@@ -71,7 +79,7 @@ def test_second_run_on_one_output_is_refused_naming_the_first(tmp_path):
     keep the test short), and each case appears once."""
     short, _ = _records(tmp_path)
     out = tmp_path / "runs.csv"
-    argv = _cli("--record", short, "--scales", "0.2:1.2:12", "--scheme", "moreau_jean", "--dt-max", "2e-4",
+    argv = _cli("--record", short, "--scales", "0.2:1.2:12", "--scheme", "moreau_jean", "--dt-max", SLOW_DT_SHORT,
                 "--workers", "0", "--out", out)
     first = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -166,8 +174,8 @@ def test_run_whose_workers_are_all_killed_ends_with_a_clear_error(tmp_path):
     psutil = pytest.importorskip("psutil")
     short, long = _records(tmp_path)
     out = tmp_path / "runs.csv"
-    argv = _cli("--record", short, long, "--scales", "0.5", "1", "--scheme", "moreau_jean", "--workers", "2",
-                "--batch-size", "1", "--no-workers-timeout", "3", "--out", out)
+    argv = _cli("--record", short, long, "--scales", "0.5", "1", "--scheme", "moreau_jean", "--dt-max", SLOW_DT_LONG,
+                "--workers", "2", "--batch-size", "1", "--no-workers-timeout", "3", "--out", out)
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + RUN_TIMEOUT
     try:
@@ -204,7 +212,7 @@ def test_run_whose_workers_are_all_killed_ends_with_a_clear_error(tmp_path):
     # a rerun skips what finished (the long cases are left out here: a rerun of them takes minutes)
     done = set(after)
     from rocking_model.ensemble import record_cases
-    cases = record_cases([short], [0.5, 1.0], schemes=["moreau_jean"])
+    cases = record_cases([short], [0.5, 1.0], schemes=["moreau_jean"], dt_max=SLOW_DT_LONG)
     s = run_ensemble(cases, out, workers=0, progress=False)
     assert s["n_skipped"] == len(done & {c["case_id"] for c in cases}) >= 1
 

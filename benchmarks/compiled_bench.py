@@ -1,0 +1,137 @@
+"""The compiled engine per communication step, its cold start from Python (issue 21).
+
+Per step: the first 30 s of the synthetic record (the record scene's accelerogram, the FMU benchmark's) in
+0.01 s communication steps, ag held over each step (zero-order hold, as an FMU importer drives it), the
+outputs read after each step, through
+
+- the raw engine loop: `rocking_model._engine.Engine.advance(t, ag, 0, max_steps)` and `output_row()`
+  (what an FMU's doStep costs in C plus one Python call each);
+- `Simulator(engine="c").advance(t, ag)` and `outputs()` (the Python API);
+- `simulate(..., hold="zoh", engine="c")` (whole run);
+- the Python engine's `Simulator.advance` loop (the reference, for the ratio and the agreement).
+
+Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flexible oscillator under the
+record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
+and Moreau-Jean (dt_max 1e-3: ten time steps per communication step; its cost is also given per time step).
+
+Cold start: in a fresh interpreter, from `import rocking_model` to the end of the first 0.01 s step of a
+`Simulator(engine="c")` (median of several interpreters); the import of numpy, which the package needs anyway,
+is listed apart.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from benchmarks import scenes as S
+
+COLD = r"""
+import json, time
+t0 = time.perf_counter()
+import numpy
+t1 = time.perf_counter()
+from rocking_model import RigidBlock, Simulator
+t2 = time.perf_counter()
+sim = Simulator(RigidBlock(b=0.4, h=2.0), "event_driven", engine="c")
+sim.advance(0.01, 0.5)
+phi = sim.outputs()["phi"]
+t3 = time.perf_counter()
+print(json.dumps({"numpy_import": t1 - t0, "package_import": t2 - t1, "first_step": t3 - t2,
+                  "import_to_first_step": t3 - t0, "import_to_first_step_after_numpy": t3 - t1}))
+"""
+
+
+def cold_start(repeats: int = 5) -> dict:
+    samples = []
+    for _ in range(repeats):
+        r = subprocess.run([sys.executable, "-c", COLD], capture_output=True, text=True, timeout=120,
+                           cwd=tempfile.gettempdir())
+        if r.returncode != 0:
+            return {"error": r.stderr.strip()[-1500:]}
+        samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    return {k: sorted(s[k] for s in samples)[len(samples) // 2] for k in samples[0]} | {"samples": samples}
+
+
+def _best(fn, repeats: int):
+    """(result of the last run, the fastest of ``repeats`` wall times [s])."""
+    best, out = float("inf"), None
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return out, best
+
+
+def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
+    from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate
+
+    t, a = S.synthetic_record()
+    dt = 0.01
+    n = int(round(duration / dt))
+    cases = [
+        ("rigid", "event_driven", lambda: RigidBlock(**S.RECORD_BLOCK), 1.0, {"tolerance": 1e-8}),
+        ("rigid", "moreau_jean", lambda: RigidBlock(**S.RECORD_BLOCK), 1.0, {"dt_max": 1e-3}),
+        ("flexible", "event_driven", FlexibleOscillator, 0.75, {"tolerance": 1e-8}),
+        ("flexible", "moreau_jean", FlexibleOscillator, 0.75, {"dt_max": 1e-3}),
+    ]
+    out = []
+    for kind, scheme, make, scale, kw in cases:
+        ag = (a[:n] * scale).tolist()
+        times = [(k + 1) * dt for k in range(n)]
+
+        def raw():
+            sim = Simulator(make(), scheme, engine="c", **kw)
+            eng = sim.integrator._engine
+            adv, row = eng.advance, eng.output_row
+            j = eng.output_names.index("phi")
+            phis = []
+            for tk, ak in zip(times, ag):
+                adv(tk, ak, 0.0, 100000)
+                phis.append(row()[j])
+            return sim, phis
+
+        def api(engine):
+            def run():
+                sim = Simulator(make(), scheme, engine=engine, **kw)
+                phis = []
+                for tk, ak in zip(times, ag):
+                    sim.advance(tk, ak)
+                    phis.append(sim.outputs()["phi"])
+                return sim, phis
+            return run
+
+        (sim_raw, phi_raw), t_raw = _best(raw, repeats)
+        (sim_c, phi_c), t_api = _best(api("c"), repeats)
+        (sim_py, phi_py), t_py = _best(api("python"), 1)
+        res_sim, t_sim = _best(lambda: simulate(make(), (t[:n + 1], a[:n + 1] * scale), n * dt, scheme=scheme,
+                                                hold="zoh", engine="c", **kw), repeats)
+        n_internal = int(sim_c.integrator.n_steps)
+        row = {"kind": kind, "scheme": scheme, "settings": kw, "steps": n, "dt": dt, "pga_g": 0.4 * scale,
+               "impacts": int(sim_c.outputs()["impacts"]), "internal_steps": n_internal,
+               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py,
+               "raw_us": t_raw / n * 1e6, "api_us": t_api / n * 1e6, "simulate_us": t_sim / n * 1e6,
+               "python_us": t_py / n * 1e6, "python_over_raw": t_py / t_raw, "python_over_api": t_py / t_api,
+               "raw_us_per_internal_step": t_raw / max(1, n_internal) * 1e6,
+               "max_dphi_c_python": float(np.max(np.abs(np.array(phi_c) - np.array(phi_py)))),
+               "max_dphi_raw_api": float(np.max(np.abs(np.array(phi_raw) - np.array(phi_c)))),
+               "python_impacts": int(sim_py.outputs()["impacts"]),
+               "max_abs_phi": float(np.max(np.abs(phi_c)))}
+        out.append(row)
+        print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, API {row['api_us']:.2f}, simulate "
+              f"{row['simulate_us']:.2f}, Python {row['python_us']:.1f} ({row['python_over_raw']:.0f}x raw); "
+              f"{row['impacts']} impacts; |dphi| C-Python {row['max_dphi_c_python']:.1e}", flush=True)
+    return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}
+
+
+def main(quick: bool = False) -> dict:
+    return {"per_step": per_step(3 if quick else 5, 8.0 if quick else 30.0),
+            "cold": cold_start(2 if quick else 7)}
+
+
+if __name__ == "__main__":
+    print(json.dumps(main("--quick" in sys.argv), indent=1))

@@ -1,0 +1,46 @@
+"""The benchmark's equal-error table and targets (issue 21's compiled-engine rows) on made-up runs: the
+arithmetic only, nothing timed."""
+import math
+
+from benchmarks import report
+from benchmarks.run import equal_error
+
+
+def _e(contender, label, time, err):
+    return {"contender": contender, "label": label, "time": time, "errors": {"phi_max": err}, "setting": {}}
+
+
+def test_equal_error_compares_each_engine_with_the_baseline_and_siconos():
+    entries = [_e("event_driven", "package event-driven", 1e-2, 1e-9),
+               _e("c_event_driven", "compiled event-driven", 1e-4, 1e-9),
+               _e("c_moreau_jean", "compiled Moreau-Jean", 1e-3, 1e-3),
+               _e("c_moreau_jean", "compiled Moreau-Jean", 1e-2, 1e-4),
+               _e("baseline", "solve_ivp DOP853", 2e-2, 1e-9),
+               _e("siconos", "Siconos Moreau-Jean", 3e-2, 1e-2),
+               _e("siconos", "Siconos Moreau-Jean", 5e-1, 1e-3)]
+    ee = equal_error(entries)
+    row = ee["1e-03"]
+    assert row["compiled"]["by"] == "compiled event-driven"
+    assert math.isclose(row["ratio_c_baseline"], 200.0) and math.isclose(row["ratio_baseline"], 2.0)
+    assert math.isclose(row["ratio_c_package"], 100.0) and math.isclose(row["ratio_c_siconos"], 5000.0)
+    assert math.isclose(row["ratio_cmj_siconos"], 500.0)             # Siconos 0.5 s against 1 ms, both MJ
+    assert math.isinf(ee["1e-04"]["ratio_cmj_siconos"])              # Siconos does not reach 1e-4 rad
+    assert math.isnan(ee["1e-05"]["ratio_cmj_siconos"])              # neither does the compiled MJ 1e-5 rad
+    assert math.isnan(ee["1e-06"]["siconos"]["time"])
+
+
+def test_compiled_targets_read_the_per_step_cold_start_memory_and_ensemble_figures():
+    res = {"compiled": {"per_step": {"rows": [
+        {"kind": "rigid", "scheme": "event_driven", "raw_us": 0.8, "api_us": 1.5, "steps": 3000, "dt": 0.01,
+         "internal_steps": 3100, "impacts": 300, "raw_us_per_internal_step": 0.77},
+        {"kind": "rigid", "scheme": "moreau_jean", "raw_us": 4.0, "api_us": 5.0, "steps": 3000, "dt": 0.01,
+         "internal_steps": 30000, "impacts": 30, "raw_us_per_internal_step": 0.4},
+        {"kind": "flexible", "scheme": "event_driven", "raw_us": 6.0, "api_us": 7.0, "steps": 3000, "dt": 0.01,
+         "internal_steps": 5000, "impacts": 20, "raw_us_per_internal_step": 3.6}]},
+        "cold": {"import_to_first_step": 0.2, "numpy_import": 0.1, "package_import": 0.09, "first_step": 0.01}},
+        "ensemble": {"best": 9000.0, "python_serial": 150.0, "compiled_serial": 4000.0, "best_over_python": 60.0}}
+    rows = report._compiled_targets(res)
+    # rigid event-driven 0.8 <= 1 us, flexible 6 > 5 us, Moreau-Jean 0.4 us per time step, cold start 0.2 s,
+    # ensembles 60x
+    assert [ok for _, _, ok in rows] == ["yes", "**no** (1.2×)", "yes", "**no** (4.0×)", "yes"], rows
+    assert "0.40 µs raw engine loop" in rows[2][1] and "60×" in rows[4][1]
