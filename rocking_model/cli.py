@@ -459,7 +459,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", default="results/ensemble.csv", help="results file .csv or directory .parquet")
     g.add_argument("--workers", type=_count(0), default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
     g.add_argument("--address", help="scheduler address of an existing Dask cluster, e.g. tcp://10.0.0.5:8786")
-    g.add_argument("--batch-size", type=_count(1), help="cases per Dask task (default: ~20 tasks per worker, <= 20 cases)")
+    g.add_argument("--batch-size", type=_count(1), help="cases per Dask task (default: about ensemble.TASKS_PER_WORKER = 4 tasks per worker)")
     g.add_argument("--no-workers-timeout", dest="no_workers_timeout", type=_positive, metavar="SECONDS",
                    default=NO_WORKERS_TIMEOUT, help="end the run when the Dask cluster has had no worker for this "
                    "long [s] (default %(default)g); the finished cases stay in --out and a rerun resumes")

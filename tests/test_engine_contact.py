@@ -759,7 +759,8 @@ def test_contact_problems_of_python_runs(scene, monkeypatch):
         monkeypatch.setattr(event_driven, name, getattr(spy, name))
     for name in ("project_to_ground", "solve_with_friction"):
         monkeypatch.setattr(moreau_jean, name, getattr(spy, name))
-    simulate(model, SinePulse(amp * 9.81, 2.0 * math.pi * freq), t_end=t_end, scheme=scheme, output_interval=0.01)
+    simulate(model, SinePulse(amp * 9.81, 2.0 * math.pi * freq), t_end=t_end, scheme=scheme, output_interval=0.01,
+             engine="python")           # (the Python reference's contact problems, spied on)
     main = "solve_with_friction" if scheme == "moreau_jean" else "impact"
     assert spy.calls.get(main, 0) >= 10, spy.calls
     assert spy.ties <= TIE_SHARE * sum(spy.calls.values())
@@ -780,7 +781,7 @@ def test_contact_problems_of_painleve_landings(mu, U_N, gap, monkeypatch):
     spy = ContactSpy("rigid", model)
     for name in ("impact", "next_mode", "painleve_sticks", "project_to_ground", "closed_candidates"):
         monkeypatch.setattr(event_driven, name, getattr(spy, name))
-    sim = Simulator(model, "event_driven", phi_0=phi_p)
+    sim = Simulator(model, "event_driven", phi_0=phi_p, engine="python")     # (spied on)
     state = sim.get_state()
     state.update(mode=int(Mode.FLIGHT), y=[0.0, h * math.cos(phi_p) - b * math.sin(phi_p) + gap, phi_p, -1.0, U_N,
                                            0.0])
