@@ -1,0 +1,117 @@
+/* The FMI 2.0 co-simulation plumbing shared by the two binaries: fmi2_cs.c (the pythonfmu FMUs, a Python
+ * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). Here: the instance states and
+ * the per-call state masks (after modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and
+ * argument checks, the messages (always passed to the logger as data, "%s"), the status bookkeeping
+ * (fmi2Terminated, fmi2LastSuccessfulTime, fmi2DoStepStatus) and the serialized FMU state's header with its
+ * CRC-32. Each backend's Instance starts with an `fmi2c_instance` named `f`. C99. */
+#ifndef FMI2_COMMON_H
+#define FMI2_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "fmi2Functions.h"
+
+/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
+ * master's time is a sum of step sizes and may differ from ours by round-off */
+#define TIME_TOLERANCE 1e-9
+
+enum {
+    INSTANTIATED = 1 << 0,
+    INITIALIZATION_MODE = 1 << 1,
+    STEP_COMPLETE = 1 << 2,
+    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
+    TERMINATED = 1 << 4,
+    ERROR_STATE = 1 << 5,
+    FATAL_STATE = 1 << 6,
+};
+#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
+#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
+
+/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
+#define MASK_SetupExperiment INSTANTIATED
+#define MASK_EnterInitializationMode INSTANTIATED
+#define MASK_ExitInitializationMode INITIALIZATION_MODE
+#define MASK_Terminate (SIMULATING | ERROR_STATE)
+#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
+#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
+#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
+#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
+#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
+#define MASK_FreeFMUstate ANY_STATE
+#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
+#define MASK_DoStep SIMULATING
+#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
+
+/* the FMI part of an instance: the first member (`f`) of each backend's Instance */
+typedef struct {
+    unsigned magic;            /* FMI2C_INSTANCE_MAGIC while the instance lives */
+    int state;                 /* one of the states above */
+    char *name;
+    fmi2CallbackLogger logger;
+    fmi2ComponentEnvironment env;
+    int logging_on;
+    char **categories;         /* enabled debug categories; none listed: all */
+    size_t n_categories;
+    double time;               /* [s] the communication point (fmi2LastSuccessfulTime) */
+    int terminated_flag;       /* fmi2Terminated */
+    fmi2Status last_step_status; /* fmi2DoStepStatus */
+    fmi2Status worst_logged;   /* the worst status logged during the current call (capped at Warning) */
+    size_t message_size;       /* the longest message text + 1 (longer texts are cut) */
+} fmi2c_instance;
+
+/* the backend's instance tag (each binary its own, so that one binary never takes the other's instance) */
+extern const unsigned FMI2C_INSTANCE_MAGIC;
+#define FMI2C_MESSAGE_MAX 4096
+
+const char *fmi2c_state_name(int state);
+int fmi2c_valid(const void *c);
+void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, const char *text);
+void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...);
+fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function);
+fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
+void fmi2c_free_categories(fmi2c_instance *F);
+/* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
+fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
+
+/* Entering call F (MASK_F): S is the backend's Instance */
+#define FMI2C_BEGIN(TYPE, F)                                                      \
+    TYPE *S = (TYPE *)c;                                                          \
+    if (!fmi2c_valid(S)) return fmi2Error;                                        \
+    ((fmi2c_instance *)S)->worst_logged = fmi2OK;                                 \
+    if (!(((fmi2c_instance *)S)->state & MASK_##F)) return fmi2c_illegal((fmi2c_instance *)S, "fmi2" #F)
+
+#define FMI2C_NOT_NULL(F, p)                                                      \
+    if (!(p)) {                                                                   \
+        fmi2c_logf((fmi2c_instance *)S, fmi2Error, "logStatusError", "fmi2" #F ": argument " #p " is NULL"); \
+        return fmi2c_fail((fmi2c_instance *)S, fmi2Error);                        \
+    }
+
+/* serialized FMU state: this header, then the backend's bytes.
+ *   offset  size  field
+ *   0       22    SERIAL_MAGIC
+ *   22      8     time [s] (double)
+ *   30      12    instance state, fmi2Terminated flag, last fmi2DoStep status (int32 each)
+ *   42      4     CRC-32 (IEEE 802.3) of bytes 0..41 and of the backend's bytes that follow
+ *   46      n     the backend's bytes
+ * The CRC covers every byte of the state but its own four: any corrupted byte (indeed any error burst of up
+ * to 32 bits) is detected before anything is set, and the state is refused with fmi2Error. It guards against
+ * accidents, not against someone who rewrites the checksum. */
+#define SERIAL_MAGIC "rocking FMI2 state v2\n"
+#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
+#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
+
+/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
+uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n);
+/* Write the header into p[0, SERIAL_HEADER_SIZE) for the backend's `payload` of n bytes */
+void fmi2c_write_header(unsigned char *p, double time, int instance_state, int terminated_flag,
+                        fmi2Status last_step_status, const unsigned char *payload, size_t n);
+/* Check and read the header of a serialized state (fmi2DeSerializeFMUstate): fmi2OK with the fields, or
+ * fmi2Error logged (the instance in the error state) */
+fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, double *time,
+                             int32_t header[3]);
+
+#endif
