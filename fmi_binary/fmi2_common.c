@@ -87,6 +87,90 @@ fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h) {
     return fmi2OK;
 }
 
+fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                             fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    if (!isfinite(startTime)) {
+        log_error(F, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (stopTimeDefined && !(stopTime >= startTime)) {
+        log_error(F, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
+                  stopTime, startTime);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+        log_error(F, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------------------------------------ life cycle */
+void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
+    if (!functions || !functions->logger) return;
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s", text);
+}
+
+int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
+                            fmi2String fmuGUID) {
+    if (!instanceName || !instanceName[0]) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
+        return -1;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
+                                "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
+                                (int)fmi2CoSimulation);
+        return -1;
+    }
+    if (!fmuGUID) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
+        return -1;
+    }
+    return 0;
+}
+
+void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
+                size_t message_size) {
+    F->magic = FMI2C_INSTANCE_MAGIC;
+    F->message_size = message_size;
+    F->state = INSTANTIATED;
+    F->logger = functions ? functions->logger : NULL;
+    F->env = functions ? functions->componentEnvironment : NULL;
+    F->logging_on = loggingOn ? 1 : 0;
+    F->last_step_status = fmi2OK;
+}
+
+void fmi2c_enter_simulation(fmi2c_instance *F) {
+    F->state = STEP_COMPLETE;
+    F->terminated_flag = 0;
+    F->last_step_status = fmi2OK;
+}
+
+void fmi2c_reset(fmi2c_instance *F) {
+    F->state = INSTANTIATED;
+    F->time = 0.0;
+    F->terminated_flag = 0;
+    F->last_step_status = fmi2OK;
+}
+
+fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F) {
+    fmi2c_fields fields = {F->state, F->time, F->terminated_flag, F->last_step_status};
+    return fields;
+}
+
+void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields) {
+    F->state = fields->instance_state;
+    F->time = fields->time;
+    F->terminated_flag = fields->terminated_flag;
+    F->last_step_status = fields->last_step_status;
+}
+
 /* ------------------------------------------------------------------------------------------ FMI calls */
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -198,18 +282,18 @@ static uint32_t serial_crc(const unsigned char *header, const unsigned char *pay
     return fmi2c_crc32_update(fmi2c_crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
 }
 
-void fmi2c_write_header(unsigned char *p, double time, int instance_state, int terminated_flag,
-                        fmi2Status last_step_status, const unsigned char *payload, size_t n) {
-    int32_t fields[3] = {instance_state, terminated_flag, (int32_t)last_step_status};
+void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n) {
+    int32_t ints[3] = {fields->instance_state, fields->terminated_flag, (int32_t)fields->last_step_status};
     memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
-    memcpy(p + SERIAL_MAGIC_SIZE, &time, 8);
-    memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
+    memcpy(p + SERIAL_MAGIC_SIZE, &fields->time, 8);
+    memcpy(p + SERIAL_MAGIC_SIZE + 8, ints, sizeof ints);
     uint32_t crc = serial_crc(p, payload, n);
     memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
 }
 
-fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, double *time,
-                             int32_t header[3]) {
+fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields) {
+    int32_t header[3];
+    double time;
     if (size < SERIAL_HEADER_SIZE || memcmp(serialized, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
         log_error(F, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
         return fmi2c_fail(F, fmi2Error);
@@ -222,14 +306,18 @@ fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], siz
                   "bytes are corrupted (CRC-32 mismatch)", size);
         return fmi2c_fail(F, fmi2Error);
     }
-    memcpy(time, serialized + SERIAL_MAGIC_SIZE, 8);
-    memcpy(header, serialized + SERIAL_MAGIC_SIZE + 8, 3 * sizeof(int32_t));
+    memcpy(&time, serialized + SERIAL_MAGIC_SIZE, 8);
+    memcpy(header, serialized + SERIAL_MAGIC_SIZE + 8, sizeof header);
     const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
     int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
-    if (!isfinite(*time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
+    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
         header[2] < fmi2OK || header[2] > fmi2Discard) {
         log_error(F, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
         return fmi2c_fail(F, fmi2Error);
     }
+    fields->instance_state = header[0];
+    fields->time = time;
+    fields->terminated_flag = header[1];
+    fields->last_step_status = (fmi2Status)header[2];
     return fmi2OK;
 }

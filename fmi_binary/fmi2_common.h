@@ -75,6 +75,32 @@ fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
 void fmi2c_free_categories(fmi2c_instance *F);
 /* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
 fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
+/* fmi2SetupExperiment's checks of its arguments: fmi2OK, or fmi2Error logged */
+fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                             fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+
+/* fmi2Instantiate: an error message to the caller's logger (no instance yet) */
+void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...);
+/* fmi2Instantiate's checks of instanceName, fmuType and fmuGUID (not NULL): 0, or -1 with the error logged */
+int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
+                            fmi2String fmuGUID);
+/* a new instance's FMI part (its name apart): instantiated, messages of at most message_size - 1 bytes */
+void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
+                size_t message_size);
+/* the bookkeeping of a successful fmi2ExitInitializationMode (simulating, fmi2Terminated false) */
+void fmi2c_enter_simulation(fmi2c_instance *F);
+/* the bookkeeping of a successful fmi2Reset (instantiated, time 0, fmi2Terminated false) */
+void fmi2c_reset(fmi2c_instance *F);
+
+/* what an FMU state keeps of the FMI part (the header of its serialized form) */
+typedef struct {
+    int instance_state;
+    double time;
+    int terminated_flag;
+    fmi2Status last_step_status;
+} fmi2c_fields;
+fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F);
+void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
 
 /* Entering call F (MASK_F): S is the backend's Instance */
 #define FMI2C_BEGIN(TYPE, F)                                                      \
@@ -107,11 +133,9 @@ fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
 /* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
 uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n);
 /* Write the header into p[0, SERIAL_HEADER_SIZE) for the backend's `payload` of n bytes */
-void fmi2c_write_header(unsigned char *p, double time, int instance_state, int terminated_flag,
-                        fmi2Status last_step_status, const unsigned char *payload, size_t n);
+void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n);
 /* Check and read the header of a serialized state (fmi2DeSerializeFMUstate): fmi2OK with the fields, or
  * fmi2Error logged (the instance in the error state) */
-fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, double *time,
-                             int32_t header[3]);
+fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields);
 
 #endif

@@ -2,9 +2,9 @@
  *
  * This file is the Python backend of the FMI plumbing; the state machine, the argument checks, the status
  * bookkeeping, the messages and the FMU state's header are in fmi2_common.c, shared with the self-contained
- * FMUs' binary (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`, in the FMU's
- * resources) loads the slave class and creates the slave; every FMI call then goes straight to the slave's
- * pythonfmu methods (get_real, set_real, do_step, ...).
+ * FMUs' binary (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
+ * in the FMU's resources) loads the slave class and creates the slave; every FMI call then goes straight to the
+ * slave's pythonfmu methods (get_real, set_real, do_step, ...).
  *
  * Status of a call (FMI 2.0, section 2.1.3):
  *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when the slave logged a warning meanwhile);
@@ -58,10 +58,7 @@ typedef struct {
 typedef struct {
     unsigned magic;
     PyObject *state;   /* the slave's state object */
-    int instance_state;
-    double time;
-    int terminated_flag;
-    fmi2Status last_step_status;
+    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
 } SavedState;
 
 /* serialized FMU state: the header of fmi2_common.h (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the
@@ -225,17 +222,6 @@ static int check_list(Instance *S, const char *function, PyObject *list, size_t 
 #define GIL_END py.GILState_Release(gil_)
 
 /* ------------------------------------------------------------------------------------------ life cycle */
-static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
-    if (!functions || !functions->logger) return;
-    char text[2048];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s",
-                      text);
-}
-
 static const char BOOTSTRAP[] =
     "import hashlib, importlib.util, os, sys\n"
     "def load_host(resources):\n"
@@ -259,56 +245,37 @@ static PyObject *bootstrap_globals = NULL; /* lives as long as this binary is lo
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
-    if (!instanceName || !instanceName[0]) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
-                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
-                          (int)fmi2CoSimulation);
-        return NULL;
-    }
-    if (!fmuGUID) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
-        return NULL;
-    }
+    if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     char resources[4096], why[2048];
     if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     char pyhost[4200];
     snprintf(pyhost, sizeof pyhost, "%s/%s", resources, PYHOST_FILE);
     if (!is_directory(resources) || !is_file(pyhost)) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                          "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
-                          is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
-                                                  : "does not exist or is not a folder");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                                "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
+                                is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
+                                                        : "does not exist or is not a folder");
         return NULL;
     }
     int started = 0;
     if (python_load(why, sizeof why, &started) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
     if (!S) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
-    S->f.magic = FMI2C_INSTANCE_MAGIC;
-    S->f.message_size = 2048; /* the longest message, 2047 bytes (longer texts are cut) */
-    S->f.state = INSTANTIATED;
+    fmi2c_init(&S->f, functions, loggingOn, 2048); /* messages of at most 2047 bytes (longer texts are cut) */
     S->f.name = (char *)malloc(strlen(instanceName) + 1);
     if (S->f.name) strcpy(S->f.name, instanceName);
-    S->f.logger = functions ? functions->logger : NULL;
-    S->f.env = functions ? functions->componentEnvironment : NULL;
-    S->f.logging_on = loggingOn ? 1 : 0;
-    S->f.last_step_status = fmi2OK;
     if (!S->f.name) {
         free(S);
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
 
@@ -404,19 +371,8 @@ static fmi2Status simple_call(Instance *S, PyObject *result) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     BEGIN(SetupExperiment);
-    if (!isfinite(startTime)) {
-        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
-        return fail(S, fmi2Error);
-    }
-    if (stopTimeDefined && !(stopTime >= startTime)) {
-        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
-                  stopTime, startTime);
-        return fail(S, fmi2Error);
-    }
-    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
-        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
+        return fmi2Error;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(startTime);
     PyObject *b = stopTimeDefined ? py.Float_FromDouble(stopTime) : (py.IncRef(py.None), py.None);
@@ -446,11 +402,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     GIL_BEGIN;
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2ExitInitializationMode", M_EXIT, NULL));
     GIL_END;
-    if (status <= fmi2Warning) {
-        S->f.state = STEP_COMPLETE;
-        S->f.terminated_flag = 0;
-        S->f.last_step_status = fmi2OK;
-    }
+    if (status <= fmi2Warning) fmi2c_enter_simulation(&S->f);
     return status;
 }
 
@@ -481,10 +433,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if (renew) py.DecRef(renew);
     GIL_END;
     if (status == fmi2Error) return fail(S, fmi2Error);
-    S->f.state = INSTANTIATED;
-    S->f.time = 0.0;
-    S->f.terminated_flag = 0;
-    S->f.last_step_status = fmi2OK;
+    fmi2c_reset(&S->f);
     return status;
 }
 
@@ -693,7 +642,7 @@ static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
 /* Put the slave's `state` (a new reference, or NULL after a logged failure) with the FMI fields into `st`
  * (a new SavedState when NULL) and hand it out through `out`; fmi2Error when there is nothing to keep. */
 static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, PyObject *state,
-                             const SavedState *fields, fmi2FMUstate *out) {
+                             const fmi2c_fields *fields, fmi2FMUstate *out) {
     if (!state) return fmi2Error;
     if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
     if (!st) {
@@ -702,7 +651,7 @@ static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, 
         return fmi2Error;
     }
     if (st->state) py.DecRef(st->state);
-    *st = *fields;
+    st->fields = *fields;
     st->magic = STATE_MAGIC;
     st->state = state;
     *out = st;
@@ -720,7 +669,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GIL_BEGIN;
     PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
     fmi2Status status = drain_log(S);
-    const SavedState fields = {0, NULL, S->f.state, S->f.time, S->f.terminated_flag, S->f.last_step_status};
+    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
     if (keep_state(S, "fmi2GetFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;
@@ -734,10 +683,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetFMUstate", M_SET_STATE, st->state));
     GIL_END;
     if (status == fmi2Error) return status; /* rejected: the slave kept its state; the instance is in error */
-    S->f.state = st->instance_state;
-    S->f.time = st->time;
-    S->f.terminated_flag = st->terminated_flag;
-    S->f.last_step_status = st->last_step_status;
+    fmi2c_restore_fields(&S->f, &st->fields);
     return status;
 }
 
@@ -777,8 +723,7 @@ static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
         return NULL;
     }
     memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
-    fmi2c_write_header((unsigned char *)p, st->time, st->instance_state, st->terminated_flag, st->last_step_status,
-                       (const unsigned char *)bytes, (size_t)n);
+    fmi2c_write_header((unsigned char *)p, &st->fields, (const unsigned char *)bytes, (size_t)n);
     py.DecRef(data);
     return out;
 }
@@ -836,9 +781,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     BEGIN(SetFMUstate);
     NOT_NULL(DeSerializeFMUstate, serializedState);
     NOT_NULL(DeSerializeFMUstate, FMUstate);
-    int32_t header[3];
-    double time;
-    if (fmi2c_read_header(&S->f, serializedState, size, &time, header) != fmi2OK) return fmi2Error;
+    fmi2c_fields fields;
+    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
     SavedState *st = NULL;
     if (*FMUstate) {
         st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
@@ -850,7 +794,6 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
     if (data) py.DecRef(data);
     fmi2Status status = drain_log(S);
-    const SavedState fields = {0, NULL, header[0], time, header[1], (fmi2Status)header[2]};
     if (keep_state(S, "fmi2DeSerializeFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;

@@ -75,10 +75,7 @@ typedef struct {
 
 typedef struct {
     unsigned magic;
-    int instance_state;
-    double time;
-    int terminated_flag;
-    fmi2Status last_step_status;
+    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
     size_t n;
     unsigned char *payload;       /* the slave's bytes (see encode_slave) */
 } SavedState;
@@ -288,66 +285,38 @@ static int is_directory(const char *path) {
 }
 
 /* ------------------------------------------------------------------------------------------ life cycle */
-static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
-    if (!functions || !functions->logger) return;
-    char text[2048];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s", text);
-}
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     (void)visible;
-    if (!instanceName || !instanceName[0]) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
-                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
-                          (int)fmi2CoSimulation);
-        return NULL;
-    }
-    if (!fmuGUID) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
-        return NULL;
-    }
+    if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     if (strcmp(fmuGUID, RK_FMU_GUID) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the GUID of "
-                          "this binary, %s (the modelDescription.xml belongs to another FMU or build)", fmuGUID,
-                          RK_FMU_GUID);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the "
+                                "GUID of this binary, %s (the modelDescription.xml belongs to another FMU or build)",
+                                fmuGUID, RK_FMU_GUID);
         return NULL;
     }
     /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
      * binary refuses it (fmi_binary/uri.c, the same messages) */
     char resources[4096], why[2048];
     if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     if (!is_directory(resources)) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from fmuResourceLocation "
-                          "\"%.500s\") does not exist or is not a folder", resources, fmuResourceLocation);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                                "fmuResourceLocation \"%.500s\") does not exist or is not a folder", resources,
+                                fmuResourceLocation);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
     if (!S || !(S->f.name = (char *)malloc(strlen(instanceName) + 1))) {
         free(S);
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
     strcpy(S->f.name, instanceName);
-    S->f.magic = FMI2C_INSTANCE_MAGIC;
-    S->f.message_size = FMI2C_MESSAGE_MAX; /* the longest message, 4095 bytes (longer texts are cut) */
-    S->f.state = INSTANTIATED;
-    S->f.logger = functions ? functions->logger : NULL;
-    S->f.env = functions ? functions->componentEnvironment : NULL;
-    S->f.logging_on = loggingOn ? 1 : 0;
-    S->f.last_step_status = fmi2OK;
+    fmi2c_init(&S->f, functions, loggingOn, FMI2C_MESSAGE_MAX); /* messages of at most 4095 bytes */
     slave_clear(&S->s);
     return S;
 }
@@ -365,19 +334,8 @@ void fmi2FreeInstance(fmi2Component c) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     BEGIN(SetupExperiment);
-    if (!isfinite(startTime)) {
-        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
-        return fail(S, fmi2Error);
-    }
-    if (stopTimeDefined && !(stopTime >= startTime)) {
-        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
-                  stopTime, startTime);
-        return fail(S, fmi2Error);
-    }
-    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
-        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
+        return fmi2Error;
     S->s.t0 = startTime;
     S->f.time = startTime;
     return fmi2OK;
@@ -404,9 +362,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     /* a rate set before initialization refers to the start of the first communication step */
     if (S->s.has_rate) S->s.rate_t = S->s.t0;
     update_outputs(S);
-    S->f.state = STEP_COMPLETE;
-    S->f.terminated_flag = 0;
-    S->f.last_step_status = fmi2OK;
+    fmi2c_enter_simulation(&S->f);
     return S->f.worst_logged;
 }
 
@@ -423,10 +379,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     rk_engine_free(S->engine);
     S->engine = NULL;
     slave_clear(&S->s);
-    S->f.state = INSTANTIATED;
-    S->f.time = 0.0;
-    S->f.terminated_flag = 0;
-    S->f.last_step_status = fmi2OK;
+    fmi2c_reset(&S->f);
     return fmi2OK;
 }
 
@@ -1037,7 +990,7 @@ static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
 }
 
 static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, unsigned char *payload, size_t n,
-                             const SavedState *fields, fmi2FMUstate *out) {
+                             const fmi2c_fields *fields, fmi2FMUstate *out) {
     if (!payload) {
         log_error(S, "%s: out of memory", function);
         return fmi2Error;
@@ -1049,7 +1002,7 @@ static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, 
         return fmi2Error;
     }
     free(st->payload);
-    *st = *fields;
+    st->fields = *fields;
     st->magic = STATE_MAGIC;
     st->payload = payload;
     st->n = n;
@@ -1067,7 +1020,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     }
     size_t n = 0;
     unsigned char *payload = encode_slave(S, &n);
-    const SavedState fields = {0, S->f.state, S->f.time, S->f.terminated_flag, S->f.last_step_status, 0, NULL};
+    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
     if (keep_state(S, "fmi2GetFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error) return fail(S, fmi2Error);
     return fmi2OK;
 }
@@ -1081,10 +1034,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
         log_error(S, "fmi2SetFMUstate: state rejected, the instance keeps its current state: %s", why);
         return fail(S, fmi2Error);
     }
-    S->f.state = st->instance_state;
-    S->f.time = st->time;
-    S->f.terminated_flag = st->terminated_flag;
-    S->f.last_step_status = st->last_step_status;
+    fmi2c_restore_fields(&S->f, &st->fields);
     return fmi2OK;
 }
 
@@ -1122,8 +1072,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     }
     char *p = serializedState;
     memcpy(p + SERIAL_HEADER_SIZE, st->payload, st->n);
-    fmi2c_write_header((unsigned char *)p, st->time, st->instance_state, st->terminated_flag, st->last_step_status,
-                       st->payload, st->n);
+    fmi2c_write_header((unsigned char *)p, &st->fields, st->payload, st->n);
     return fmi2OK;
 }
 
@@ -1132,9 +1081,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     BEGIN(SetFMUstate);
     NOT_NULL(DeSerializeFMUstate, serializedState);
     NOT_NULL(DeSerializeFMUstate, FMUstate);
-    int32_t header[3];
-    double time;
-    if (fmi2c_read_header(&S->f, serializedState, size, &time, header) != fmi2OK) return fmi2Error;
+    fmi2c_fields fields;
+    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
     SavedState *st = NULL;
     if (*FMUstate) {
         st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
@@ -1143,7 +1091,6 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     size_t n = size - SERIAL_HEADER_SIZE;
     unsigned char *payload = (unsigned char *)malloc(n ? n : 1);
     if (payload) memcpy(payload, serializedState + SERIAL_HEADER_SIZE, n);
-    const SavedState fields = {0, header[0], time, header[1], (fmi2Status)header[2], 0, NULL};
     if (keep_state(S, "fmi2DeSerializeFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error)
         return fail(S, fmi2Error);
     return fmi2OK;
