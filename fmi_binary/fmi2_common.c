@@ -1,5 +1,6 @@
 /* The FMI 2.0 plumbing shared by fmi2_cs.c and standalone/fmi2_engine.c (fmi2_common.h): messages, state
  * checks, status bookkeeping, the serialized state's header, and the FMI calls that need no backend. */
+#define FMI2C_IMPLEMENTATION /* none of the backends' shorthands */
 #include "fmi2_common.h"
 
 #include <math.h>
@@ -85,6 +86,22 @@ fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h) {
         return fmi2c_fail(F, fmi2Error);
     }
     return fmi2OK;
+}
+
+fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end) {
+    fmi2Status status;
+    if (refused) {
+        status = fmi2Discard;
+        F->state = STEP_FAILED;
+        F->terminated_flag = 1;
+    } else {
+        status = logged;
+        F->state = STEP_COMPLETE;
+        F->terminated_flag = 0;
+        F->time = t_end;
+    }
+    F->last_step_status = status;
+    return status;
 }
 
 fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,

@@ -75,6 +75,9 @@ fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
 void fmi2c_free_categories(fmi2c_instance *F);
 /* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
 fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
+/* the bookkeeping at the end of an fmi2DoStep that got that far: refused (fmi2Discard, fmi2Terminated true,
+ * the time unchanged) or done (`logged`, the worst status logged, and the time t_end); the status returned */
+fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end);
 /* fmi2SetupExperiment's checks of its arguments: fmi2OK, or fmi2Error logged */
 fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
                              fmi2Boolean stopTimeDefined, fmi2Real stopTime);
@@ -101,6 +104,17 @@ typedef struct {
 } fmi2c_fields;
 fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F);
 void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
+
+#ifndef FMI2C_IMPLEMENTATION
+/* the backends' shorthands on their `Instance *S`, whose first member is the fmi2c_instance f */
+#define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
+#define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
+#define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
+#define fail(S, status) fmi2c_fail(&(S)->f, status)
+#define valid(S) fmi2c_valid(S)
+#define BEGIN(F) FMI2C_BEGIN(Instance, F)
+#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
+#endif
 
 /* Entering call F (MASK_F): S is the backend's Instance */
 #define FMI2C_BEGIN(TYPE, F)                                                      \

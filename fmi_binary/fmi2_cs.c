@@ -27,9 +27,9 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "fmi2_common.h"
 #include "platform.h"
 #include "uri.h"
+#include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
 #define PYHOST_FILE "fmi2_pyhost.py"
 
@@ -65,14 +65,6 @@ typedef struct {
  * slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256) */
 
 /* ------------------------------------------------------------------------------------------ messages */
-/* the shared plumbing (fmi2_common.c) on this file's Instance, whose first member is the fmi2c_instance f */
-#define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
-#define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
-#define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
-#define fail(S, status) fmi2c_fail(&(S)->f, status)
-#define valid(S) fmi2c_valid(S)
-#define BEGIN(F) FMI2C_BEGIN(Instance, F)
-#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
 
 /* Forward the slave's queued messages (pythonfmu LogMsg: status, category, msg); return the worst status
  * among them, capped at fmi2Warning (a slave reports failures by raising or by do_step returning False). */
@@ -576,22 +568,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     if (b) py.DecRef(b);
     if (result) py.DecRef(result);
     GIL_END;
-    fmi2Status status;
     if (accepted < 0) {
-        status = fail(S, fmi2Error);
-    } else if (accepted == 0) {
-        /* refused: the slave stayed at S->f.time; the master may retry, or end at the last successful time */
-        status = fmi2Discard;
-        S->f.state = STEP_FAILED;
-        S->f.terminated_flag = 1;
-    } else {
-        status = logged;
-        S->f.state = STEP_COMPLETE;
-        S->f.terminated_flag = 0;
-        S->f.time = t + h;
+        S->f.last_step_status = fmi2Error;
+        return fail(S, fmi2Error);
     }
-    S->f.last_step_status = status;
-    return status;
+    /* refused: the slave stayed at S->f.time; the master may retry, or end at the last successful time */
+    return fmi2c_step_done(&S->f, accepted == 0, logged, t + h);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

@@ -30,9 +30,9 @@
 #include <sys/stat.h>
 
 #include "fmi2Functions.h"
-#include "fmi2_common.h"
 #include "rk_engine.h"
 #include "uri.h"
+#include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
 enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
 enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
@@ -130,14 +130,6 @@ static void py_repr(double x, char *out, size_t size) {
 }
 
 /* ------------------------------------------------------------------------------------------ messages */
-/* the shared plumbing (fmi2_common.c) on this file's Instance, whose first member is the fmi2c_instance f */
-#define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
-#define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
-#define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
-#define fail(S, status) fmi2c_fail(&(S)->f, status)
-#define valid(S) fmi2c_valid(S)
-#define BEGIN(F) FMI2C_BEGIN(Instance, F)
-#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
 #define log_warning(S, ...) logf_(S, fmi2Warning, "logStatusWarning", __VA_ARGS__)
 
 /* ------------------------------------------------------------------------------------------ the slave */
@@ -717,20 +709,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
             }
         }
     }
-    fmi2Status status;
-    if (refused) {
-        status = fmi2Discard;
-        S->f.state = STEP_FAILED;
-        S->f.terminated_flag = 1;
-    } else {
-        s->t = t_end;
-        status = S->f.worst_logged;
-        S->f.state = STEP_COMPLETE;
-        S->f.terminated_flag = 0;
-        S->f.time = t_end;
-    }
-    S->f.last_step_status = status;
-    return status;
+    if (!refused) s->t = t_end;
+    return fmi2c_step_done(&S->f, refused, S->f.worst_logged, t_end);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
