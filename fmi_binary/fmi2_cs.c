@@ -1,9 +1,10 @@
 /* FMI 2.0 co-simulation binary that hosts a Python slave (a pythonfmu `Fmi2Slave` subclass).
  *
- * This file is the FMI plumbing: the state machine, the argument checks, the status of every call, the
- * messages, the FMU states. It knows nothing of the model. The Python side (`fmi2_pyhost.py`, in the FMU's
- * resources) loads the slave class and creates the slave; every FMI call then goes straight to the slave's
- * pythonfmu methods (get_real, set_real, do_step, ...).
+ * This file is the Python backend of the FMI plumbing; the state machine, the argument checks, the status
+ * bookkeeping, the messages and the FMU state's header are in fmi2_common.c, shared with the self-contained
+ * FMUs' binary (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
+ * in the FMU's resources) loads the slave class and creates the slave; every FMI call then goes straight to the
+ * slave's pythonfmu methods (get_real, set_real, do_step, ...).
  *
  * Status of a call (FMI 2.0, section 2.1.3):
  *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when the slave logged a warning meanwhile);
@@ -28,53 +29,9 @@
 #include "fmi2Functions.h"
 #include "platform.h"
 #include "uri.h"
+#include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
 #define PYHOST_FILE "fmi2_pyhost.py"
-
-/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
- * master's time is a sum of step sizes and may differ from ours by round-off */
-#define TIME_TOLERANCE 1e-9
-
-enum {
-    INSTANTIATED = 1 << 0,
-    INITIALIZATION_MODE = 1 << 1,
-    STEP_COMPLETE = 1 << 2,
-    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
-    TERMINATED = 1 << 4,
-    ERROR_STATE = 1 << 5,
-    FATAL_STATE = 1 << 6,
-};
-#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
-#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
-
-/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
-#define MASK_SetupExperiment INSTANTIATED
-#define MASK_EnterInitializationMode INSTANTIATED
-#define MASK_ExitInitializationMode INITIALIZATION_MODE
-#define MASK_Terminate (SIMULATING | ERROR_STATE)
-#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
-#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
-#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
-#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
-#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
-#define MASK_FreeFMUstate ANY_STATE
-#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
-#define MASK_DoStep SIMULATING
-#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
-
-static const char *state_name(int state) {
-    switch (state) {
-    case INSTANTIATED: return "instantiated";
-    case INITIALIZATION_MODE: return "in initialization mode";
-    case STEP_COMPLETE: return "simulating (step complete)";
-    case STEP_FAILED: return "simulating (last step discarded)";
-    case TERMINATED: return "terminated";
-    case ERROR_STATE: return "in the error state (call fmi2Reset or fmi2FreeInstance)";
-    default: return "in the fatal state (only fmi2FreeInstance is allowed)";
-    }
-}
 
 /* the slave's methods, bound once per slave */
 enum { M_SETUP, M_ENTER, M_EXIT, M_TERMINATE, M_DO_STEP, M_GET_REAL, M_GET_INTEGER, M_GET_BOOLEAN, M_GET_STRING,
@@ -86,89 +43,28 @@ static const char *method_names[N_METHODS] = {
     "set_string", "_get_fmu_state", "_set_fmu_state", "_fmu_state_to_bytes", "_fmu_state_from_bytes",
     "set_real_input_derivatives"};
 
-#define INSTANCE_MAGIC 0x46d12a7bu
+const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7bu;
 #define STATE_MAGIC 0x5d7e0c19u
 
 typedef struct {
-    unsigned magic;
-    int state;
-    char *name;
-    fmi2CallbackLogger logger;
-    fmi2ComponentEnvironment env;
-    int logging_on;
-    char **categories; /* enabled debug categories; none listed: all */
-    size_t n_categories;
+    fmi2c_instance f;  /* the FMI part (fmi2_common.h): state, logger, time of the slave, statuses */
     PyObject *host;    /* the fmi2_pyhost.Host */
     PyObject *slave;
     PyObject *methods[N_METHODS]; /* NULL where the slave lacks the method */
     PyObject *log_name; /* the str "log_queue", made once: drain_log runs after every call */
     PyObject *strings; /* the last fmi2GetString result: keeps the returned UTF-8 buffers alive */
-    double time;       /* [s] the slave's communication point */
-    int terminated_flag;
-    fmi2Status last_step_status;
 } Instance;
 
 typedef struct {
     unsigned magic;
     PyObject *state;   /* the slave's state object */
-    int instance_state;
-    double time;
-    int terminated_flag;
-    fmi2Status last_step_status;
+    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
 } SavedState;
 
-/* serialized FMU state: this header, then the slave's bytes.
- *   offset  size  field
- *   0       22    SERIAL_MAGIC
- *   22      8     time [s] (double)
- *   30      12    instance state, fmi2Terminated flag, last fmi2DoStep status (int32 each)
- *   42      4     CRC-32 (IEEE 802.3) of bytes 0..41 and of the slave's bytes that follow
- *   46      n     the slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256)
- * The CRC covers every byte of the state but its own four: any corrupted byte (indeed any error burst of up
- * to 32 bits) is detected before anything is set, and the state is refused with fmi2Error. Like the slave's
- * SHA-256 it guards against accidents, not against someone who rewrites the checksum. */
-#define SERIAL_MAGIC "rocking FMI2 state v2\n"
-#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
-#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
-#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
-
-/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
-static uint32_t crc32_update(uint32_t crc, const unsigned char *p, size_t n) {
-    crc = ~crc;
-    while (n--) {
-        crc ^= *p++;
-        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-static uint32_t serial_crc(const unsigned char *header, const unsigned char *payload, size_t n) {
-    return crc32_update(crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
-}
+/* serialized FMU state: the header of fmi2_common.h (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the
+ * slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256) */
 
 /* ------------------------------------------------------------------------------------------ messages */
-static int category_enabled(const Instance *S, const char *category) {
-    if (S->n_categories == 0) return 1;
-    for (size_t i = 0; i < S->n_categories; i++)
-        if (category && strcmp(S->categories[i], category) == 0) return 1;
-    return 0;
-}
-
-static void emit(const Instance *S, fmi2Status status, const char *category, const char *text) {
-    if (!S->logger) return;
-    if (status == fmi2OK && !(S->logging_on && category_enabled(S, category))) return;
-    S->logger(S->env, S->name, status, category ? category : "logAll", "%s", text ? text : "");
-}
-
-static void logf_(const Instance *S, fmi2Status status, const char *category, const char *format, ...) {
-    char text[2048];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    emit(S, status, category, text);
-}
-#define log_error(S, ...) logf_(S, fmi2Error, "logStatusError", __VA_ARGS__)
 
 /* Forward the slave's queued messages (pythonfmu LogMsg: status, category, msg); return the worst status
  * among them, capped at fmi2Warning (a slave reports failures by raising or by do_step returning False). */
@@ -235,31 +131,6 @@ static void log_exception(Instance *S, const char *function) {
 }
 
 /* ------------------------------------------------------------------------------------------ helpers */
-static int valid(const Instance *S) { return S && S->magic == INSTANCE_MAGIC; }
-
-static fmi2Status illegal(Instance *S, const char *function) {
-    log_error(S, "%s: illegal call sequence: the instance is %s", function, state_name(S->state));
-    if (S->state != FATAL_STATE) S->state = ERROR_STATE;
-    return fmi2Error;
-}
-
-static fmi2Status fail(Instance *S, fmi2Status status) {
-    if (status == fmi2Error) S->state = ERROR_STATE;
-    if (status == fmi2Fatal) S->state = FATAL_STATE;
-    return status;
-}
-
-#define BEGIN(F)                                                                  \
-    Instance *S = (Instance *)c;                                                  \
-    if (!valid(S)) return fmi2Error;                                              \
-    if (!(S->state & MASK_##F)) return illegal(S, "fmi2" #F)
-
-#define NOT_NULL(F, p)                                                            \
-    if (!(p)) {                                                                   \
-        log_error(S, "fmi2" #F ": argument " #p " is NULL");                      \
-        return fail(S, fmi2Error);                                                \
-    }
-
 static void release_slave(Instance *S) {
     for (int i = 0; i < N_METHODS; i++) {
         if (S->methods[i]) py.DecRef(S->methods[i]);
@@ -294,7 +165,7 @@ static int bind_slave(Instance *S) {
 #define CALL_SLAVE(S, function, m, ...) call_slave(S, function, m, __VA_ARGS__, NULL)
 static PyObject *call_slave(Instance *S, const char *function, int m, ...) {
     if (!S->methods[m]) {
-        log_error(S, "%s: the slave %s has no method %s", function, S->name, method_names[m]);
+        log_error(S, "%s: the slave %s has no method %s", function, S->f.name, method_names[m]);
         return NULL;
     }
     /* vectorcall: no argument tuple built; slot 0 stays free for the bound method's self
@@ -343,20 +214,6 @@ static int check_list(Instance *S, const char *function, PyObject *list, size_t 
 #define GIL_END py.GILState_Release(gil_)
 
 /* ------------------------------------------------------------------------------------------ life cycle */
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
-static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
-    if (!functions || !functions->logger) return;
-    char text[2048];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s",
-                      text);
-}
-
 static const char BOOTSTRAP[] =
     "import hashlib, importlib.util, os, sys\n"
     "def load_host(resources):\n"
@@ -380,55 +237,37 @@ static PyObject *bootstrap_globals = NULL; /* lives as long as this binary is lo
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
-    if (!instanceName || !instanceName[0]) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
-                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
-                          (int)fmi2CoSimulation);
-        return NULL;
-    }
-    if (!fmuGUID) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
-        return NULL;
-    }
+    if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     char resources[4096], why[2048];
     if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     char pyhost[4200];
     snprintf(pyhost, sizeof pyhost, "%s/%s", resources, PYHOST_FILE);
     if (!is_directory(resources) || !is_file(pyhost)) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                          "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
-                          is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
-                                                  : "does not exist or is not a folder");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                                "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
+                                is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
+                                                        : "does not exist or is not a folder");
         return NULL;
     }
     int started = 0;
     if (python_load(why, sizeof why, &started) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
     if (!S) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
-    S->magic = INSTANCE_MAGIC;
-    S->state = INSTANTIATED;
-    S->name = (char *)malloc(strlen(instanceName) + 1);
-    if (S->name) strcpy(S->name, instanceName);
-    S->logger = functions ? functions->logger : NULL;
-    S->env = functions ? functions->componentEnvironment : NULL;
-    S->logging_on = loggingOn ? 1 : 0;
-    S->last_step_status = fmi2OK;
-    if (!S->name) {
+    fmi2c_init(&S->f, functions, loggingOn, 2048); /* messages of at most 2047 bytes (longer texts are cut) */
+    S->f.name = (char *)malloc(strlen(instanceName) + 1);
+    if (S->f.name) strcpy(S->f.name, instanceName);
+    if (!S->f.name) {
         free(S);
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
 
@@ -484,19 +323,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     GIL_END;
     if (!ok) {
-        S->magic = 0;
-        free(S->name);
+        S->f.magic = 0;
+        free(S->f.name);
         free(S);
         return NULL;
     }
     return S;
-}
-
-static void free_categories(Instance *S) {
-    for (size_t i = 0; i < S->n_categories; i++) free(S->categories[i]);
-    free(S->categories);
-    S->categories = NULL;
-    S->n_categories = 0;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
@@ -514,33 +346,10 @@ void fmi2FreeInstance(fmi2Component c) {
         S->host = NULL;
     }
     GIL_END;
-    free_categories(S);
-    S->magic = 0;
-    free(S->name);
+    fmi2c_free_categories(&S->f);
+    S->f.magic = 0;
+    free(S->f.name);
     free(S);
-}
-
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
-                               const fmi2String categories[]) {
-    BEGIN(SetDebugLogging);
-    if (nCategories > 0) NOT_NULL(SetDebugLogging, categories);
-    for (size_t i = 0; i < nCategories; i++) NOT_NULL(SetDebugLogging, categories[i]);
-    free_categories(S);
-    if (nCategories > 0) {
-        S->categories = (char **)calloc(nCategories, sizeof(char *));
-        if (!S->categories) return fail(S, fmi2Error);
-        for (size_t i = 0; i < nCategories; i++) {
-            S->categories[i] = (char *)malloc(strlen(categories[i]) + 1);
-            if (!S->categories[i]) {
-                S->n_categories = i;
-                return fail(S, fmi2Error);
-            }
-            strcpy(S->categories[i], categories[i]);
-        }
-    }
-    S->n_categories = nCategories;
-    S->logging_on = loggingOn ? 1 : 0;
-    return fmi2OK;
 }
 
 /* a call of one slave method without results: status from the call and the messages it logged */
@@ -554,19 +363,8 @@ static fmi2Status simple_call(Instance *S, PyObject *result) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     BEGIN(SetupExperiment);
-    if (!isfinite(startTime)) {
-        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
-        return fail(S, fmi2Error);
-    }
-    if (stopTimeDefined && !(stopTime >= startTime)) {
-        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
-                  stopTime, startTime);
-        return fail(S, fmi2Error);
-    }
-    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
-        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
+        return fmi2Error;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(startTime);
     PyObject *b = stopTimeDefined ? py.Float_FromDouble(stopTime) : (py.IncRef(py.None), py.None);
@@ -577,7 +375,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     py.DecRef(t);
     GIL_END;
     if (status <= fmi2Warning) {
-        S->time = startTime;
+        S->f.time = startTime;
     }
     return status;
 }
@@ -587,7 +385,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     GIL_BEGIN;
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2EnterInitializationMode", M_ENTER, NULL));
     GIL_END;
-    if (status <= fmi2Warning) S->state = INITIALIZATION_MODE;
+    if (status <= fmi2Warning) S->f.state = INITIALIZATION_MODE;
     return status;
 }
 
@@ -596,21 +394,17 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     GIL_BEGIN;
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2ExitInitializationMode", M_EXIT, NULL));
     GIL_END;
-    if (status <= fmi2Warning) {
-        S->state = STEP_COMPLETE;
-        S->terminated_flag = 0;
-        S->last_step_status = fmi2OK;
-    }
+    if (status <= fmi2Warning) fmi2c_enter_simulation(&S->f);
     return status;
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     BEGIN(Terminate);
-    if (S->state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
+    if (S->f.state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
     GIL_BEGIN;
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2Terminate", M_TERMINATE, NULL));
     GIL_END;
-    if (status <= fmi2Warning) S->state = TERMINATED;
+    if (status <= fmi2Warning) S->f.state = TERMINATED;
     return status;
 }
 
@@ -631,10 +425,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if (renew) py.DecRef(renew);
     GIL_END;
     if (status == fmi2Error) return fail(S, fmi2Error);
-    S->state = INSTANTIATED;
-    S->time = 0.0;
-    S->terminated_flag = 0;
-    S->last_step_status = fmi2OK;
+    fmi2c_reset(&S->f);
     return status;
 }
 
@@ -766,20 +557,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     (void)noSetFMUStatePriorToCurrentPoint;
     BEGIN(DoStep);
     const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (!(h > 0.0) || !isfinite(h)) {
-        log_error(S, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
-        return fail(S, fmi2Error);
-    }
-    if (!isfinite(t) || fabs(t - S->time) > TIME_TOLERANCE * fmax(1.0, fabs(S->time))) {
-        log_error(S, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the time of the instance, "
-                  "%.17g; each step starts where the last one ended (to go back, restore a state saved with "
-                  "fmi2GetFMUstate)", t, S->time);
-        return fail(S, fmi2Error);
-    }
-    if (!isfinite(t + h)) {
-        log_error(S, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %g is not finite", t + h);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
     PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
@@ -790,29 +568,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     if (b) py.DecRef(b);
     if (result) py.DecRef(result);
     GIL_END;
-    fmi2Status status;
     if (accepted < 0) {
-        status = fail(S, fmi2Error);
-    } else if (accepted == 0) {
-        /* refused: the slave stayed at S->time; the master may retry, or end at the last successful time */
-        status = fmi2Discard;
-        S->state = STEP_FAILED;
-        S->terminated_flag = 1;
-    } else {
-        status = logged;
-        S->state = STEP_COMPLETE;
-        S->terminated_flag = 0;
-        S->time = t + h;
+        S->f.last_step_status = fmi2Error;
+        return fail(S, fmi2Error);
     }
-    S->last_step_status = status;
-    return status;
-}
-
-fmi2Status fmi2CancelStep(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return fmi2Error;
-    log_error(S, "fmi2CancelStep: no step is in progress (fmi2DoStep never returns fmi2Pending)");
-    return fail(S, fmi2Error);
+    /* refused: the slave stayed at S->f.time; the master may retry, or end at the last successful time */
+    return fmi2c_step_done(&S->f, accepted == 0, logged, t + h);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -850,68 +611,6 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     return status == fmi2Error ? fail(S, status) : status;
 }
 
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[]) {
-    (void)vr; (void)order; (void)value;
-    BEGIN(GetRealOutputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    log_error(S, "fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder "
-              "= 0)");
-    return fail(S, fmi2Error);
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
-                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return fmi2Error;
-    log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
-    return fail(S, fmi2Error);
-}
-
-/* ------------------------------------------------------------------------------------------ status */
-static fmi2Status unavailable(Instance *S, const char *function, int kind) {
-    logf_(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function, kind);
-    return fmi2Discard;
-}
-
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    BEGIN(Status);
-    NOT_NULL(GetStatus, value);
-    if (s != fmi2DoStepStatus) return unavailable(S, "fmi2GetStatus", (int)s);
-    *value = S->last_step_status;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    BEGIN(Status);
-    NOT_NULL(GetRealStatus, value);
-    if (s != fmi2LastSuccessfulTime) return unavailable(S, "fmi2GetRealStatus", (int)s);
-    *value = S->time;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    BEGIN(Status);
-    NOT_NULL(GetIntegerStatus, value);
-    return unavailable(S, "fmi2GetIntegerStatus", (int)s);
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    BEGIN(Status);
-    NOT_NULL(GetBooleanStatus, value);
-    if (s != fmi2Terminated) return unavailable(S, "fmi2GetBooleanStatus", (int)s);
-    *value = S->terminated_flag ? fmi2True : fmi2False;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    BEGIN(Status);
-    NOT_NULL(GetStringStatus, value);
-    return unavailable(S, "fmi2GetStringStatus", (int)s);
-}
-
 /* ------------------------------------------------------------------------------------------ FMU state */
 static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
     SavedState *st = (SavedState *)p;
@@ -925,7 +624,7 @@ static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
 /* Put the slave's `state` (a new reference, or NULL after a logged failure) with the FMI fields into `st`
  * (a new SavedState when NULL) and hand it out through `out`; fmi2Error when there is nothing to keep. */
 static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, PyObject *state,
-                             const SavedState *fields, fmi2FMUstate *out) {
+                             const fmi2c_fields *fields, fmi2FMUstate *out) {
     if (!state) return fmi2Error;
     if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
     if (!st) {
@@ -934,7 +633,7 @@ static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, 
         return fmi2Error;
     }
     if (st->state) py.DecRef(st->state);
-    *st = *fields;
+    st->fields = *fields;
     st->magic = STATE_MAGIC;
     st->state = state;
     *out = st;
@@ -952,7 +651,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GIL_BEGIN;
     PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
     fmi2Status status = drain_log(S);
-    const SavedState fields = {0, NULL, S->state, S->time, S->terminated_flag, S->last_step_status};
+    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
     if (keep_state(S, "fmi2GetFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;
@@ -966,10 +665,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetFMUstate", M_SET_STATE, st->state));
     GIL_END;
     if (status == fmi2Error) return status; /* rejected: the slave kept its state; the instance is in error */
-    S->state = st->instance_state;
-    S->time = st->time;
-    S->terminated_flag = st->terminated_flag;
-    S->last_step_status = st->last_step_status;
+    fmi2c_restore_fields(&S->f, &st->fields);
     return status;
 }
 
@@ -1008,13 +704,8 @@ static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
         if (out) py.DecRef(out);
         return NULL;
     }
-    int32_t fields[3] = {st->instance_state, st->terminated_flag, (int32_t)st->last_step_status};
-    memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
-    memcpy(p + SERIAL_MAGIC_SIZE, &st->time, 8);
-    memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
     memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
-    uint32_t crc = serial_crc((const unsigned char *)p, (const unsigned char *)bytes, (size_t)n);
-    memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
+    fmi2c_write_header((unsigned char *)p, &st->fields, (const unsigned char *)bytes, (size_t)n);
     py.DecRef(data);
     return out;
 }
@@ -1072,29 +763,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     BEGIN(SetFMUstate);
     NOT_NULL(DeSerializeFMUstate, serializedState);
     NOT_NULL(DeSerializeFMUstate, FMUstate);
-    int32_t header[3];
-    double time;
-    if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
-        log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
-        return fail(S, fmi2Error);
-    }
-    uint32_t crc;
-    memcpy(&crc, serializedState + SERIAL_CRC_OFFSET, 4);
-    if (crc != serial_crc((const unsigned char *)serializedState,
-                          (const unsigned char *)serializedState + SERIAL_HEADER_SIZE, size - SERIAL_HEADER_SIZE)) {
-        log_error(S, "fmi2DeSerializeFMUstate: state rejected, the instance keeps its current state: the %zu "
-                  "bytes are corrupted (CRC-32 mismatch)", size);
-        return fail(S, fmi2Error);
-    }
-    memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);
-    memcpy(header, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof header);
-    const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
-    int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
-    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
-        header[2] < fmi2OK || header[2] > fmi2Discard) {
-        log_error(S, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
-        return fail(S, fmi2Error);
-    }
+    fmi2c_fields fields;
+    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
     SavedState *st = NULL;
     if (*FMUstate) {
         st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
@@ -1106,7 +776,6 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
     if (data) py.DecRef(data);
     fmi2Status status = drain_log(S);
-    const SavedState fields = {0, NULL, header[0], time, header[1], (fmi2Status)header[2]};
     if (keep_state(S, "fmi2DeSerializeFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
     return status == fmi2Error ? fail(S, status) : status;

@@ -1,8 +1,9 @@
 /* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs of issue 22, with no
  * Python at all. C99 + libm.
  *
- * The state machine, the statuses, the messages and the serialized FMU state's header are those of
- * fmi_binary/fmi2_cs.c (the binary of the pythonfmu FMUs, per-call state masks after modelica/Reference-FMUs);
+ * The state machine, the statuses, the messages and the serialized FMU state's header are fmi_binary/
+ * fmi2_common.c's, shared with fmi2_cs.c (the binary of the pythonfmu FMUs; per-call state masks after
+ * modelica/Reference-FMUs);
  * the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave) is written here in C with the same
  * checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
  * rocking_model/fmi/standalone.py from the declarations the pythonfmu FMUs use.
@@ -31,6 +32,7 @@
 #include "fmi2Functions.h"
 #include "rk_engine.h"
 #include "uri.h"
+#include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
 enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
 enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
@@ -51,49 +53,7 @@ typedef struct {
 
 static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
 
-/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|) */
-#define TIME_TOLERANCE 1e-9
-
-enum {
-    INSTANTIATED = 1 << 0,
-    INITIALIZATION_MODE = 1 << 1,
-    STEP_COMPLETE = 1 << 2,
-    STEP_FAILED = 1 << 3,
-    TERMINATED = 1 << 4,
-    ERROR_STATE = 1 << 5,
-    FATAL_STATE = 1 << 6,
-};
-#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
-#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
-#define MASK_SetupExperiment INSTANTIATED
-#define MASK_EnterInitializationMode INSTANTIATED
-#define MASK_ExitInitializationMode INITIALIZATION_MODE
-#define MASK_Terminate (SIMULATING | ERROR_STATE)
-#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
-#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
-#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
-#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
-#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
-#define MASK_FreeFMUstate ANY_STATE
-#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
-#define MASK_DoStep SIMULATING
-#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
-
-static const char *state_name(int state) {
-    switch (state) {
-    case INSTANTIATED: return "instantiated";
-    case INITIALIZATION_MODE: return "in initialization mode";
-    case STEP_COMPLETE: return "simulating (step complete)";
-    case STEP_FAILED: return "simulating (last step discarded)";
-    case TERMINATED: return "terminated";
-    case ERROR_STATE: return "in the error state (call fmi2Reset or fmi2FreeInstance)";
-    default: return "in the fatal state (only fmi2FreeInstance is allowed)";
-    }
-}
-
-#define INSTANCE_MAGIC 0x46d12a7cu
+const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7cu;
 #define STATE_MAGIC 0x5d7e0c1au
 #define ERROR_LEN 1024
 
@@ -108,55 +68,24 @@ typedef struct {
 } Slave;
 
 typedef struct {
-    unsigned magic;
-    int state;
-    char *name;
-    fmi2CallbackLogger logger;
-    fmi2ComponentEnvironment env;
-    int logging_on;
-    char **categories;
-    size_t n_categories;
+    fmi2c_instance f;             /* the FMI part (fmi2_common.h): state, logger, time, statuses */
     Slave s;
     rk_engine *engine;            /* NULL until initialized (or after an error without simulator) */
-    double time;
-    int terminated_flag;
-    fmi2Status last_step_status;
-    fmi2Status worst_logged;      /* the worst status logged during the current call (capped at Warning) */
 } Instance;
 
 typedef struct {
     unsigned magic;
-    int instance_state;
-    double time;
-    int terminated_flag;
-    fmi2Status last_step_status;
+    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
     size_t n;
     unsigned char *payload;       /* the slave's bytes (see encode_slave) */
 } SavedState;
 
-/* serialized FMU state: the header of fmi2_cs.c (magic, time, instance state, fmi2Terminated, last DoStep
- * status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
+/* serialized FMU state: the header of fmi2_common.h (magic, time, instance state, fmi2Terminated, last
+ * DoStep status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
  * fields and the engine snapshot. */
-#define SERIAL_MAGIC "rocking FMI2 state v2\n"
-#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
-#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
-#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
 #define PAYLOAD_MAGIC "rocking engine FMU state v1\n"
 #define PAYLOAD_MAGIC_SIZE (sizeof PAYLOAD_MAGIC - 1)
 #define GUID_SIZE 36
-
-static uint32_t crc32_update(uint32_t crc, const unsigned char *p, size_t n) {
-    crc = ~crc;
-    while (n--) {
-        crc ^= *p++;
-        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-static uint32_t serial_crc(const unsigned char *header, const unsigned char *payload, size_t n) {
-    return crc32_update(crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
-}
 
 /* ------------------------------------------------------------------------------------------ texts */
 /* Python's repr of a float: the shortest text that reads back as the same double, in the notation Python
@@ -201,56 +130,7 @@ static void py_repr(double x, char *out, size_t size) {
 }
 
 /* ------------------------------------------------------------------------------------------ messages */
-static int category_enabled(const Instance *S, const char *category) {
-    if (S->n_categories == 0) return 1;
-    for (size_t i = 0; i < S->n_categories; i++)
-        if (category && strcmp(S->categories[i], category) == 0) return 1;
-    return 0;
-}
-
-static void emit(Instance *S, fmi2Status status, const char *category, const char *text) {
-    if (status > S->worst_logged && status <= fmi2Warning) S->worst_logged = status;
-    if (!S->logger) return;
-    if (status == fmi2OK && !(S->logging_on && category_enabled(S, category))) return;
-    S->logger(S->env, S->name, status, category ? category : "logAll", "%s", text ? text : "");
-}
-
-static void logf_(Instance *S, fmi2Status status, const char *category, const char *format, ...) {
-    char text[4096];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    emit(S, status, category, text);
-}
-#define log_error(S, ...) logf_(S, fmi2Error, "logStatusError", __VA_ARGS__)
 #define log_warning(S, ...) logf_(S, fmi2Warning, "logStatusWarning", __VA_ARGS__)
-
-static int valid(const Instance *S) { return S && S->magic == INSTANCE_MAGIC; }
-
-static fmi2Status illegal(Instance *S, const char *function) {
-    log_error(S, "%s: illegal call sequence: the instance is %s", function, state_name(S->state));
-    if (S->state != FATAL_STATE) S->state = ERROR_STATE;
-    return fmi2Error;
-}
-
-static fmi2Status fail(Instance *S, fmi2Status status) {
-    if (status == fmi2Error) S->state = ERROR_STATE;
-    if (status == fmi2Fatal) S->state = FATAL_STATE;
-    return status;
-}
-
-#define BEGIN(F)                                                                  \
-    Instance *S = (Instance *)c;                                                  \
-    if (!valid(S)) return fmi2Error;                                              \
-    S->worst_logged = fmi2OK;                                                     \
-    if (!(S->state & MASK_##F)) return illegal(S, "fmi2" #F)
-
-#define NOT_NULL(F, p)                                                            \
-    if (!(p)) {                                                                   \
-        log_error(S, "fmi2" #F ": argument " #p " is NULL");                      \
-        return fail(S, fmi2Error);                                                \
-    }
 
 /* ------------------------------------------------------------------------------------------ the slave */
 static void slave_clear(Slave *s) {
@@ -397,136 +277,65 @@ static int is_directory(const char *path) {
 }
 
 /* ------------------------------------------------------------------------------------------ life cycle */
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
-static void instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
-    if (!functions || !functions->logger) return;
-    char text[2048];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s", text);
-}
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     (void)visible;
-    if (!instanceName || !instanceName[0]) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
-                          "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
-                          (int)fmi2CoSimulation);
-        return NULL;
-    }
-    if (!fmuGUID) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
-        return NULL;
-    }
+    if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     if (strcmp(fmuGUID, RK_FMU_GUID) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the GUID of "
-                          "this binary, %s (the modelDescription.xml belongs to another FMU or build)", fmuGUID,
-                          RK_FMU_GUID);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID \"%.100s\" does not match the "
+                                "GUID of this binary, %s (the modelDescription.xml belongs to another FMU or build)",
+                                fmuGUID, RK_FMU_GUID);
         return NULL;
     }
     /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
      * binary refuses it (fmi_binary/uri.c, the same messages) */
     char resources[4096], why[2048];
     if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
     if (!is_directory(resources)) {
-        instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from fmuResourceLocation "
-                          "\"%.500s\") does not exist or is not a folder", resources, fmuResourceLocation);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                                "fmuResourceLocation \"%.500s\") does not exist or is not a folder", resources,
+                                fmuResourceLocation);
         return NULL;
     }
     Instance *S = (Instance *)calloc(1, sizeof(Instance));
-    if (!S || !(S->name = (char *)malloc(strlen(instanceName) + 1))) {
+    if (!S || !(S->f.name = (char *)malloc(strlen(instanceName) + 1))) {
         free(S);
-        instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
     }
-    strcpy(S->name, instanceName);
-    S->magic = INSTANCE_MAGIC;
-    S->state = INSTANTIATED;
-    S->logger = functions ? functions->logger : NULL;
-    S->env = functions ? functions->componentEnvironment : NULL;
-    S->logging_on = loggingOn ? 1 : 0;
-    S->last_step_status = fmi2OK;
+    strcpy(S->f.name, instanceName);
+    fmi2c_init(&S->f, functions, loggingOn, FMI2C_MESSAGE_MAX); /* messages of at most 4095 bytes */
     slave_clear(&S->s);
     return S;
-}
-
-static void free_categories(Instance *S) {
-    for (size_t i = 0; i < S->n_categories; i++) free(S->categories[i]);
-    free(S->categories);
-    S->categories = NULL;
-    S->n_categories = 0;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
     Instance *S = (Instance *)c;
     if (!valid(S)) return;
     rk_engine_free(S->engine);
-    free_categories(S);
-    S->magic = 0;
-    free(S->name);
+    fmi2c_free_categories(&S->f);
+    S->f.magic = 0;
+    free(S->f.name);
     free(S);
-}
-
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
-                               const fmi2String categories[]) {
-    BEGIN(SetDebugLogging);
-    if (nCategories > 0) NOT_NULL(SetDebugLogging, categories);
-    for (size_t i = 0; i < nCategories; i++) NOT_NULL(SetDebugLogging, categories[i]);
-    free_categories(S);
-    if (nCategories > 0) {
-        S->categories = (char **)calloc(nCategories, sizeof(char *));
-        if (!S->categories) return fail(S, fmi2Error);
-        for (size_t i = 0; i < nCategories; i++) {
-            S->categories[i] = (char *)malloc(strlen(categories[i]) + 1);
-            if (!S->categories[i]) {
-                S->n_categories = i;
-                return fail(S, fmi2Error);
-            }
-            strcpy(S->categories[i], categories[i]);
-        }
-    }
-    S->n_categories = nCategories;
-    S->logging_on = loggingOn ? 1 : 0;
-    return fmi2OK;
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     BEGIN(SetupExperiment);
-    if (!isfinite(startTime)) {
-        log_error(S, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
-        return fail(S, fmi2Error);
-    }
-    if (stopTimeDefined && !(stopTime >= startTime)) {
-        log_error(S, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
-                  stopTime, startTime);
-        return fail(S, fmi2Error);
-    }
-    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
-        log_error(S, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
+        return fmi2Error;
     S->s.t0 = startTime;
-    S->time = startTime;
+    S->f.time = startTime;
     return fmi2OK;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     BEGIN(EnterInitializationMode);
-    S->state = INITIALIZATION_MODE;
+    S->f.state = INITIALIZATION_MODE;
     return fmi2OK;
 }
 
@@ -545,17 +354,15 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     /* a rate set before initialization refers to the start of the first communication step */
     if (S->s.has_rate) S->s.rate_t = S->s.t0;
     update_outputs(S);
-    S->state = STEP_COMPLETE;
-    S->terminated_flag = 0;
-    S->last_step_status = fmi2OK;
-    return S->worst_logged;
+    fmi2c_enter_simulation(&S->f);
+    return S->f.worst_logged;
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     BEGIN(Terminate);
-    if (S->state == ERROR_STATE) return fmi2OK;
+    if (S->f.state == ERROR_STATE) return fmi2OK;
     S->s.terminated = 1;
-    S->state = TERMINATED;
+    S->f.state = TERMINATED;
     return fmi2OK;
 }
 
@@ -564,10 +371,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     rk_engine_free(S->engine);
     S->engine = NULL;
     slave_clear(&S->s);
-    S->state = INSTANTIATED;
-    S->time = 0.0;
-    S->terminated_flag = 0;
-    S->last_step_status = fmi2OK;
+    fmi2c_reset(&S->f);
     return fmi2OK;
 }
 
@@ -821,21 +625,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     (void)noSetFMUStatePriorToCurrentPoint;
     BEGIN(DoStep);
     const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (!(h > 0.0) || !isfinite(h)) {
-        log_error(S, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
-        return fail(S, fmi2Error);
-    }
-    if (!isfinite(t) || fabs(t - S->time) > TIME_TOLERANCE * fmax(1.0, fabs(S->time))) {
-        log_error(S, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the time of the instance, "
-                  "%.17g; each step starts where the last one ended (to go back, restore a state saved with "
-                  "fmi2GetFMUstate)", t, S->time);
-        return fail(S, fmi2Error);
-    }
+    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
     const double t_end = t + h;
-    if (!isfinite(t_end)) {
-        log_error(S, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %g is not finite", t_end);
-        return fail(S, fmi2Error);
-    }
     Slave *s = &S->s;
     if (s->has_error || !S->engine) {
         log_error(S, "fmi2DoStep: RuntimeError: step refused after an earlier failure (call fmi2Reset): %s",
@@ -913,32 +704,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                          rk_status_name(st), rk_engine_message(e));
                 s->has_error = 1;
                 log_error(S, "fmi2DoStep: RuntimeError: %s", s->error);
-                S->last_step_status = fmi2Error;
+                S->f.last_step_status = fmi2Error;
                 return fail(S, fmi2Error);
             }
         }
     }
-    fmi2Status status;
-    if (refused) {
-        status = fmi2Discard;
-        S->state = STEP_FAILED;
-        S->terminated_flag = 1;
-    } else {
-        s->t = t_end;
-        status = S->worst_logged;
-        S->state = STEP_COMPLETE;
-        S->terminated_flag = 0;
-        S->time = t_end;
-    }
-    S->last_step_status = status;
-    return status;
-}
-
-fmi2Status fmi2CancelStep(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return fmi2Error;
-    log_error(S, "fmi2CancelStep: no step is in progress (fmi2DoStep never returns fmi2Pending)");
-    return fail(S, fmi2Error);
+    if (!refused) s->t = t_end;
+    return fmi2c_step_done(&S->f, refused, S->f.worst_logged, t_end);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -990,68 +762,6 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
         s->rate_t = now;
     }
     return fmi2OK;
-}
-
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[]) {
-    (void)vr; (void)order; (void)value;
-    BEGIN(GetRealOutputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    log_error(S, "fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder "
-              "= 0)");
-    return fail(S, fmi2Error);
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
-                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return fmi2Error;
-    log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
-    return fail(S, fmi2Error);
-}
-
-/* ------------------------------------------------------------------------------------------ status */
-static fmi2Status unavailable(Instance *S, const char *function, int kind) {
-    logf_(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function, kind);
-    return fmi2Discard;
-}
-
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    BEGIN(Status);
-    NOT_NULL(GetStatus, value);
-    if (s != fmi2DoStepStatus) return unavailable(S, "fmi2GetStatus", (int)s);
-    *value = S->last_step_status;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    BEGIN(Status);
-    NOT_NULL(GetRealStatus, value);
-    if (s != fmi2LastSuccessfulTime) return unavailable(S, "fmi2GetRealStatus", (int)s);
-    *value = S->time;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    BEGIN(Status);
-    NOT_NULL(GetIntegerStatus, value);
-    return unavailable(S, "fmi2GetIntegerStatus", (int)s);
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    BEGIN(Status);
-    NOT_NULL(GetBooleanStatus, value);
-    if (s != fmi2Terminated) return unavailable(S, "fmi2GetBooleanStatus", (int)s);
-    *value = S->terminated_flag ? fmi2True : fmi2False;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    BEGIN(Status);
-    NOT_NULL(GetStringStatus, value);
-    return unavailable(S, "fmi2GetStringStatus", (int)s);
 }
 
 /* ------------------------------------------------------------------------------------------ FMU state */
@@ -1154,7 +864,7 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
         put_plain(q, &ps);
         q += PLAIN_SIZE;
     }
-    uint32_t crc = crc32_update(0, p, *n - 4);
+    uint32_t crc = fmi2c_crc32_update(0, p, *n - 4);
     memcpy(q, &crc, 4);
     return p;
 }
@@ -1167,7 +877,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     }
     uint32_t crc;
     memcpy(&crc, p + n - 4, 4);
-    if (crc != crc32_update(0, p, n - 4)) {
+    if (crc != fmi2c_crc32_update(0, p, n - 4)) {
         snprintf(why, size, "the engine FMU state is corrupted (CRC-32 mismatch of its %zu payload bytes)", n - 4);
         return -1;
     }
@@ -1260,7 +970,7 @@ static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
 }
 
 static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, unsigned char *payload, size_t n,
-                             const SavedState *fields, fmi2FMUstate *out) {
+                             const fmi2c_fields *fields, fmi2FMUstate *out) {
     if (!payload) {
         log_error(S, "%s: out of memory", function);
         return fmi2Error;
@@ -1272,7 +982,7 @@ static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, 
         return fmi2Error;
     }
     free(st->payload);
-    *st = *fields;
+    st->fields = *fields;
     st->magic = STATE_MAGIC;
     st->payload = payload;
     st->n = n;
@@ -1290,7 +1000,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     }
     size_t n = 0;
     unsigned char *payload = encode_slave(S, &n);
-    const SavedState fields = {0, S->state, S->time, S->terminated_flag, S->last_step_status, 0, NULL};
+    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
     if (keep_state(S, "fmi2GetFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error) return fail(S, fmi2Error);
     return fmi2OK;
 }
@@ -1304,10 +1014,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
         log_error(S, "fmi2SetFMUstate: state rejected, the instance keeps its current state: %s", why);
         return fail(S, fmi2Error);
     }
-    S->state = st->instance_state;
-    S->time = st->time;
-    S->terminated_flag = st->terminated_flag;
-    S->last_step_status = st->last_step_status;
+    fmi2c_restore_fields(&S->f, &st->fields);
     return fmi2OK;
 }
 
@@ -1344,13 +1051,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
         return fail(S, fmi2Error);
     }
     char *p = serializedState;
-    int32_t fields[3] = {st->instance_state, st->terminated_flag, (int32_t)st->last_step_status};
-    memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
-    memcpy(p + SERIAL_MAGIC_SIZE, &st->time, 8);
-    memcpy(p + SERIAL_MAGIC_SIZE + 8, fields, sizeof fields);
     memcpy(p + SERIAL_HEADER_SIZE, st->payload, st->n);
-    uint32_t crc = serial_crc((const unsigned char *)p, st->payload, st->n);
-    memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
+    fmi2c_write_header((unsigned char *)p, &st->fields, st->payload, st->n);
     return fmi2OK;
 }
 
@@ -1359,29 +1061,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     BEGIN(SetFMUstate);
     NOT_NULL(DeSerializeFMUstate, serializedState);
     NOT_NULL(DeSerializeFMUstate, FMUstate);
-    int32_t header[3];
-    double time;
-    if (size < SERIAL_HEADER_SIZE || memcmp(serializedState, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
-        log_error(S, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
-        return fail(S, fmi2Error);
-    }
-    uint32_t crc;
-    memcpy(&crc, serializedState + SERIAL_CRC_OFFSET, 4);
-    if (crc != serial_crc((const unsigned char *)serializedState,
-                          (const unsigned char *)serializedState + SERIAL_HEADER_SIZE, size - SERIAL_HEADER_SIZE)) {
-        log_error(S, "fmi2DeSerializeFMUstate: state rejected, the instance keeps its current state: the %zu "
-                  "bytes are corrupted (CRC-32 mismatch)", size);
-        return fail(S, fmi2Error);
-    }
-    memcpy(&time, serializedState + SERIAL_MAGIC_SIZE, 8);
-    memcpy(header, serializedState + SERIAL_MAGIC_SIZE + 8, sizeof header);
-    const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
-    int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
-    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
-        header[2] < fmi2OK || header[2] > fmi2Discard) {
-        log_error(S, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
-        return fail(S, fmi2Error);
-    }
+    fmi2c_fields fields;
+    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
     SavedState *st = NULL;
     if (*FMUstate) {
         st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
@@ -1390,7 +1071,6 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     size_t n = size - SERIAL_HEADER_SIZE;
     unsigned char *payload = (unsigned char *)malloc(n ? n : 1);
     if (payload) memcpy(payload, serializedState + SERIAL_HEADER_SIZE, n);
-    const SavedState fields = {0, header[0], time, header[1], (fmi2Status)header[2], 0, NULL};
     if (keep_state(S, "fmi2DeSerializeFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error)
         return fail(S, fmi2Error);
     return fmi2OK;

@@ -34,9 +34,10 @@ _SPECIAL = {"scheme": "RK_ROLE_SCHEME", "dt_max": "RK_ROLE_DT_MAX", "tolerance":
 _TYPES = {"Real": "RK_REAL", "Integer": "RK_INTEGER", "Boolean": "RK_BOOLEAN", "String": "RK_STRING"}
 _CAUS = {"parameter": "RK_PARAMETER", "input": "RK_INPUT", "output": "RK_OUTPUT"}
 
-#: the C sources of a standalone FMU besides the engine's (rocking_model/engine/src): the FMI layer and the
-#: resource-URI check it shares with the pythonfmu FMUs' binary (paths relative to fmi_binary/)
-FMI_SOURCES = ("standalone/fmi2_engine.c", "uri.c", "uri.h")
+#: the C sources of a standalone FMU besides the engine's (rocking_model/engine/src): the FMI layer, with the
+#: FMI plumbing (fmi2_common) and the resource-URI check it shares with the pythonfmu FMUs' binary (paths
+#: relative to fmi_binary/)
+FMI_SOURCES = ("standalone/fmi2_engine.c", "fmi2_common.c", "fmi2_common.h", "uri.c", "uri.h")
 
 
 def slave_instance(slave_class):

@@ -1,0 +1,340 @@
+/* The FMI 2.0 plumbing shared by fmi2_cs.c and standalone/fmi2_engine.c (fmi2_common.h): messages, state
+ * checks, status bookkeeping, the serialized state's header, and the FMI calls that need no backend. */
+#define FMI2C_IMPLEMENTATION /* none of the backends' shorthands */
+#include "fmi2_common.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *fmi2c_state_name(int state) {
+    switch (state) {
+    case INSTANTIATED: return "instantiated";
+    case INITIALIZATION_MODE: return "in initialization mode";
+    case STEP_COMPLETE: return "simulating (step complete)";
+    case STEP_FAILED: return "simulating (last step discarded)";
+    case TERMINATED: return "terminated";
+    case ERROR_STATE: return "in the error state (call fmi2Reset or fmi2FreeInstance)";
+    default: return "in the fatal state (only fmi2FreeInstance is allowed)";
+    }
+}
+
+int fmi2c_valid(const void *c) { return c && ((const fmi2c_instance *)c)->magic == FMI2C_INSTANCE_MAGIC; }
+
+/* ------------------------------------------------------------------------------------------ messages */
+static int category_enabled(const fmi2c_instance *F, const char *category) {
+    if (F->n_categories == 0) return 1;
+    for (size_t i = 0; i < F->n_categories; i++)
+        if (category && strcmp(F->categories[i], category) == 0) return 1;
+    return 0;
+}
+
+void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, const char *text) {
+    if (status > F->worst_logged && status <= fmi2Warning) F->worst_logged = status;
+    if (!F->logger) return;
+    if (status == fmi2OK && !(F->logging_on && category_enabled(F, category))) return;
+    F->logger(F->env, F->name, status, category ? category : "logAll", "%s", text ? text : "");
+}
+
+void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...) {
+    char text[FMI2C_MESSAGE_MAX];
+    size_t size = F->message_size > 0 && F->message_size < sizeof text ? F->message_size : sizeof text;
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, size, format, args);
+    va_end(args);
+    fmi2c_emit(F, status, category, text);
+}
+
+fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function) {
+    fmi2c_logf(F, fmi2Error, "logStatusError", "%s: illegal call sequence: the instance is %s", function,
+               fmi2c_state_name(F->state));
+    if (F->state != FATAL_STATE) F->state = ERROR_STATE;
+    return fmi2Error;
+}
+
+fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status) {
+    if (status == fmi2Error) F->state = ERROR_STATE;
+    if (status == fmi2Fatal) F->state = FATAL_STATE;
+    return status;
+}
+
+void fmi2c_free_categories(fmi2c_instance *F) {
+    for (size_t i = 0; i < F->n_categories; i++) free(F->categories[i]);
+    free(F->categories);
+    F->categories = NULL;
+    F->n_categories = 0;
+}
+
+#define log_error(F, ...) fmi2c_logf(F, fmi2Error, "logStatusError", __VA_ARGS__)
+
+fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h) {
+    if (!(h > 0.0) || !isfinite(h)) {
+        log_error(F, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (!isfinite(t) || fabs(t - F->time) > TIME_TOLERANCE * fmax(1.0, fabs(F->time))) {
+        log_error(F, "fmi2DoStep: currentCommunicationPoint = %.17g does not match the time of the instance, "
+                  "%.17g; each step starts where the last one ended (to go back, restore a state saved with "
+                  "fmi2GetFMUstate)", t, F->time);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (!isfinite(t + h)) {
+        log_error(F, "fmi2DoStep: currentCommunicationPoint + communicationStepSize = %g is not finite", t + h);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end) {
+    fmi2Status status;
+    if (refused) {
+        status = fmi2Discard;
+        F->state = STEP_FAILED;
+        F->terminated_flag = 1;
+    } else {
+        status = logged;
+        F->state = STEP_COMPLETE;
+        F->terminated_flag = 0;
+        F->time = t_end;
+    }
+    F->last_step_status = status;
+    return status;
+}
+
+fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                             fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    if (!isfinite(startTime)) {
+        log_error(F, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (stopTimeDefined && !(stopTime >= startTime)) {
+        log_error(F, "fmi2SetupExperiment: stopTime = %g is invalid; allowed range: [startTime = %g, inf]",
+                  stopTime, startTime);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+        log_error(F, "fmi2SetupExperiment: tolerance = %g is invalid; allowed range: (0, inf)", tolerance);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------------------------------------ life cycle */
+void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...) {
+    if (!functions || !functions->logger) return;
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    functions->logger(functions->componentEnvironment, name ? name : "", fmi2Error, "logStatusError", "%s", text);
+}
+
+int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
+                            fmi2String fmuGUID) {
+    if (!instanceName || !instanceName[0]) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
+        return -1;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuType = %d is not supported; this FMU "
+                                "implements co-simulation only (fmi2CoSimulation = %d)", (int)fmuType,
+                                (int)fmi2CoSimulation);
+        return -1;
+    }
+    if (!fmuGUID) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: fmuGUID is NULL");
+        return -1;
+    }
+    return 0;
+}
+
+void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
+                size_t message_size) {
+    F->magic = FMI2C_INSTANCE_MAGIC;
+    F->message_size = message_size;
+    F->state = INSTANTIATED;
+    F->logger = functions ? functions->logger : NULL;
+    F->env = functions ? functions->componentEnvironment : NULL;
+    F->logging_on = loggingOn ? 1 : 0;
+    F->last_step_status = fmi2OK;
+}
+
+void fmi2c_enter_simulation(fmi2c_instance *F) {
+    F->state = STEP_COMPLETE;
+    F->terminated_flag = 0;
+    F->last_step_status = fmi2OK;
+}
+
+void fmi2c_reset(fmi2c_instance *F) {
+    F->state = INSTANTIATED;
+    F->time = 0.0;
+    F->terminated_flag = 0;
+    F->last_step_status = fmi2OK;
+}
+
+fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F) {
+    fmi2c_fields fields = {F->state, F->time, F->terminated_flag, F->last_step_status};
+    return fields;
+}
+
+void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields) {
+    F->state = fields->instance_state;
+    F->time = fields->time;
+    F->terminated_flag = fields->terminated_flag;
+    F->last_step_status = fields->last_step_status;
+}
+
+/* ------------------------------------------------------------------------------------------ FMI calls */
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    FMI2C_BEGIN(fmi2c_instance, SetDebugLogging);
+    if (nCategories > 0) FMI2C_NOT_NULL(SetDebugLogging, categories);
+    for (size_t i = 0; i < nCategories; i++) FMI2C_NOT_NULL(SetDebugLogging, categories[i]);
+    fmi2c_free_categories(S);
+    if (nCategories > 0) {
+        S->categories = (char **)calloc(nCategories, sizeof(char *));
+        if (!S->categories) return fmi2c_fail(S, fmi2Error);
+        for (size_t i = 0; i < nCategories; i++) {
+            S->categories[i] = (char *)malloc(strlen(categories[i]) + 1);
+            if (!S->categories[i]) {
+                S->n_categories = i;
+                return fmi2c_fail(S, fmi2Error);
+            }
+            strcpy(S->categories[i], categories[i]);
+        }
+    }
+    S->n_categories = nCategories;
+    S->logging_on = loggingOn ? 1 : 0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    fmi2c_instance *S = (fmi2c_instance *)c;
+    if (!fmi2c_valid(S)) return fmi2Error;
+    log_error(S, "fmi2CancelStep: no step is in progress (fmi2DoStep never returns fmi2Pending)");
+    return fmi2c_fail(S, fmi2Error);
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    (void)vr; (void)order; (void)value;
+    FMI2C_BEGIN(fmi2c_instance, GetRealOutputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    log_error(S, "fmi2GetRealOutputDerivatives: output derivatives are not provided (maxOutputDerivativeOrder "
+              "= 0)");
+    return fmi2c_fail(S, fmi2Error);
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
+    fmi2c_instance *S = (fmi2c_instance *)c;
+    if (!fmi2c_valid(S)) return fmi2Error;
+    log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
+    return fmi2c_fail(S, fmi2Error);
+}
+
+/* ------------------------------------------------------------------------------------------ status */
+static fmi2Status unavailable(fmi2c_instance *S, const char *function, int kind) {
+    fmi2c_logf(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function,
+               kind);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    FMI2C_BEGIN(fmi2c_instance, Status);
+    FMI2C_NOT_NULL(GetStatus, value);
+    if (s != fmi2DoStepStatus) return unavailable(S, "fmi2GetStatus", (int)s);
+    *value = S->last_step_status;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    FMI2C_BEGIN(fmi2c_instance, Status);
+    FMI2C_NOT_NULL(GetRealStatus, value);
+    if (s != fmi2LastSuccessfulTime) return unavailable(S, "fmi2GetRealStatus", (int)s);
+    *value = S->time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    FMI2C_BEGIN(fmi2c_instance, Status);
+    FMI2C_NOT_NULL(GetIntegerStatus, value);
+    return unavailable(S, "fmi2GetIntegerStatus", (int)s);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    FMI2C_BEGIN(fmi2c_instance, Status);
+    FMI2C_NOT_NULL(GetBooleanStatus, value);
+    if (s != fmi2Terminated) return unavailable(S, "fmi2GetBooleanStatus", (int)s);
+    *value = S->terminated_flag ? fmi2True : fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    FMI2C_BEGIN(fmi2c_instance, Status);
+    FMI2C_NOT_NULL(GetStringStatus, value);
+    return unavailable(S, "fmi2GetStringStatus", (int)s);
+}
+
+/* ------------------------------------------------------------------------------------------ state header */
+uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n) {
+    crc = ~crc;
+    while (n--) {
+        crc ^= *p++;
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static uint32_t serial_crc(const unsigned char *header, const unsigned char *payload, size_t n) {
+    return fmi2c_crc32_update(fmi2c_crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
+}
+
+void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n) {
+    int32_t ints[3] = {fields->instance_state, fields->terminated_flag, (int32_t)fields->last_step_status};
+    memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
+    memcpy(p + SERIAL_MAGIC_SIZE, &fields->time, 8);
+    memcpy(p + SERIAL_MAGIC_SIZE + 8, ints, sizeof ints);
+    uint32_t crc = serial_crc(p, payload, n);
+    memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
+}
+
+fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields) {
+    int32_t header[3];
+    double time;
+    if (size < SERIAL_HEADER_SIZE || memcmp(serialized, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
+        log_error(F, "fmi2DeSerializeFMUstate: the %zu bytes are not a serialized state of this FMU", size);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    uint32_t crc;
+    memcpy(&crc, serialized + SERIAL_CRC_OFFSET, 4);
+    if (crc != serial_crc((const unsigned char *)serialized,
+                          (const unsigned char *)serialized + SERIAL_HEADER_SIZE, size - SERIAL_HEADER_SIZE)) {
+        log_error(F, "fmi2DeSerializeFMUstate: state rejected, the instance keeps its current state: the %zu "
+                  "bytes are corrupted (CRC-32 mismatch)", size);
+        return fmi2c_fail(F, fmi2Error);
+    }
+    memcpy(&time, serialized + SERIAL_MAGIC_SIZE, 8);
+    memcpy(header, serialized + SERIAL_MAGIC_SIZE + 8, sizeof header);
+    const int allowed = INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED;
+    int single_state = header[0] > 0 && (header[0] & (header[0] - 1)) == 0;
+    if (!isfinite(time) || !single_state || !(header[0] & allowed) || (header[1] != 0 && header[1] != 1) ||
+        header[2] < fmi2OK || header[2] > fmi2Discard) {
+        log_error(F, "fmi2DeSerializeFMUstate: the header of the serialized state is corrupt");
+        return fmi2c_fail(F, fmi2Error);
+    }
+    fields->instance_state = header[0];
+    fields->time = time;
+    fields->terminated_flag = header[1];
+    fields->last_step_status = (fmi2Status)header[2];
+    return fmi2OK;
+}

@@ -1,0 +1,155 @@
+/* The FMI 2.0 co-simulation plumbing shared by the two binaries: fmi2_cs.c (the pythonfmu FMUs, a Python
+ * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). Here: the instance states and
+ * the per-call state masks (after modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and
+ * argument checks, the messages (always passed to the logger as data, "%s"), the status bookkeeping
+ * (fmi2Terminated, fmi2LastSuccessfulTime, fmi2DoStepStatus) and the serialized FMU state's header with its
+ * CRC-32. Each backend's Instance starts with an `fmi2c_instance` named `f`. C99. */
+#ifndef FMI2_COMMON_H
+#define FMI2_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "fmi2Functions.h"
+
+/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
+ * master's time is a sum of step sizes and may differ from ours by round-off */
+#define TIME_TOLERANCE 1e-9
+
+enum {
+    INSTANTIATED = 1 << 0,
+    INITIALIZATION_MODE = 1 << 1,
+    STEP_COMPLETE = 1 << 2,
+    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
+    TERMINATED = 1 << 4,
+    ERROR_STATE = 1 << 5,
+    FATAL_STATE = 1 << 6,
+};
+#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
+#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
+
+/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
+#define MASK_SetupExperiment INSTANTIATED
+#define MASK_EnterInitializationMode INSTANTIATED
+#define MASK_ExitInitializationMode INITIALIZATION_MODE
+#define MASK_Terminate (SIMULATING | ERROR_STATE)
+#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
+#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
+#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
+#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
+#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
+#define MASK_FreeFMUstate ANY_STATE
+#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
+#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
+#define MASK_DoStep SIMULATING
+#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
+
+/* the FMI part of an instance: the first member (`f`) of each backend's Instance */
+typedef struct {
+    unsigned magic;            /* FMI2C_INSTANCE_MAGIC while the instance lives */
+    int state;                 /* one of the states above */
+    char *name;
+    fmi2CallbackLogger logger;
+    fmi2ComponentEnvironment env;
+    int logging_on;
+    char **categories;         /* enabled debug categories; none listed: all */
+    size_t n_categories;
+    double time;               /* [s] the communication point (fmi2LastSuccessfulTime) */
+    int terminated_flag;       /* fmi2Terminated */
+    fmi2Status last_step_status; /* fmi2DoStepStatus */
+    fmi2Status worst_logged;   /* the worst status logged during the current call (capped at Warning) */
+    size_t message_size;       /* the longest message text + 1 (longer texts are cut) */
+} fmi2c_instance;
+
+/* the backend's instance tag (each binary its own, so that one binary never takes the other's instance) */
+extern const unsigned FMI2C_INSTANCE_MAGIC;
+#define FMI2C_MESSAGE_MAX 4096
+
+const char *fmi2c_state_name(int state);
+int fmi2c_valid(const void *c);
+void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, const char *text);
+void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...);
+fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function);
+fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
+void fmi2c_free_categories(fmi2c_instance *F);
+/* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
+fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
+/* the bookkeeping at the end of an fmi2DoStep that got that far: refused (fmi2Discard, fmi2Terminated true,
+ * the time unchanged) or done (`logged`, the worst status logged, and the time t_end); the status returned */
+fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end);
+/* fmi2SetupExperiment's checks of its arguments: fmi2OK, or fmi2Error logged */
+fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
+                             fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+
+/* fmi2Instantiate: an error message to the caller's logger (no instance yet) */
+void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...);
+/* fmi2Instantiate's checks of instanceName, fmuType and fmuGUID (not NULL): 0, or -1 with the error logged */
+int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
+                            fmi2String fmuGUID);
+/* a new instance's FMI part (its name apart): instantiated, messages of at most message_size - 1 bytes */
+void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
+                size_t message_size);
+/* the bookkeeping of a successful fmi2ExitInitializationMode (simulating, fmi2Terminated false) */
+void fmi2c_enter_simulation(fmi2c_instance *F);
+/* the bookkeeping of a successful fmi2Reset (instantiated, time 0, fmi2Terminated false) */
+void fmi2c_reset(fmi2c_instance *F);
+
+/* what an FMU state keeps of the FMI part (the header of its serialized form) */
+typedef struct {
+    int instance_state;
+    double time;
+    int terminated_flag;
+    fmi2Status last_step_status;
+} fmi2c_fields;
+fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F);
+void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
+
+#ifndef FMI2C_IMPLEMENTATION
+/* the backends' shorthands on their `Instance *S`, whose first member is the fmi2c_instance f */
+#define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
+#define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
+#define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
+#define fail(S, status) fmi2c_fail(&(S)->f, status)
+#define valid(S) fmi2c_valid(S)
+#define BEGIN(F) FMI2C_BEGIN(Instance, F)
+#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
+#endif
+
+/* Entering call F (MASK_F): S is the backend's Instance */
+#define FMI2C_BEGIN(TYPE, F)                                                      \
+    TYPE *S = (TYPE *)c;                                                          \
+    if (!fmi2c_valid(S)) return fmi2Error;                                        \
+    ((fmi2c_instance *)S)->worst_logged = fmi2OK;                                 \
+    if (!(((fmi2c_instance *)S)->state & MASK_##F)) return fmi2c_illegal((fmi2c_instance *)S, "fmi2" #F)
+
+#define FMI2C_NOT_NULL(F, p)                                                      \
+    if (!(p)) {                                                                   \
+        fmi2c_logf((fmi2c_instance *)S, fmi2Error, "logStatusError", "fmi2" #F ": argument " #p " is NULL"); \
+        return fmi2c_fail((fmi2c_instance *)S, fmi2Error);                        \
+    }
+
+/* serialized FMU state: this header, then the backend's bytes.
+ *   offset  size  field
+ *   0       22    SERIAL_MAGIC
+ *   22      8     time [s] (double)
+ *   30      12    instance state, fmi2Terminated flag, last fmi2DoStep status (int32 each)
+ *   42      4     CRC-32 (IEEE 802.3) of bytes 0..41 and of the backend's bytes that follow
+ *   46      n     the backend's bytes
+ * The CRC covers every byte of the state but its own four: any corrupted byte (indeed any error burst of up
+ * to 32 bits) is detected before anything is set, and the state is refused with fmi2Error. It guards against
+ * accidents, not against someone who rewrites the checksum. */
+#define SERIAL_MAGIC "rocking FMI2 state v2\n"
+#define SERIAL_MAGIC_SIZE (sizeof SERIAL_MAGIC - 1)
+#define SERIAL_CRC_OFFSET (SERIAL_MAGIC_SIZE + 8 + 4 + 4 + 4)
+#define SERIAL_HEADER_SIZE (SERIAL_CRC_OFFSET + 4)
+
+/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
+uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n);
+/* Write the header into p[0, SERIAL_HEADER_SIZE) for the backend's `payload` of n bytes */
+void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n);
+/* Check and read the header of a serialized state (fmi2DeSerializeFMUstate): fmi2OK with the fields, or
+ * fmi2Error logged (the instance in the error state) */
+fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields);
+
+#endif
