@@ -76,8 +76,8 @@ STANDALONE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
 
 def slave_bytes(data: bytes) -> bytes:
     """The slave's own state format inside a serialized FMU state (after the binary's header: the
-    communication time, the FMI state fields and the CRC-32, fmi_binary/fmi2_cs.c and the standalone FMUs'
-    fmi2_engine.c)."""
+    communication time, the FMI state fields and the CRC-32, written by fmi_binary/fmi2_common.c for both kinds
+    of FMU)."""
     from rocking_model.fmi_state import MAGIC
 
     for magic in (MAGIC, STANDALONE_PAYLOAD_MAGIC):
@@ -100,7 +100,7 @@ def decode_payload(payload: bytes) -> dict:
     return decode_state(payload)
 
 
-#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_cs.c: magic 22,
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_common.c: magic 22,
 #: time 8, three int32 fields), and the header's size
 SERIAL_CRC_OFFSET = 42
 SERIAL_HEADER_SIZE = SERIAL_CRC_OFFSET + 4
@@ -2336,7 +2336,7 @@ Run it: `bash run.sh test tests/test_fault_suite.py`; one case by hand: `python 
 --list`, then `--case <id> --config <fmus.json>`. The session prints the classes tried and passing, the
 longest case and the longest single `fmi2DoStep`.
 
-## Statuses (FMI 2.0 §2.1.3, the project's binary `fmi_binary/fmi2_cs.c`)
+## Statuses (FMI 2.0 §2.1.3, the project's binaries: `fmi_binary/fmi2_common.c` shared by `fmi2_cs.c` and `standalone/fmi2_engine.c`)
 
 * **fmi2Error** for an invalid argument, value or call sequence, or a rejected FMU state: nothing of the call
   is applied; the instance is in the error state, where the getters, the status queries, `fmi2SetFMUstate`,
