@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import subprocess
+import os
 import sys
 import time
 import warnings
@@ -330,6 +331,13 @@ def cmd_ensemble(args) -> int:
         print(f"interrupted: the finished cases are in {args.out}; run the same command to resume",
               file=sys.stderr)
         return 130
+    except E.WorkersLost as exc:
+        print(f"rocking ensemble: error: {exc}", file=sys.stderr)
+        # the rows are written and the lock released (run_ensemble's finally); a cluster whose workers were
+        # being killed can leave Dask threads that would hold the interpreter's shutdown: end the process now
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(1)
     except E.EnsembleError as exc:
         print(f"rocking ensemble: error: {exc}", file=sys.stderr)
         return 1

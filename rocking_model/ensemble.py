@@ -711,8 +711,10 @@ def _progress(total: int, initial: int, enabled: bool):
 #: does) it can give up, and the wait for results would never end. An adaptive cluster that scales up from
 #: zero workers may need longer: run_ensemble(no_workers_timeout=...), CLI --no-workers-timeout.
 NO_WORKERS_TIMEOUT = 60.0
-#: [s] sleep between two looks at the finished tasks while none is ready
-_POLL = 0.05
+#: [s] sleep between two looks at the finished tasks while none is ready: short against a task of compiled
+#: cases (a few ms), long enough that the look costs nothing
+_POLL = 0.005
+
 #: [s] interval between two questions to the scheduler about its workers (one small RPC each)
 _WORKER_CHECK = 0.25
 #: [workers] how many workers may die (leave the cluster) while no batch finishes before the run ends with
@@ -723,16 +725,33 @@ MAX_DEATHS_WITHOUT_PROGRESS = 8
 
 
 def _wait_for_ready(ac) -> None:
-    """Wait at most `_POLL` for a batch to finish: woken by as_completed's condition as soon as one does (a
-    plain sleep would add up to `_POLL` per task, more than a task of compiled cases costs), a sleep where
-    the as_completed has no such condition."""
-    cond = getattr(ac, "thread_condition", None)
-    if cond is None or not hasattr(ac, "has_ready"):
-        time.sleep(_POLL)
-        return
-    with cond:
-        if not ac.has_ready():
-            cond.wait(timeout=_POLL)
+    """Wait `_POLL` for a batch to finish (a plain sleep: short, as a task of compiled cases costs a few ms;
+    as_completed's own condition variable is not used, as a run whose workers were killed over and over was
+    seen to stay in it)."""
+    time.sleep(_POLL)
+
+
+#: [s] how long one question to the scheduler about its workers may take; an answer that does not come (a
+#: scheduler busy with dying workers) counts as a look at a cluster without workers
+WORKER_QUERY_TIMEOUT = 2.0
+
+
+def _workers_now(client) -> set:
+    """The addresses of the cluster's workers now, or an empty set when the scheduler does not answer within
+    `WORKER_QUERY_TIMEOUT` (asked from a daemon thread, so that a hung call never holds the run)."""
+    import threading
+
+    box: list = []
+
+    def ask():
+        try:
+            box.append(set(client.nthreads()))
+        except Exception:                 # noqa: BLE001 - a scheduler that cannot answer has no usable worker
+            box.append(set())
+    th = threading.Thread(target=ask, daemon=True)
+    th.start()
+    th.join(WORKER_QUERY_TIMEOUT)
+    return box[0] if box else set()
 
 
 def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> None:
@@ -766,7 +785,7 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
         if time.monotonic() - t_check < _WORKER_CHECK:
             continue
         t_check = time.monotonic()
-        workers = set(client.nthreads())
+        workers = _workers_now(client)
         deaths += len(alive - workers)
         alive = workers
         if deaths >= MAX_DEATHS_WITHOUT_PROGRESS:
@@ -784,6 +803,9 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
                               f"were left; the finished cases are in {out}; run the same command to resume "
                               "(fewer --workers, or --batch-size 1, need less memory)")
 
+
+#: [s] how long a run waits for its Dask client and local cluster to close at its end (or after an error)
+CLOSE_TIMEOUT = 10.0
 
 #: [tasks] Dask tasks per worker by default: enough to balance cases of unequal cost, few enough that a task's
 #: scheduling and round trip (a few ms) stay small against its cases (0.1-1 ms each on the compiled engine)
@@ -903,10 +925,14 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
                 writer.close()
             if bar is not None:
                 bar.close()
-            if client is not None:
-                client.close()
-            if cluster is not None:
-                cluster.close()
+            # bounded: a cluster whose workers are being killed may never shut down cleanly, and the run must
+            # end (its rows are written) rather than wait for it
+            for closing in (client, cluster):
+                if closing is not None:
+                    try:
+                        closing.close(timeout=CLOSE_TIMEOUT)
+                    except Exception:             # noqa: BLE001 - a cluster that cannot close is abandoned
+                        pass
         finally:
             lock.release()
     summary["wall_time"] = time.perf_counter() - t0
