@@ -88,7 +88,7 @@ def test_model_description_units_variability_structure(fmu):
     assert units["J"] == {"kg": "1", "m": "2", "s": "-2"}
     assert units["rad/s"] == {"rad": "1", "s": "-1"}
     expected_units = dict(b="m", h="m", m="kg", g="m/s2", e_N="1", phi_0="rad", phi_dot_0="rad/s",
-                          dt_max="s", tolerance="1", ag="m/s2", phi="rad", phi_dot="rad/s", x="m", y="m",
+                          dt_max="s", tolerance="1", ag="m/s2", ag_v="m/s2", phi="rad", phi_dot="rad/s", x="m", y="m",
                           x_dot="m/s", y_dot="m/s", energy="J", mu="1", slip="m", friction_demand="1")
     variables = {}
     for i, sv in enumerate(root.find("ModelVariables"), start=1):
@@ -123,7 +123,13 @@ def test_model_description_units_variability_structure(fmu):
         for bound, value in (("min", p.fmu_min()), ("max", p.fmu_max())):
             assert (None if typ.get(bound) is None else float(typ.get(bound))) == value, (p.name, bound)
         assert variables[p.name][1].get("description").startswith(p.description)
-    assert (variables["ag"][1].get("causality"), variables["ag"][1].get("variability")) == ("input", "continuous")
+    for name in ("ag", "ag_v"):  # the horizontal and the vertical ground acceleration: the same declaration
+        sv, typ = variables[name][1], variables[name][2]
+        assert (sv.get("causality"), sv.get("variability")) == ("input", "continuous")
+        assert [float(typ.get(k)) for k in ("start", "min", "max")] == [0.0, -1000.0, 1000.0]
+    # the sign convention of ag_v is stated where the importer reads it
+    assert "positive upward" in variables["ag_v"][1].get("description")
+    assert "g + ag_v" in variables["ag_v"][1].get("description")
     for name in OUTPUTS:
         sv, typ = variables[name][1], variables[name][2]
         assert sv.get("causality") == "output" and sv.get("initial") == "calculated"

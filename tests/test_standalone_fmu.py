@@ -649,7 +649,10 @@ def test_overflowing_motion_refused_with_the_simulators_message(standalone, unzi
     r = Run(standalone[FLEX], unzipped[FLEX], "huge")
     blob = bytearray(r.f.serializeFMUstate(r.f.getFMUstate()))
     n_vars = len(r.md.modelVariables)
-    off = 46 + 28 + 36 + 4 + 8 * n_vars + 20 + 32 + 4 + 4          # the engine's plain state (no error text)
+    n_inputs = 2                                                    # ag, ag_v: (has_rate, rate, rate_t) each
+    # the engine's plain state (no error text): header, magic, GUID, n_vars, values, 4 flags, t, t0, n_inputs,
+    # the rates, the error's length, has_engine
+    off = 46 + 28 + 36 + 4 + 8 * n_vars + 16 + 16 + 4 + 20 * n_inputs + 4 + 4
     struct.pack_into("<ii4d", blob, off + 8, 1, 4, 1e148, 0.01, 0.0, 0.1)   # mode LEFT, y = [u, phi, u', phi']
     blob[-4:] = zlib.crc32(bytes(blob[46:-4])).to_bytes(4, "little")
     blob[42:46] = zlib.crc32(bytes(blob[:42]) + bytes(blob[46:])).to_bytes(4, "little")

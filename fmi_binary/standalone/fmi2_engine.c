@@ -34,6 +34,13 @@
 #include "uri.h"
 #include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
+#if RK_ENGINE_API_VERSION < 2 /* TEMPORARY until the engine with ag_v (v-c) is merged: horizontal only */
+#define rk_engine_advance(e, t_end, ag0, slope, ag_v0, ag_v_slope, max_steps, flags) \
+    ((ag_v0) != 0.0 ? RK_ERR_VALUE : rk_engine_advance(e, t_end, ag0, slope, max_steps, flags))
+#define rk_engine_advance_motion(e, t_end, ag, ag_v, max_steps) \
+    ((ag_v) != NULL ? RK_ERR_VALUE : rk_engine_advance_motion(e, t_end, ag, max_steps))
+#endif
+
 enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
 enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
 enum { RK_ROLE_PARAM, RK_ROLE_INITIAL, RK_ROLE_SCHEME, RK_ROLE_DT_MAX, RK_ROLE_TOLERANCE, RK_ROLE_MAX_STEPS,
@@ -60,9 +67,11 @@ const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7cu;
 /* the slave's part of the instance (RockingSlave._clear_state): what an FMU state holds */
 typedef struct {
     double values[RK_FMU_N_VARS]; /* every variable as a double (Integer / Boolean exactly representable) */
-    int initialized, terminated, frozen, has_rate;
+    int initialized, terminated, frozen;
     double t, t0;                 /* [s] communication point, start time */
-    double rate, rate_t;          /* input = value + rate (t - rate_t) when has_rate */
+    /* per Real input (index 0 ag, 1 ag_v; RockingSlave._rates): input = value + rate (t - rate_t) when has_rate */
+    int has_rate[RK_FMU_N_INPUTS];
+    double rate[RK_FMU_N_INPUTS], rate_t[RK_FMU_N_INPUTS];
     int has_error;
     char error[ERROR_LEN];        /* permanent failure, until reset */
 } Slave;
@@ -83,7 +92,7 @@ typedef struct {
 /* serialized FMU state: the header of fmi2_common.h (magic, time, instance state, fmi2Terminated, last
  * DoStep status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
  * fields and the engine snapshot. */
-#define PAYLOAD_MAGIC "rocking engine FMU state v1\n"
+#define PAYLOAD_MAGIC "rocking engine FMU state v2\n"
 #define PAYLOAD_MAGIC_SIZE (sizeof PAYLOAD_MAGIC - 1)
 #define GUID_SIZE 36
 
@@ -215,9 +224,10 @@ static long long max_steps_of(const Slave *s) {
     return -1;
 }
 
-static int input_index(void) {
+/* the variable (value reference) of Real input k: 0 ag, 1 ag_v */
+static int input_var(int k) {
     for (int i = 0; i < RK_FMU_N_VARS; i++)
-        if (RK_FMU_VARS[i].role == RK_ROLE_INPUT) return i;
+        if (RK_FMU_VARS[i].role == RK_ROLE_INPUT && RK_FMU_VARS[i].index == k) return i;
     return -1;
 }
 
@@ -352,7 +362,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     S->s.initialized = 1;
     S->s.t = S->s.t0;
     /* a rate set before initialization refers to the start of the first communication step */
-    if (S->s.has_rate) S->s.rate_t = S->s.t0;
+    for (int k = 0; k < RK_FMU_N_INPUTS; k++)
+        if (S->s.has_rate[k]) S->s.rate_t[k] = S->s.t0;
     update_outputs(S);
     fmi2c_enter_simulation(&S->f);
     return S->f.worst_logged;
@@ -504,7 +515,8 @@ static fmi2Status set_values(Instance *S, const char *function, int type, const 
     }
     for (size_t i = 0; i < nvr; i++) {
         S->s.values[vr[i]] = x[i];
-        if (RK_FMU_VARS[vr[i]].role == RK_ROLE_INPUT) S->s.has_rate = 0; /* held until a rate is given again */
+        if (RK_FMU_VARS[vr[i]].role == RK_ROLE_INPUT) /* held until a rate is given again */
+            S->s.has_rate[RK_FMU_VARS[vr[i]].index] = 0;
     }
     return fmi2OK;
 }
@@ -637,27 +649,38 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     py_repr(t, rt, sizeof rt);
     py_repr(t_end, rte, sizeof rte);
     int refused = 0;
-    /* the input (held, or a line after fmi2SetRealInputDerivatives) checked as the Python does */
-    const int in = input_index();
-    const rk_fmu_var *iv = &RK_FMU_VARS[in];
-    const double value = s->values[in];
+    /* the inputs (each held, or a line after fmi2SetRealInputDerivatives) checked in order as the Python does */
+    double value[RK_FMU_N_INPUTS];
     char why[1024], rv[40];
-    int bad = check_real(iv->name, value, iv, why, sizeof why);
-    double peak = fabs(value); /* the bound of |ag| over the step (GroundMotion.peak_bound) */
-    if (!bad && s->has_rate) {
-        char name[128];
-        double end = value + s->rate * (t_end - s->rate_t), start = value + s->rate * (t - s->rate_t);
-        peak = fmax(fabs(start), fabs(end));
-        snprintf(name, sizeof name, "%s at the end of the step (rate %g per s)", iv->name, s->rate);
-        bad = check_real(name, end, iv, why, sizeof why);
-        if (!bad) {
-            snprintf(name, sizeof name, "%s at the start of the step (rate %g per s)", iv->name, s->rate);
-            bad = check_real(name, start, iv, why, sizeof why);
+    int bad = 0, any_rate = 0;
+    double peak = 0.0; /* the bound of |ag| over the step (GroundMotion.peak_bound) */
+    for (int k = 0; k < RK_FMU_N_INPUTS && !bad; k++) {
+        const rk_fmu_var *iv = &RK_FMU_VARS[input_var(k)];
+        value[k] = s->values[input_var(k)];
+        bad = check_real(iv->name, value[k], iv, why, sizeof why);
+        if (k == 0) peak = fabs(value[k]);
+        if (!bad && s->has_rate[k]) {
+            char name[128];
+            double end = value[k] + s->rate[k] * (t_end - s->rate_t[k]);
+            double start = value[k] + s->rate[k] * (t - s->rate_t[k]);
+            if (k == 0) peak = fmax(fabs(start), fabs(end));
+            any_rate = 1;
+            snprintf(name, sizeof name, "%s at the end of the step (rate %g per s)", iv->name, s->rate[k]);
+            bad = check_real(name, end, iv, why, sizeof why);
+            if (!bad) {
+                snprintf(name, sizeof name, "%s at the start of the step (rate %g per s)", iv->name, s->rate[k]);
+                bad = check_real(name, start, iv, why, sizeof why);
+            }
+        }
+        if (bad) {
+            py_repr(value[k], rv, sizeof rv);
+            log_error(S, "input %s = %s at t = %s is invalid: %s", iv->name, rv, rt, why);
         }
     }
+    /* the vertical input: 0 where the FMU has none (then every call is the horizontal-only one) */
+    const double ag_v = RK_FMU_N_INPUTS > 1 ? value[RK_FMU_N_INPUTS - 1] : 0.0;
+    const int vertical = RK_FMU_N_INPUTS > 1 && (ag_v != 0.0 || s->has_rate[RK_FMU_N_INPUTS - 1]);
     if (bad) {
-        py_repr(value, rv, sizeof rv);
-        log_error(S, "input %s = %s at t = %s is invalid: %s", iv->name, rv, rt, why);
         refused = 1;
 #ifdef RK_FMU_NULL_STEP
     } else if (0) { /* benchmarks/standalone_fmu.py: the do-nothing FMU (the FMI layer without the engine) */
@@ -668,12 +691,19 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         double target = t_end > rk_engine_time(e) ? t_end : rk_engine_time(e);
         rk_engine_checkpoint(e);
         rk_status st;
-        if (s->has_rate) {
-            rk_motion m;
-            rk_motion_linear(&m, value, s->rate, s->rate_t);
-            st = rk_engine_advance_motion(e, target, &m, max_steps_of(s));
+        if (any_rate) {
+            /* RockingSlave._do_step: a LinearMotion for an input with a rate, a number held for the others */
+            rk_motion m, mv;
+            if (s->has_rate[0]) rk_motion_linear(&m, value[0], s->rate[0], s->rate_t[0]);
+            else rk_motion_constant(&m, value[0]);
+            if (vertical) {
+                const int k = RK_FMU_N_INPUTS - 1;
+                if (s->has_rate[k]) rk_motion_linear(&mv, ag_v, s->rate[k], s->rate_t[k]);
+                else rk_motion_constant(&mv, ag_v);
+            }
+            st = rk_engine_advance_motion(e, target, &m, vertical ? &mv : NULL, max_steps_of(s));
         } else {
-            st = rk_engine_advance(e, target, value, 0.0, max_steps_of(s), 0u);
+            st = rk_engine_advance(e, target, value[0], 0.0, ag_v, 0.0, max_steps_of(s), 0u);
         }
         const char *first = NULL;
         int failures = st == RK_OK ? has_failed_step(e, &first) : 0;
@@ -721,8 +751,6 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     NOT_NULL(SetRealInputDerivatives, order);
     NOT_NULL(SetRealInputDerivatives, value);
     char problems[PROBLEMS_LEN] = "";
-    int ok_rate = 0;
-    double rate = 0.0;
     for (size_t i = 0; i < nvr; i++) {
         char text[600];
         const rk_fmu_var *v = lookup(vr[i], RK_REAL, problems, sizeof problems);
@@ -743,23 +771,21 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
             append(problems, sizeof problems, text);
             continue;
         }
-        ok_rate = 1;
-        rate = value[i];
     }
     if (problems[0]) {
         log_error(S, "fmi2SetRealInputDerivatives: %s (nothing was set)", problems);
         return fail(S, fmi2Error);
     }
-    if (ok_rate) {
-        Slave *s = &S->s;
-        double now = s->initialized ? s->t : s->t0;
-        if (s->has_rate && s->initialized) { /* continue the line: the value at this point */
-            int in = input_index();
-            s->values[in] = s->values[in] + s->rate * (now - s->rate_t);
-        }
-        s->has_rate = 1;
-        s->rate = rate;
-        s->rate_t = now;
+    /* all checked: set them in order (a reference given twice: the last rate, from the line of the first) */
+    Slave *s = &S->s;
+    double now = s->initialized ? s->t : s->t0;
+    for (size_t i = 0; i < nvr; i++) {
+        const int k = RK_FMU_VARS[vr[i]].index, in = (int)vr[i];
+        if (s->has_rate[k] && s->initialized) /* continue the line: the value at this point */
+            s->values[in] = s->values[in] + s->rate[k] * (now - s->rate_t[k]);
+        s->has_rate[k] = 1;
+        s->rate[k] = value[i];
+        s->rate_t[k] = now;
     }
     return fmi2OK;
 }
@@ -767,10 +793,11 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 /* ------------------------------------------------------------------------------------------ FMU state */
 /* The slave's bytes, field by field (no struct padding, native byte order, little-endian on every FMI
  * platform this project builds; rocking_model/fmi/standalone.py: decode_state_payload reads them):
- *   PAYLOAD_MAGIC (28 bytes, its last line the format version), GUID (36),
+ *   PAYLOAD_MAGIC (28 bytes, its last line the format version: 2), GUID (36),
  *   int32 n_vars, double values[n_vars] (value-reference order),
- *   int32 initialized, terminated, frozen, has_rate, has_error,
- *   double t, t0, rate, rate_t,
+ *   int32 initialized, terminated, frozen, has_error,
+ *   double t, t0,
+ *   int32 n_inputs, then per Real input (ag, ag_v): int32 has_rate, double rate, rate_t,
  *   int32 error length, the error text (no NUL),
  *   int32 has_engine, then (with an engine) its plain-data state (Simulator.get_state's fields,
  *   rk_plain_state): double t, int32 mode, int32 n_y, double y[RK_MAX_Y], double q[RK_MAX_DOF],
@@ -785,7 +812,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 #define GET(x) (memcpy(&(x), p + off, sizeof(x)), off += sizeof(x))
 
 static size_t fixed_payload_size(void) {
-    return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 5 * 4 + 4 * 8 + 4;
+    return PAYLOAD_MAGIC_SIZE + GUID_SIZE + 4 + 8 * (size_t)RK_FMU_N_VARS + 4 * 4 + 2 * 8 + 4 +
+           (size_t)RK_FMU_N_INPUTS * (4 + 2 * 8) + 4;
 }
 
 #define PLAIN_SIZE (8 + 4 + 4 + 8 * RK_MAX_Y + 16 * RK_MAX_DOF + 4 + 8 + 4 + 8 + 8 * 3 + 8)
@@ -838,8 +866,9 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     const Slave *sl = &S->s;
     int32_t has_engine = S->engine != NULL;
     int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
-    int32_t flags[5] = {sl->initialized, sl->terminated, sl->frozen, sl->has_rate, sl->has_error};
-    double times[4] = {sl->t, sl->t0, sl->rate, sl->rate_t};
+    int32_t flags[4] = {sl->initialized, sl->terminated, sl->frozen, sl->has_error};
+    double times[2] = {sl->t, sl->t0};
+    int32_t n_inputs = RK_FMU_N_INPUTS;
     *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
     unsigned char *p = (unsigned char *)calloc(1, *n);
     if (!p) return NULL;
@@ -853,6 +882,13 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
     q += sizeof sl->values;
     PUT(q, flags);
     PUT(q, times);
+    PUT(q, n_inputs);
+    for (int k = 0; k < RK_FMU_N_INPUTS; k++) {
+        int32_t has_rate = sl->has_rate[k];
+        PUT(q, has_rate);
+        PUT(q, sl->rate[k]);
+        PUT(q, sl->rate_t[k]);
+    }
     PUT(q, len);
     memcpy(q, sl->error, (size_t)len);
     q += len;
@@ -872,7 +908,7 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
 static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why, size_t size) {
     if (n < fixed_payload_size() + 8 || memcmp(p, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE) != 0) {
-        snprintf(why, size, "bad header: the %zu bytes are not a state of the C engine FMU (format version 1)", n);
+        snprintf(why, size, "bad header: the %zu bytes are not a state of the C engine FMU (format version 2)", n);
         return -1;
     }
     uint32_t crc;
@@ -888,8 +924,8 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
         return -1;
     }
     size_t off = PAYLOAD_MAGIC_SIZE + GUID_SIZE;
-    int32_t n_vars, flags[5], len, has_engine;
-    double times[4];
+    int32_t n_vars, flags[4], len, has_engine, n_inputs, has_rate[RK_FMU_N_INPUTS];
+    double times[2];
     Slave s;
     memset(&s, 0, sizeof s);
     GET(n_vars);
@@ -901,6 +937,17 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     off += sizeof s.values;
     GET(flags);
     GET(times);
+    GET(n_inputs);
+    if (n_inputs != RK_FMU_N_INPUTS) {
+        snprintf(why, size, "the state has %d inputs, %s has %d", (int)n_inputs, RK_FMU_NAME, RK_FMU_N_INPUTS);
+        return -1;
+    }
+    for (int k = 0; k < RK_FMU_N_INPUTS; k++) {
+        GET(has_rate[k]);
+        GET(s.rate[k]);
+        GET(s.rate_t[k]);
+        s.has_rate[k] = has_rate[k];
+    }
     GET(len);
     if (len < 0 || len >= ERROR_LEN || off + (size_t)len + 4 > n) {
         snprintf(why, size, "state field slave.error has an invalid length");
@@ -908,19 +955,20 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     }
     memcpy(s.error, p + off, (size_t)len);
     off += (size_t)len;
-    s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_rate = flags[3];
-    s.has_error = flags[4];
-    s.t = times[0], s.t0 = times[1], s.rate = times[2], s.rate_t = times[3];
+    s.initialized = flags[0], s.terminated = flags[1], s.frozen = flags[2], s.has_error = flags[3];
+    s.t = times[0], s.t0 = times[1];
     GET(has_engine);
     if (!(has_engine == 0 || has_engine == 1) || n - off != (has_engine ? (size_t)PLAIN_SIZE : 0)) {
         snprintf(why, size, "the engine state has %zu bytes, expected %d", n - off, has_engine ? PLAIN_SIZE : 0);
         return -1;
     }
     int flags_ok = (s.initialized == 0 || s.initialized == 1) && (s.terminated == 0 || s.terminated == 1) &&
-                   (s.frozen == 0 || s.frozen == 1) && (s.has_rate == 0 || s.has_rate == 1) &&
-                   (s.has_error == 0 || s.has_error == 1);
-    if (!flags_ok || !isfinite(s.t) || !isfinite(s.t0) || !isfinite(s.rate) || !isfinite(s.rate_t) ||
-        fabs(s.rate) > RK_FMU_INPUT_RATE_MAX) {
+                   (s.frozen == 0 || s.frozen == 1) && (s.has_error == 0 || s.has_error == 1) &&
+                   isfinite(s.t) && isfinite(s.t0);
+    for (int k = 0; k < RK_FMU_N_INPUTS; k++)
+        flags_ok = flags_ok && (s.has_rate[k] == 0 || s.has_rate[k] == 1) && isfinite(s.rate[k]) &&
+                   isfinite(s.rate_t[k]) && fabs(s.rate[k]) <= RK_FMU_INPUT_RATE_MAX;
+    if (!flags_ok) {
         snprintf(why, size, "state fields of the slave are invalid");
         return -1;
     }

@@ -82,7 +82,7 @@ from pythonfmu.enums import Fmi2Status
 
 from ..validation import AG_MAX
 from .slave import INPUT_RATE_MAX, ModelSlave, RockingSlave
-from .variables import AG_INPUT, MAX_STEPS_PARAMETER, UNITS, Var
+from .variables import AG_INPUT, AG_V_INPUT, MAX_STEPS_PARAMETER, UNITS, Var
 
 #: the importer-side names, loaded on first use (an FMU never needs them: its cold start stays short)
 _IMPORTER = ("FMUError", "collect_fmu_messages", "fmpy_callbacks", "run_fmu", "run_fmu_record", "choice_codes")
@@ -94,6 +94,6 @@ def __getattr__(name):
         return getattr(importer, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
-__all__ = ["AG_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "ModelSlave", "DefaultExperiment",
+__all__ = ["AG_INPUT", "AG_V_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "ModelSlave", "DefaultExperiment",
            "Fmi2Status", "FMUError", "run_fmu", "run_fmu_record", "fmpy_callbacks", "collect_fmu_messages",
            "INPUT_RATE_MAX"]

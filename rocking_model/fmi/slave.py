@@ -307,10 +307,14 @@ class RockingSlave(Fmi2Slave):
                 and self._error is None and not self._terminated:
             t, t_now = current_time, self._t
             t_end = t + step_size
-            ag = self._values[lean[0]]
+            values = self._values
+            ag = values[lean[0]]
+            # the vertical input (ModelSlave: ag_v), 0.0 where the FMU has none
+            ag_v = 0.0 if lean[3] is None else values[lean[3]]
             # t_now within time_tolerance of t (relative beyond 1 s), as _do_step words it
             lim = t_now if t_now >= 1.0 else (-t_now if t_now <= -1.0 else 1.0)
             if 0.0 < step_size <= _BIG and -_BIG <= t_end <= _BIG and lean[1] <= ag <= lean[2] and \
+                    lean[4] <= ag_v <= lean[5] and \
                     (t == t_now or -self.time_tolerance * lim <= t - t_now <= self.time_tolerance * lim):
                 if self._frozen:                  # overturned: the outputs stay, the time goes on
                     self._t = t_end
@@ -319,10 +323,13 @@ class RockingSlave(Fmi2Slave):
                 t_sim = eng.t
                 eng.checkpoint()
                 try:
-                    eng.advance(t_end if t_end >= t_sim else t_sim, ag, 0.0, self._max_steps)
+                    if ag_v == 0.0:               # the horizontal-only call: today's results bit for bit
+                        eng.advance(t_end if t_end >= t_sim else t_sim, ag, 0.0, self._max_steps)
+                    else:
+                        eng.advance(t_end if t_end >= t_sim else t_sim, ag, 0.0, self._max_steps, ag_v=ag_v)
                 except BaseException as exc:
                     eng.rollback()
-                    return self._step_failed(exc, t, t_end, ag)
+                    return self._step_failed(exc, t, t_end, ag, ag_v)
                 if eng.report_count:
                     if not self._step_reports(t, t_end):
                         return False
@@ -340,11 +347,15 @@ class RockingSlave(Fmi2Slave):
                 return True
         return self._do_step(current_time, step_size)
 
-    def _step_failed(self, exc, t: float, t_end: float, ag: float) -> bool:
+    def _step_failed(self, exc, t: float, t_end: float, ag: float, ag_v: float = 0.0) -> bool:
         """A failed engine advance (state restored) as `_do_step` treats it: refused (fmi2Discard) or a
         permanent failure (raises)."""
         try:
-            self._sim._c_failed(exc, t_end, ag)     # the Simulator's exception types and messages
+            # the Simulator's exception types and messages
+            if ag_v == 0.0:
+                self._sim._c_failed(exc, t_end, ag)
+            else:
+                self._sim._c_failed(exc, t_end, ag, ag_v)
         except (WorkLimitError, ValueError) as err:
             return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(err)}")
         except Exception as err:
@@ -434,11 +445,24 @@ class RockingSlave(Fmi2Slave):
         self._max_steps = None if eng is None else sim.max_steps
         self._freeze_overturned = eng is not None and self.freeze_output == "overturned"
         self._freeze_other = eng is not None and self.freeze_output not in (None, "overturned")
-        # the single Real input of an FMU that keeps the default `advance`: stepped by the lean path
+        # the Real inputs the lean path steps (`_lean_inputs`): (name, lo, hi, vertical name or None, lo, hi)
         lean = None
-        if eng is not None and len(self._inputs) == 1 and type(self).advance is RockingSlave.advance:
-            lean = self._fast_inputs.get(self._vr_of[self._inputs[0][0]])
+        names = self._lean_inputs() if eng is not None else None
+        if names is not None:
+            name, lo, hi = self._fast_inputs[self._vr_of[names[0]]]
+            if len(names) == 1:
+                lean = (name, lo, hi, None, -_BIG, _BIG)
+            else:
+                lean = (name, lo, hi, *self._fast_inputs[self._vr_of[names[1]]])
         self._lean = lean
+
+    def _lean_inputs(self) -> Optional[tuple]:
+        """The names of the Real inputs that the lean path passes to the compiled engine, (horizontal,) or
+        (horizontal, vertical); None: every step takes the checked path. Here: the single input of an FMU that
+        keeps the default `advance`."""
+        if len(self._inputs) == 1 and type(self).advance is RockingSlave.advance:
+            return (self._inputs[0][0],)
+        return None
 
     def _update_outputs(self) -> None:
         if self._eng is not None:             # read on demand (_output_value); only the freeze is decided now
@@ -815,8 +839,8 @@ def fmu_engine() -> str:
 class ModelSlave(RockingSlave):
     """The FMU of a registered model (`rocking_model.models.MODELS`), its whole interface derived from the
     model's declarations: parameters (start values, units, ranges, descriptions), initial values, the solver
-    options (`rocking_model.simulation.SOLVER_PARAMETERS`), the work budget, the input ag, the model's outputs
-    and the simulator's (contact, impacts, overturned). An FMU script only names the model::
+    options (`rocking_model.simulation.SOLVER_PARAMETERS`), the work budget, the inputs ag and ag_v (horizontal
+    and vertical ground acceleration), the model's outputs and the simulator's (contact, impacts, overturned). An FMU script only names the model::
 
         class RigidRockingBlock(ModelSlave):
             model_class = RigidBlock
@@ -830,7 +854,7 @@ class ModelSlave(RockingSlave):
     def variables_of(model_class) -> tuple:
         """The variable table of ``model_class``'s FMU (see the class docstring)."""
         from ..simulation import SOLVER_PARAMETERS
-        from .variables import AG_INPUT, MAX_STEPS_PARAMETER, model_variables
+        from .variables import AG_INPUT, AG_V_INPUT, MAX_STEPS_PARAMETER, model_variables
 
         extra_outputs = (
             Var("contact", "output", 0, type="Integer", min=0, max=model_class.max_contact_code(),
@@ -850,8 +874,22 @@ class ModelSlave(RockingSlave):
                 description="Painleve situations met so far (sliding with no or several consistent "
                             "accelerations, each resolved by an impact without collision)"),
         )
-        return model_variables(model_class, SOLVER_PARAMETERS, (MAX_STEPS_PARAMETER,), (AG_INPUT,),
+        return model_variables(model_class, SOLVER_PARAMETERS, (MAX_STEPS_PARAMETER,), (AG_INPUT, AG_V_INPUT),
                                extra_outputs)
+
+    def advance(self, sim, t_end: float, inputs: Dict[str, Any]) -> None:
+        """Advance under ag and ag_v (each a number held over the step or a `LinearMotion`); ag_v = 0 held
+        takes the horizontal-only call, so that its results are today's bit for bit."""
+        ag_v = inputs["ag_v"]
+        if type(ag_v) is float and ag_v == 0.0:
+            sim.advance(t_end, inputs["ag"])
+        else:
+            sim.advance(t_end, inputs["ag"], ag_v=ag_v)
+
+    def _lean_inputs(self) -> Optional[tuple]:
+        if type(self).advance is ModelSlave.advance:
+            return ("ag", "ag_v")
+        return super()._lean_inputs()
 
     def create_simulator(self, p, t0):
         from ..simulation import SOLVER_PARAMETERS

@@ -111,6 +111,11 @@ def vars_header(slave, guid: str) -> str:
     cls = slave.model_class
     params = list(cls.parameters())
     initial = list(cls.INITIAL)
+    # the inputs in the engine's order: ag, then ag_v (the vertical ground acceleration) where declared
+    inputs = [s.name for s in slave.variables if s.causality == "input"]
+    if inputs not in (["ag"], ["ag", "ag_v"]):
+        raise ValueError(f"{type(slave).__name__}: the C engine FMU takes the inputs ag and (optionally) ag_v, "
+                         f"in this order; declared: {inputs}")
     p_index = {p.name: i for i, p in enumerate(params)}
     i_index = {p.name: i for i, p in enumerate(initial)}
     o_index = {p.name: i for i, p in enumerate(cls.OUTPUTS)}
@@ -124,7 +129,7 @@ def vars_header(slave, guid: str) -> str:
         elif spec.name in _SPECIAL:
             role, index = _SPECIAL[spec.name], 0
         elif spec.causality == "input":
-            role, index = "RK_ROLE_INPUT", 0
+            role, index = "RK_ROLE_INPUT", inputs.index(spec.name)
         elif spec.causality == "output" and spec.name in o_index:
             role, index = "RK_ROLE_OUTPUT", o_index[spec.name]
         else:
@@ -136,9 +141,6 @@ def vars_header(slave, guid: str) -> str:
             1 if spec.resolved_variability == "fixed" else 0, role, index, _c_double(spec.default),
             spec.min is not None, _c_double(spec.min if spec.min is not None else 0.0),
             spec.max is not None, _c_double(spec.max if spec.max is not None else 0.0)))
-    n_inputs = sum(1 for s in slave.variables if s.causality == "input")
-    if n_inputs != 1:
-        raise ValueError(f"{type(slave).__name__}: the C engine FMU takes exactly one input (ag)")
     from ..validation import AG_MAX
     from .slave import INPUT_RATE_MAX
     from .variables import MAX_STEPS_PARAMETER
@@ -154,6 +156,8 @@ def vars_header(slave, guid: str) -> str:
         f"#define RK_FMU_N_PARAMS {len(params)}",
         f"#define RK_FMU_N_INITIAL {len(initial)}",
         f"#define RK_FMU_N_OUTPUTS {len(cls.OUTPUTS)}",
+        "/* the Real inputs: index 0 ag (horizontal), index 1 ag_v (vertical) where declared */",
+        f"#define RK_FMU_N_INPUTS {len(inputs)}",
         f"#define RK_FMU_FREEZE {1 if slave.freeze_output == 'overturned' else 0}",
         f"#define RK_FMU_TIME_TOLERANCE {_c_double(slave.time_tolerance)}",
         f"#define RK_FMU_INPUT_RATE_MAX {_c_double(INPUT_RATE_MAX)}",
@@ -214,8 +218,10 @@ def documentation(slave) -> str:
 
 
 # ---------------------------------------------------------------------------------------------- FMU states
-#: the slave part of a standalone FMU's serialized state (fmi_binary/standalone/fmi2_engine.c, encode_slave)
-STATE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
+#: the slave part of a standalone FMU's serialized state (fmi_binary/standalone/fmi2_engine.c, encode_slave);
+#: version 2: one (has_rate, rate, rate_t) per Real input (version 1, a single input, is refused: its GUID is
+#: that of another build anyway)
+STATE_PAYLOAD_MAGIC = b"rocking engine FMU state v2\n"
 #: rk_common.h: RK_MAX_DOF, RK_MAX_Y = 2 RK_MAX_DOF (the fixed array sizes of the engine's plain state)
 RK_MAX_DOF = 8
 RK_MAX_Y = 2 * RK_MAX_DOF
@@ -224,8 +230,9 @@ RK_MAX_Y = 2 * RK_MAX_DOF
 def decode_state_payload(data: bytes) -> dict:
     """The fields of a standalone FMU's state payload (the bytes after the binary's 46-byte header, what
     fmi2_cs.c's header precedes too): guid, values (value-reference order), the slave's flags and times, the
-    error text, and the engine's plain-data state (None before initialization). ValueError naming what is
-    wrong."""
+    input rates (``rates``: one {"has_rate", "rate", "rate_t"} per Real input, ag first; ``has_rate``, ``rate``
+    and ``rate_t`` repeat the first), the error text, and the engine's plain-data state (None before
+    initialization). ValueError naming what is wrong."""
     import struct
 
     import zlib
@@ -241,14 +248,24 @@ def decode_state_payload(data: bytes) -> dict:
     off = m + g
     (n_vars,) = struct.unpack_from("<i", data, off)
     off += 4
-    if not 0 <= n_vars <= 10_000 or len(data) < off + 8 * n_vars + 20 + 32 + 4:
+    if not 0 <= n_vars <= 10_000 or len(data) < off + 8 * n_vars + 16 + 16 + 4:
         raise ValueError("the standalone FMU state is truncated")
     values = list(struct.unpack_from(f"<{n_vars}d", data, off))
     off += 8 * n_vars
-    flags = struct.unpack_from("<5i", data, off)
-    off += 20
-    t, t0, rate, rate_t = struct.unpack_from("<4d", data, off)
-    off += 32
+    flags = struct.unpack_from("<4i", data, off)       # initialized, terminated, frozen, has_error
+    off += 16
+    t, t0 = struct.unpack_from("<2d", data, off)
+    off += 16
+    (n_inputs,) = struct.unpack_from("<i", data, off)
+    off += 4
+    if not 0 <= n_inputs <= 16 or len(data) < off + 20 * n_inputs + 4:
+        raise ValueError("the standalone FMU state is truncated")
+    rates = []
+    for _ in range(n_inputs):
+        (has_rate,) = struct.unpack_from("<i", data, off)
+        rate, rate_t = struct.unpack_from("<2d", data, off + 4)
+        rates.append({"has_rate": has_rate, "rate": rate, "rate_t": rate_t})
+        off += 20
     (n_err,) = struct.unpack_from("<i", data, off)
     off += 4
     if not 0 <= n_err <= len(data) - off - 4:          # the error text, then has_engine
@@ -272,6 +289,7 @@ def decode_state_payload(data: bytes) -> dict:
                               "painleve"), rest))}
     elif len(data) != off:
         raise ValueError("the standalone FMU state has bytes after its end")
-    keys = ("initialized", "terminated", "frozen", "has_rate", "has_error")
-    return {"guid": guid, "values": values, **dict(zip(keys, flags)), "t": t, "t0": t0, "rate": rate,
-            "rate_t": rate_t, "error": error if flags[4] else None, "engine": engine}
+    keys = ("initialized", "terminated", "frozen", "has_error")
+    first = rates[0] if rates else {"has_rate": 0, "rate": 0.0, "rate_t": 0.0}
+    return {"guid": guid, "values": values, **dict(zip(keys, flags)), "t": t, "t0": t0, "rates": rates,
+            **first, "error": error if flags[3] else None, "engine": engine}

@@ -1,5 +1,5 @@
 """FMU variables: the table an FMU script declares (`Var`), the units, the shared variables (`AG_INPUT`,
-`MAX_STEPS_PARAMETER`), the pythonfmu variable classes that write what pythonfmu 0.7 does not (unit, min,
+`AG_V_INPUT`, `MAX_STEPS_PARAMETER`), the pythonfmu variable classes that write what pythonfmu 0.7 does not (unit, min,
 max, enumeration types), and `model_variables`, which derives the variables of a model's FMU from the model's
 own declarations (`rocking_model.params`)."""
 from __future__ import annotations
@@ -120,6 +120,13 @@ class Var:
 AG_INPUT = Var("ag", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
                description="Horizontal ground acceleration (held constant over each communication step), "
                            f"|ag| <= {AG_MAX:g} m/s2 (about 100 g)")
+#: the vertical ground acceleration input of the rocking FMUs, the same range, checks, statuses and input
+#: derivatives as `AG_INPUT`; start 0 gives exactly the horizontal-only results
+AG_V_INPUT = Var("ag_v", "input", 0.0, unit="m/s2", min=-AG_MAX, max=AG_MAX,
+                 description="Vertical ground acceleration, positive upward: the effective gravity is g + ag_v "
+                             "(g + ag_v < 0 makes the body leave the ground); held constant over each "
+                             "communication step (or interpolated linearly with fmi2SetRealInputDerivatives), "
+                             f"|ag_v| <= {AG_MAX:g} m/s2")
 #: the work budget of one communication step, a parameter of every FMU that runs a `Simulator`
 #: [internal steps] largest work budget of one communication step an FMU accepts: at the costliest internal
 #: step (a Moreau-Jean step, about 0.3 ms) 1e9 steps take days, far beyond any use, and the bound fits the
