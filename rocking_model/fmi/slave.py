@@ -355,13 +355,29 @@ class RockingSlave(Fmi2Slave):
             if ag_v == 0.0:
                 self._sim._c_failed(exc, t_end, ag)
             else:
-                self._sim._c_failed(exc, t_end, ag, ag_v)
+                self._c_failed_vertical(exc, t_end, ag, ag_v)
         except (WorkLimitError, ValueError) as err:
             return self._fail(f"step [{t!r}, {t_end!r}] refused, the FMU state is unchanged: {_describe(err)}")
         except Exception as err:
             self._error = f"simulation failed in the step [{t!r}, {t_end!r}]: {_describe(err)}"
             raise RuntimeError(self._error) from None
         raise AssertionError("unreachable: _c_failed always raises")  # pragma: no cover
+
+    def _c_failed_vertical(self, exc, t_end: float, ag: float, ag_v: float) -> None:
+        """`Simulator._c_failed` of a lean step under ag and a nonzero ag_v (held): the same exception types,
+        the message of `Simulator._diverged` with both components (it names a large ag_v as the likely
+        cause)."""
+        import numpy as np
+
+        from .. import _engine
+        from ..ground_motion import ConstantMotion, TwoComponentMotion
+
+        if isinstance(exc, (_engine.NonFiniteError, np.linalg.LinAlgError)):
+            if isinstance(exc, _engine.NonFiniteError):
+                exc = FloatingPointError(str(exc))
+            motion = TwoComponentMotion(ConstantMotion(ag), ConstantMotion(ag_v))
+            raise ValueError(self._sim._diverged(exc, t_end, motion, self._eng.fail_time)) from exc
+        raise exc
 
     def _step_reports(self, t: float, t_end: float) -> bool:
         """Reports of a lean step: a failed internal step refuses it (rolled back, False); the others are
