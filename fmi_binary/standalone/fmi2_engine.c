@@ -671,9 +671,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         if (s->has_rate) {
             rk_motion m;
             rk_motion_linear(&m, value, s->rate, s->rate_t);
-            st = rk_engine_advance_motion(e, target, &m, max_steps_of(s));
+            st = rk_engine_advance_motion(e, target, &m, NULL, max_steps_of(s));  /* ag_v = 0 until the FMU part adds the input */
         } else {
-            st = rk_engine_advance(e, target, value, 0.0, max_steps_of(s), 0u);
+            st = rk_engine_advance(e, target, value, 0.0, 0.0, 0.0, max_steps_of(s), 0u);
         }
         const char *first = NULL;
         int failures = st == RK_OK ? has_failed_step(e, &first) : 0;
