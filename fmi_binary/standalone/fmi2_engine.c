@@ -34,13 +34,6 @@
 #include "uri.h"
 #include "fmi2_common.h" /* last: its shorthands (log_error, fail, ...) are macros */
 
-#if RK_ENGINE_API_VERSION < 2 /* TEMPORARY until the engine with ag_v (v-c) is merged: horizontal only */
-#define rk_engine_advance(e, t_end, ag0, slope, ag_v0, ag_v_slope, max_steps, flags) \
-    ((ag_v0) != 0.0 ? RK_ERR_VALUE : rk_engine_advance(e, t_end, ag0, slope, max_steps, flags))
-#define rk_engine_advance_motion(e, t_end, ag, ag_v, max_steps) \
-    ((ag_v) != NULL ? RK_ERR_VALUE : rk_engine_advance_motion(e, t_end, ag, max_steps))
-#endif
-
 enum { RK_REAL, RK_INTEGER, RK_BOOLEAN, RK_STRING };
 enum { RK_PARAMETER, RK_INPUT, RK_OUTPUT };
 enum { RK_ROLE_PARAM, RK_ROLE_INITIAL, RK_ROLE_SCHEME, RK_ROLE_DT_MAX, RK_ROLE_TOLERANCE, RK_ROLE_MAX_STEPS,
@@ -568,8 +561,10 @@ static double value_of(const Slave *s, const char *name, double fallback) {
 }
 
 /* Simulator._diverged: the message of an advance whose motion overflowed (the engine restored its state):
- * where, and the likely cause. `peak`: the bound of |ag| over the step (GroundMotion.peak_bound). */
-static void diverged(Instance *S, rk_status st, double t_end, double peak, char *out, size_t size) {
+ * where, and the likely cause. `peak`, `peak_v`: the bounds of |ag| and |ag_v| over the step
+ * (GroundMotion.peak_bound of each component; 0 without a vertical one). */
+static void diverged(Instance *S, rk_status st, double t_end, double peak, double peak_v, char *out,
+                     size_t size) {
     rk_engine *e = S->engine;
     double q[RK_MAX_DOF], v[RK_MAX_DOF], qmax = 0.0, vmax = 0.0;
     int n = rk_engine_full_state(e, q, v);
@@ -582,6 +577,11 @@ static void diverged(Instance *S, rk_status st, double t_end, double peak, char 
     size_t m;
     if (peak > 10.0 * g)
         snprintf(causes, sizeof causes, "the ground acceleration (|ag| up to %g m/s2, %.3g g); or ", peak, peak / g);
+    if (peak_v > 10.0 * g) {
+        m = strlen(causes);
+        snprintf(causes + m, sizeof causes - m, "the vertical ground acceleration (|ag_v| up to %g m/s2, %.3g g); "
+                 "or ", peak_v, peak_v / g);
+    }
     if (e_N > 0.0) {
         m = strlen(causes);
         snprintf(causes + m, sizeof causes - m, "energy created at impacts by e_N = %g with sticking (physics "
@@ -653,17 +653,17 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     double value[RK_FMU_N_INPUTS];
     char why[1024], rv[40];
     int bad = 0, any_rate = 0;
-    double peak = 0.0; /* the bound of |ag| over the step (GroundMotion.peak_bound) */
+    double peak[RK_FMU_N_INPUTS] = {0.0}; /* the bound of |ag|, |ag_v| over the step (GroundMotion.peak_bound) */
     for (int k = 0; k < RK_FMU_N_INPUTS && !bad; k++) {
         const rk_fmu_var *iv = &RK_FMU_VARS[input_var(k)];
         value[k] = s->values[input_var(k)];
         bad = check_real(iv->name, value[k], iv, why, sizeof why);
-        if (k == 0) peak = fabs(value[k]);
+        peak[k] = fabs(value[k]);
         if (!bad && s->has_rate[k]) {
             char name[128];
             double end = value[k] + s->rate[k] * (t_end - s->rate_t[k]);
             double start = value[k] + s->rate[k] * (t - s->rate_t[k]);
-            if (k == 0) peak = fmax(fabs(start), fabs(end));
+            peak[k] = fmax(fabs(start), fabs(end));
             any_rate = 1;
             snprintf(name, sizeof name, "%s at the end of the step (rate %g per s)", iv->name, s->rate[k]);
             bad = check_real(name, end, iv, why, sizeof why);
@@ -723,7 +723,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                 /* RockingSlave._describe: a ValueError by its text, other exceptions with their class name */
                 char text[3072];
                 if (st == RK_ERR_NONFINITE || st == RK_ERR_SOLVER)
-                    diverged(S, st, target, peak, text, sizeof text);
+                    diverged(S, st, target, peak[0], vertical ? peak[RK_FMU_N_INPUTS - 1] : 0.0, text,
+                             sizeof text);
                 else
                     snprintf(text, sizeof text, "%s%s", st == RK_ERR_WORK_LIMIT ? "WorkLimitError: " : "",
                              rk_engine_message(e));

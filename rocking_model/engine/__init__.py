@@ -17,7 +17,7 @@ from ..ground_motion import (CheckedMotion, ConstantMotion, CosinePulse, GroundM
 from ..integrators.base import SCHEMES, Integrator, Report
 from ..modes import ContactState
 
-__all__ = ["CompiledIntegrator", "motion_spec", "ENGINES", "available"]
+__all__ = ["CompiledIntegrator", "motion_spec", "vertical_spec", "ENGINES", "available"]
 
 #: the accepted values of ``Simulator(engine=...)``
 ENGINES = {"c": "c", "python": "python"}
@@ -34,7 +34,10 @@ def available() -> bool:
 
 def motion_spec(gm: GroundMotion) -> tuple:
     """The engine's description of a ground motion: the classes the C engine evaluates itself (same formulas,
-    bit for bit: rk_motion.c), any other one as a callback into Python (exact, slower)."""
+    bit for bit: rk_motion.c), any other one as a callback into Python (exact, slower). A two-component motion
+    (``gm.vertical`` not None) is described by its horizontal component; `vertical_spec` gives the other."""
+    if getattr(gm, "vertical", None) is not None:
+        return motion_spec(gm.horizontal)
     cls = type(gm)
     if cls is ConstantMotion:
         return ("constant", gm.value)
@@ -58,6 +61,13 @@ def motion_spec(gm: GroundMotion) -> tuple:
         return motion_spec(gm.motion)
     constant = bool(getattr(gm, "constant", False))
     return ("callback", gm, constant, float(getattr(gm, "value", 0.0)) if constant else 0.0)
+
+
+def vertical_spec(gm: GroundMotion):
+    """The engine's description of the vertical component of a ground motion, None without one (the engine then
+    runs today's path: no vertical acceleration, bit-identical)."""
+    vertical = getattr(gm, "vertical", None)
+    return None if vertical is None else motion_spec(vertical)
 
 
 #: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
@@ -294,10 +304,16 @@ class CompiledIntegrator(Integrator):
         eng = self._engine
         if type(ag) is ConstantMotion:
             self._run(lambda: eng.advance(t_end, ag.value, 0.0, max_steps))
+        elif (getattr(ag, "vertical", None) is not None and type(ag.horizontal) is ConstantMotion
+              and type(ag.vertical) is ConstantMotion):
+            # both components constant: the engine's constant path with the vertical value
+            h, v = ag.horizontal.value, ag.vertical.value
+            self._run(lambda: eng.advance(t_end, h, 0.0, max_steps, ag_v=v))
         else:
             spec = motion_spec(ag)
+            vspec = vertical_spec(ag)
             ident = self._identity(ag)
-            self._run(lambda: eng.advance_motion(t_end, spec, max_steps, ident))
+            self._run(lambda: eng.advance_motion(t_end, spec, max_steps, ident, vspec))
 
     def _identity(self, ag) -> int:
         """id(ag), the object kept alive while it is the last motion (the Python's closure cache holds it too),
@@ -316,8 +332,10 @@ class CompiledIntegrator(Integrator):
         impacts = np.empty(n, dtype=np.int64)
         overturned = np.empty(n, dtype=np.intc)
         spec = motion_spec(ag)
+        vspec = vertical_spec(ag)
         ident = self._identity(ag)
-        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident))
+        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident,
+                                              vspec))
         out = {name: values[:, j].copy() for j, name in enumerate(names)}
         out["friction_demand"] = values[:, len(names)].copy()
         out["painleve"] = values[:, len(names) + 1].astype(np.int64)

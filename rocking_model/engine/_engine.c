@@ -584,26 +584,93 @@ static int read_max_steps(PyObject *obj, long long *out)
     return 0;
 }
 
-static PyObject *engine_advance(EngineObject *self, PyObject *args, PyObject *kwargs)
+/* Engine.advance's parameters, in positional order */
+enum { ADV_T_END, ADV_AG0, ADV_SLOPE, ADV_MAX_STEPS, ADV_CONTINUOUS, ADV_LINEAR, ADV_AG_V, ADV_AG_V_SLOPE,
+       ADV_LINEAR_V, ADV_N };
+static const char *const ADVANCE_NAMES[ADV_N] = {"t_end", "ag0", "slope", "max_steps", "continuous", "linear",
+                                                 "ag_v", "ag_v_slope", "linear_v"};
+
+/* a float argument as the "d" format reads it (PyFloat_AsDouble: float, int, __float__) */
+static int advance_float(PyObject *obj, int i, double *out)
 {
-    static char *kwlist[] = {"t_end", "ag0", "slope", "max_steps", "continuous", "linear", NULL};
-    double t_end, ag0 = 0.0, slope = 0.0;
-    PyObject *ms = Py_None;
-    int continuous = 0, linear = 0;
-    long long max_steps;
+    if (obj == NULL)
+        return 0;
+    *out = PyFloat_CheckExact(obj) ? PyFloat_AS_DOUBLE(obj) : PyFloat_AsDouble(obj);
+    if (*out == -1.0 && PyErr_Occurred()) {
+        if (PyErr_ExceptionMatches(PyExc_TypeError)) {
+            PyErr_Clear();
+            PyErr_Format(PyExc_TypeError, "advance() argument '%s' must be a real number, not %.80s",
+                         ADVANCE_NAMES[i], Py_TYPE(obj)->tp_name);
+        }
+        return -1;
+    }
+    return 0;
+}
+
+/* a bool argument as the "p" format reads it */
+static int advance_flag(PyObject *obj, unsigned bit, unsigned *flags)
+{
+    int truth;
+    if (obj == NULL)
+        return 0;
+    truth = PyObject_IsTrue(obj);
+    if (truth < 0)
+        return -1;
+    if (truth)
+        *flags |= bit;
+    return 0;
+}
+
+/** Engine.advance(t_end, ag0=0.0, slope=0.0, max_steps=None, continuous=False, linear=False, ag_v=0.0,
+ *  ag_v_slope=0.0, linear_v=False): METH_FASTCALL with a hand-written parser (the FMU-like loop calls it once
+ *  per communication step: the generic keyword parser cost more than a short advance itself). */
+static PyObject *engine_advance(EngineObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+{
+    PyObject *arg[ADV_N] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+    double t_end = 0.0, ag0 = 0.0, slope = 0.0, ag_v = 0.0, ag_v_slope = 0.0;
+    long long max_steps = -1;
     unsigned flags = 0u;
+    Py_ssize_t i, nkw = kwnames == NULL ? 0 : PyTuple_GET_SIZE(kwnames);
     rk_status st;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "d|ddOpp", kwlist, &t_end, &ag0, &slope, &ms,
-                                                      &continuous, &linear))
+    if (!ready(self))
         return NULL;
-    if (read_max_steps(ms, &max_steps) < 0)
+    if (nargs > ADV_N) {
+        PyErr_Format(PyExc_TypeError, "advance() takes at most %d arguments (%zd given)", ADV_N, nargs);
         return NULL;
-    if (continuous)
-        flags |= RK_ADVANCE_CONTINUOUS;
-    if (linear)
-        flags |= RK_ADVANCE_LINEAR;
+    }
+    for (i = 0; i < nargs; i++)
+        arg[i] = args[i];
+    for (i = 0; i < nkw; i++) {
+        PyObject *key = PyTuple_GET_ITEM(kwnames, i);
+        int j;
+        for (j = 0; j < ADV_N; j++)
+            if (PyUnicode_CompareWithASCIIString(key, ADVANCE_NAMES[j]) == 0)
+                break;
+        if (j == ADV_N) {
+            PyErr_Format(PyExc_TypeError, "advance() got an unexpected keyword argument '%U'", key);
+            return NULL;
+        }
+        if (arg[j] != NULL) {
+            PyErr_Format(PyExc_TypeError, "advance() got multiple values for argument '%s'", ADVANCE_NAMES[j]);
+            return NULL;
+        }
+        arg[j] = args[nargs + i];
+    }
+    if (arg[ADV_T_END] == NULL) {
+        PyErr_SetString(PyExc_TypeError, "advance() missing required argument 't_end' (pos 1)");
+        return NULL;
+    }
+    if (advance_float(arg[ADV_T_END], ADV_T_END, &t_end) < 0 || advance_float(arg[ADV_AG0], ADV_AG0, &ag0) < 0
+        || advance_float(arg[ADV_SLOPE], ADV_SLOPE, &slope) < 0
+        || advance_float(arg[ADV_AG_V], ADV_AG_V, &ag_v) < 0
+        || advance_float(arg[ADV_AG_V_SLOPE], ADV_AG_V_SLOPE, &ag_v_slope) < 0
+        || read_max_steps(arg[ADV_MAX_STEPS], &max_steps) < 0
+        || advance_flag(arg[ADV_CONTINUOUS], RK_ADVANCE_CONTINUOUS, &flags) < 0
+        || advance_flag(arg[ADV_LINEAR], RK_ADVANCE_LINEAR, &flags) < 0
+        || advance_flag(arg[ADV_LINEAR_V], RK_ADVANCE_LINEAR_V, &flags) < 0)
+        return NULL;
     Py_BEGIN_ALLOW_THREADS
-    st = rk_engine_advance(self->e, t_end, ag0, slope, max_steps, flags);
+    st = rk_engine_advance(self->e, t_end, ag0, slope, ag_v, ag_v_slope, max_steps, flags);
     Py_END_ALLOW_THREADS
     if (st != RK_OK)
         return raise_status(st, rk_engine_message(self->e));
@@ -628,22 +695,25 @@ static PyObject *finish_call(EngineObject *self, motion_holder *h, rk_status st,
 
 static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
-    static char *kwlist[] = {"t_end", "motion", "max_steps", "identity", NULL};
+    static char *kwlist[] = {"t_end", "motion", "max_steps", "identity", "vspec", NULL};
     double t_end;
-    PyObject *spec, *ms = Py_None;
+    PyObject *spec, *ms = Py_None, *vspec = Py_None;
     long long max_steps;
     unsigned long long identity = 0;
     motion_holder h;
-    int idx;
+    int idx, vidx = -1;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "dO|OK", kwlist, &t_end, &spec, &ms, &identity))
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "dO|OKO", kwlist, &t_end, &spec, &ms, &identity,
+                                                      &vspec))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
     memset(&h, 0, sizeof(h));
     idx = parse_motion(&h, spec, 0);
-    if (idx < 0) {
+    if (idx >= 0 && vspec != Py_None)
+        vidx = parse_motion(&h, vspec, 0);
+    if (idx < 0 || (vspec != Py_None && vidx < 0)) {
         holder_release(&h);
         return NULL;
     }
@@ -655,10 +725,10 @@ static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObj
             return PyErr_NoMemory();
         }
         rk_engine_save(self->e, saved);
-        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], max_steps);
+        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], vidx < 0 ? NULL : &h.m[vidx], max_steps);
     } else {
         Py_BEGIN_ALLOW_THREADS
-        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], max_steps);
+        st = rk_engine_advance_motion(self->e, t_end, &h.m[idx], vidx < 0 ? NULL : &h.m[vidx], max_steps);
         Py_END_ALLOW_THREADS
     }
     {
@@ -685,8 +755,9 @@ static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssi
 static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
     static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", "identity",
-                             NULL};
-    PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r;
+                             "vspec", NULL};
+    PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r, *vspec = Py_None;
+    rk_motion *mv = NULL;
     unsigned long long identity = 0;
     long long max_steps;
     motion_holder h;
@@ -696,9 +767,9 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     int idx, stride;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|K", kwlist, &times_obj, &spec, &ms,
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|KO", kwlist, &times_obj, &spec, &ms,
                                                       &modes_obj, &values_obj, &impacts_obj, &over_obj,
-                                                      &identity))
+                                                      &identity, &vspec))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
@@ -711,6 +782,14 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     if (idx < 0) {
         holder_release(&h);
         return NULL;
+    }
+    if (vspec != Py_None) {
+        int vidx = parse_motion(&h, vspec, 0);
+        if (vidx < 0) {
+            holder_release(&h);
+            return NULL;
+        }
+        mv = &h.m[vidx];
     }
     h.m[idx].identity = identity;
     stride = rk_engine_n_outputs(self->e) + 2;
@@ -743,12 +822,12 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
             rk_fail(&self->e->error, st, "out of memory");
         } else {
             rk_engine_save(self->e, saved);
-            st = rk_engine_sample(self->e, &h.m[idx], times, (long long)n, max_steps, (int *)bm.buf,
+            st = rk_engine_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, (int *)bm.buf,
                                   (double *)bv.buf, (long long *)bi.buf, (int *)bo.buf);
         }
     } else {
         Py_BEGIN_ALLOW_THREADS
-        st = rk_engine_sample(self->e, &h.m[idx], times, (long long)n, max_steps, (int *)bm.buf, (double *)bv.buf,
+        st = rk_engine_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, (int *)bm.buf, (double *)bv.buf,
                               (long long *)bi.buf, (int *)bo.buf);
         Py_END_ALLOW_THREADS
     }
@@ -1265,14 +1344,16 @@ static PyObject *engine_reports(EngineObject *self, PyObject *unused)
 }
 
 static PyMethodDef engine_methods[] = {
-    {"advance", (PyCFunction)(void (*)(void))engine_advance, METH_VARARGS | METH_KEYWORDS,
-     "advance(t_end, ag0=0.0, slope=0.0, max_steps=None, continuous=False, linear=False): integrate to t_end "
-     "under ag(t) = ag0 + slope (t - t); the state is unchanged on any error."},
+    {"advance", (PyCFunction)(void (*)(void))engine_advance, METH_FASTCALL | METH_KEYWORDS,
+     "advance(t_end, ag0=0.0, slope=0.0, max_steps=None, continuous=False, linear=False, ag_v=0.0, "
+     "ag_v_slope=0.0, linear_v=False): integrate to t_end under ag(t) = ag0 + slope (t - t0) and the vertical "
+     "ag_v(t) = ag_v + ag_v_slope (t - t0); the state is unchanged on any error."},
     {"advance_motion", (PyCFunction)(void (*)(void))engine_advance_motion, METH_VARARGS | METH_KEYWORDS,
-     "advance_motion(t_end, motion, max_steps=None): integrate to t_end under a motion spec."},
+     "advance_motion(t_end, motion, max_steps=None, identity=0, vspec=None): integrate to t_end under a motion "
+     "spec (vspec: the vertical component's, None: none)."},
     {"sample", (PyCFunction)(void (*)(void))engine_sample, METH_VARARGS | METH_KEYWORDS,
-     "sample(times, motion, max_steps, modes, values, impacts, overturned): Integrator.sample into the given "
-     "arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1)."},
+     "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None): "
+     "Integrator.sample into the given arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1)."},
     {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
     {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
      "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "

@@ -388,10 +388,10 @@ static void tm_inverse_mass(const rk_model *m, const double *q, double *Minv)
     for (i = 0; i < n * n; i++)
         Minv[i] = m->d[i];
 }
-static void tm_forces(const rk_model *m, const double *q, const double *v, double ag, double *f)
+static void tm_forces(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double *f)
 {
     int i;
-    (void)q; (void)v; (void)ag;
+    (void)q; (void)v; (void)ag; (void)ag_v;
     for (i = 0; i < m->ops->n_dof; i++)
         f[i] = m->p[i];
 }
@@ -551,13 +551,14 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         }
         res = narrow_dict(&sol, nd, n);
     } else if (strcmp(name, "uplift") == 0) {
-        /* (q, v, ag, candidates, forced, slip_tol or None, count, prefer) */
+        /* (q, v, ag, candidates, forced, slip_tol or None, count, prefer[, ag_v]) */
         PyObject *q, *v, *cand, *forced, *slip;
-        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, ag_v = 0.0;
         rk_contact_args a;
         rk_set c;
         int count, prefer;
-        if (!PyArg_ParseTuple(rest, "OOdOOOpi", &q, &v, &ag, &cand, &forced, &slip, &count, &prefer))
+        if (!PyArg_ParseTuple(rest, "OOdOOOpi|d", &q, &v, &ag, &cand, &forced, &slip, &count, &prefer,
+                              &ag_v))
             goto done;
         rk_contact_args_default(&a);
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
@@ -572,7 +573,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         }
         a.count = count;
         a.prefer = prefer;
-        if (rk_uplift(&m, qa, va, ag, c, &a, &sol, &err) != RK_OK) {
+        if (rk_uplift(&m, qa, va, ag, ag_v, c, &a, &sol, &err) != RK_OK) {
             raise_err(&err);
             goto done;
         }
@@ -681,13 +682,14 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         res = set_tuple_of(rk_painleve_sticks(&m, qa, va, vb, c, v_tol), n);
     } else if (strcmp(name, "next_mode") == 0) {
         PyObject *q, *v, *d;
-        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, gap_tol, v_tol;
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, gap_tol, v_tol, ag_v = 0.0;
         int prefer, mode, has;
-        if (!PyArg_ParseTuple(rest, "OOdddi", &q, &v, &ag, &gap_tol, &v_tol, &prefer))
+        /* (q, v, ag, gap_tol, v_tol, prefer[, ag_v]) */
+        if (!PyArg_ParseTuple(rest, "OOdddi|d", &q, &v, &ag, &gap_tol, &v_tol, &prefer, &ag_v))
             goto done;
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
             goto bad_vec;
-        if (rk_next_mode(&m, qa, va, ag, gap_tol, v_tol, prefer, &mode, &sol, &has, &err) != RK_OK) {
+        if (rk_next_mode(&m, qa, va, ag, ag_v, gap_tol, v_tol, prefer, &mode, &sol, &has, &err) != RK_OK) {
             raise_err(&err);
             goto done;
         }
@@ -718,13 +720,14 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         res = PyLong_FromLong(rk_solution_sigma(&sol, (int)k));
     } else if (strcmp(name, "mode_forces") == 0) {
         PyObject *q, *v;
-        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, lam[RK_MAX_CONTACTS];
+        double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, lam[RK_MAX_CONTACTS], ag_v = 0.0;
         int mode;
-        if (!PyArg_ParseTuple(rest, "iOOd", &mode, &q, &v, &ag))
+        /* (mode, q, v, ag[, ag_v]) */
+        if (!PyArg_ParseTuple(rest, "iOOd|d", &mode, &q, &v, &ag, &ag_v))
             goto done;
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
             goto bad_vec;
-        if (rk_mode_forces(&m, mode, qa, va, ag, lam, &err) != RK_OK) {
+        if (rk_mode_forces(&m, mode, qa, va, ag, ag_v, lam, &err) != RK_OK) {
             raise_err(&err);
             goto done;
         }

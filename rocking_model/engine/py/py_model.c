@@ -136,17 +136,17 @@ static PyObject *py_model_kinds(PyObject *self, PyObject *args)
 
 static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
 {
-    static char *kwlist[] = {"kind", "params", "name", "mode", "a", "b", "ag", NULL};
+    static char *kwlist[] = {"kind", "params", "name", "mode", "a", "b", "ag", "ag_v", NULL};
     const char *kind, *name;
     PyObject *params_obj, *a_obj = Py_None, *b_obj = Py_None;
     int mode = 0, na, nb, n, nc, k, i;
-    double ag = 0.0, a[N_ALL], b[N_ALL], x1[N_ALL], x2[N_ALL];
+    double ag = 0.0, ag_v = 0.0, a[N_ALL], b[N_ALL], x1[N_ALL], x2[N_ALL];
     int idx[RK_MAX_DOF];
     rk_model m;
     rk_error err;
     (void)self;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sOs|iOOd", kwlist, &kind, &params_obj, &name, &mode, &a_obj,
-                                     &b_obj, &ag))
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sOs|iOOdd", kwlist, &kind, &params_obj, &name, &mode, &a_obj,
+                                     &b_obj, &ag, &ag_v))
         return NULL;
     rk_model_ops bare;
     if (build_model(kind, params_obj, &m) < 0)
@@ -233,7 +233,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         return list_of(x1, n * n);
     }
     if (strcmp(name, "forces") == 0) {
-        m.ops->forces(&m, a, b, ag, x1);
+        m.ops->forces(&m, a, b, ag, ag_v, x1);
         return list_of(x1, n);
     }
     if (strcmp(name, "stiff_jacobians") == 0) {
@@ -308,9 +308,9 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (strcmp(name, "kernel_rhs") == 0 || strcmp(name, "generic_rhs") == 0) {  /* a = y */
         k = m.ops->mode_dofs(&m, mode, idx);
         if (name[0] == 'k' && m.ops->mode_rhs != NULL)
-            m.ops->mode_rhs(&m, mode, a, ag, x1);
+            m.ops->mode_rhs(&m, mode, a, ag, ag_v, x1);
         else
-            rk_model_generic_rhs(&m, mode, a, ag, x1);
+            rk_model_generic_rhs(&m, mode, a, ag, ag_v, x1);
         return list_of(x1, 2 * k);
     }
     if (strcmp(name, "kernel_monitors") == 0 || strcmp(name, "generic_monitors") == 0) {
@@ -318,9 +318,9 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         for (i = 0; i < 2; i++)
             x2[i] = NAN;
         if (name[0] == 'k' && m.ops->mode_monitors != NULL)
-            m.ops->mode_monitors(&m, mode, a, ag, x1, x2);
+            m.ops->mode_monitors(&m, mode, a, ag, ag_v, x1, x2);
         else
-            rk_model_generic_monitors(&m, mode, a, ag, x1, x2);
+            rk_model_generic_monitors(&m, mode, a, ag, ag_v, x1, x2);
         if (!s)
             return Py_BuildValue("(NO)", list_of(x1, nc + 1), Py_None);
         return Py_BuildValue("(NN)", list_of(x1, nc + 1), list_of(x2, 2));
@@ -334,7 +334,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (strcmp(name, "contact_forces") == 0) {
         if (m.ops->contact_forces == NULL)
             Py_RETURN_NONE;
-        m.ops->contact_forces(&m, mode, a, b, ag, x1);
+        m.ops->contact_forces(&m, mode, a, b, ag, ag_v, x1);
         return list_of(x1, nc);
     }
     /* ---------------------------------------------------------------- any mode */
@@ -353,7 +353,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (strcmp(name, "rhs") == 0) {
         rk_status st;
         k = rk_dofs_of(&m, mode, idx);
-        st = rk_mode_rhs(&m, mode, a, ag, x1);
+        st = rk_mode_rhs(&m, mode, a, ag, ag_v, x1);
         if (st != RK_OK) {
             PyErr_Format(PyExc_RuntimeError, "rk_mode_rhs failed with status %d", (int)st);
             return NULL;
@@ -361,13 +361,13 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         return list_of(x1, 2 * k);
     }
     if (strcmp(name, "monitors") == 0) {
-        int has = 0, ng = rk_mode_monitors(&m, mode, a, ag, x1, x2, &has);
+        int has = 0, ng = rk_mode_monitors(&m, mode, a, ag, ag_v, x1, x2, &has);
         if (!has)
             return Py_BuildValue("(NO)", list_of(x1, ng), Py_None);
         return Py_BuildValue("(NN)", list_of(x1, ng), list_of(x2, 2));
     }
     if (strcmp(name, "monitors_only") == 0) {   /* rk_mode_monitors without totals (the event functions) */
-        int ng = rk_mode_monitors(&m, mode, a, ag, x1, NULL, NULL);
+        int ng = rk_mode_monitors(&m, mode, a, ag, ag_v, x1, NULL, NULL);
         return list_of(x1, ng);
     }
     if (strcmp(name, "outputs_of") == 0) {     /* a = y, ag = shift */
@@ -377,7 +377,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     if (strcmp(name, "shift_of") == 0)
         return PyFloat_FromDouble(rk_shift_of(&m, mode, a));
     if (strcmp(name, "force_totals") == 0) {
-        rk_force_totals(&m, mode, a, b, ag, x1);
+        rk_force_totals(&m, mode, a, b, ag, ag_v, x1);
         return list_of(x1, 2);
     }
     /* ---------------------------------------------------------------- sliding (a = r or q, b = r_dot or v) */
@@ -386,7 +386,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         int kc = 0;
         for (i = 0; i < nc; i++)
             kc += RK_IN(s, i);
-        if (rk_slide_motion(&m, mode, a, b, ag, x1, x2) != RK_OK) {
+        if (rk_slide_motion(&m, mode, a, b, ag, ag_v, x1, x2) != RK_OK) {
             PyErr_SetString(PyExc_RuntimeError, "rk_slide_motion failed");
             return NULL;
         }
@@ -394,7 +394,7 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
     }
     if (strcmp(name, "slide_acceleration") == 0) {
         k = rk_slide_dofs(&m, mode, idx);
-        if (rk_slide_acceleration(&m, mode, a, b, ag, x1) != RK_OK) {
+        if (rk_slide_acceleration(&m, mode, a, b, ag, ag_v, x1) != RK_OK) {
             PyErr_SetString(PyExc_RuntimeError, "rk_slide_acceleration failed");
             return NULL;
         }

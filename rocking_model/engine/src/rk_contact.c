@@ -202,7 +202,7 @@ rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, r
     return rk_solve_with_friction(m, &p, &args, out, err);
 }
 
-rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, rk_set candidates,
+rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set candidates,
                     const rk_contact_args *a, rk_lcp_solution *out, rk_error *err)
 {
     int n = m->ops->n_contacts, nd = m->ops->n_dof, i, sliding[RK_MAX_CONTACTS];
@@ -217,7 +217,7 @@ rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double 
     m->ops->contact_jacobians(m, q, W_N, W_T);
     m->ops->contact_drift(m, q, v, a_N, a_T);
     inverse_mass(m, q, Minv);
-    m->ops->forces(m, q, v, ag, f);
+    m->ops->forces(m, q, v, ag, ag_v, f);
     mat_vec(nd, Minv, f, acc_free);
     rk_contact_args_default(&args);
     if (a->has_slip_tol) {
@@ -382,7 +382,7 @@ int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts)
     return 0;
 }
 
-rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double gap_tol,
+rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double gap_tol,
                        double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
                        rk_error *err)
 {
@@ -399,7 +399,7 @@ rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, doub
     a.slip_tol = v_tol;
     a.count = 1;
     a.prefer = prefer;
-    st = rk_uplift(m, q, v, ag, cand, &a, sol, err);
+    st = rk_uplift(m, q, v, ag, ag_v, cand, &a, sol, err);
     if (st != RK_OK)
         return st;
     *has_solution = 1;
@@ -407,7 +407,7 @@ rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, doub
     return RK_OK;
 }
 
-rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double *lam,
+rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *lam,
                          rk_error *err)
 {
     int n = m->ops->n_contacts, nd = m->ops->n_dof, i;
@@ -425,7 +425,7 @@ rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const dou
     m->ops->contact_jacobians(m, q, W_N, W_T);
     m->ops->contact_drift(m, q, v, a_N, a_T);
     inverse_mass(m, q, Minv);
-    m->ops->forces(m, q, v, ag, f);
+    m->ops->forces(m, q, v, ag, ag_v, f);
     mat_vec(nd, Minv, f, acc_free);
     memset(&p, 0, sizeof p);
     p.n_dof = nd;

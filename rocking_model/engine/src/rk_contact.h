@@ -125,7 +125,7 @@ void rk_contact_args_default(rk_contact_args *a);
 rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, rk_set candidates,
                     const rk_contact_args *a, rk_lcp_solution *out, rk_error *err);
 /** contact.uplift: the acceleration-level LCP at (q, v, ag). */
-rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, rk_set candidates,
+rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set candidates,
                     const rk_contact_args *a, rk_lcp_solution *out, rk_error *err);
 /** contact.solve_with_friction: the friction law picks the problem (p's Minv..b_T, candidates, forced are
  *  used; its rtol / hint / mu / sliding / count / hint_states fields are set from m and a). */
@@ -143,13 +143,13 @@ rk_set rk_painleve_sticks(const rk_model *m, const double *q, const double *v_mi
                           rk_set candidates, double v_tol);
 /** contact.next_mode: the mode that follows a consistent state, and whether an uplift solution was computed
  *  (*has_solution 0: no candidate, the mode of no closed contact, sol untouched). prefer: -1 or a state. */
-rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double gap_tol,
+rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double gap_tol,
                        double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
                        rk_error *err);
 /** contact.solution_sigma: +1, -1 or 0. */
 int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts);
 /** contact.mode_forces: normal forces [N] of the closed contacts of a sticking mode held closed. */
-rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double *lam,
+rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *lam,
                          rk_error *err);
 
 /** Added by part B: integrators/moreau_jean.inexact_message, the text of an "inexact_contact" report (shared by

@@ -126,45 +126,52 @@ typedef struct ed_fn {
     rk_engine *e;
     int mode;
     rk_motion *ag;
-    int constant;
+    rk_motion *ag_v;            /**< the vertical component (NULL: none) */
+    int constant;               /**< both components constant (TwoComponentMotion.constant) */
     double a0;                  /**< ag.value of a constant input */
+    double v0;                  /**< ag.vertical.value of a constant input (0 without vertical component) */
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
 } ed_fn;
 
-static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag)
+static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motion *ag_v)
 {
     f->e = e;
     f->mode = mode;
     f->ag = ag;
-    f->constant = ag->constant;
+    f->ag_v = ag_v;
+    f->constant = rk_motion_pair_constant(ag, ag_v);
     /* (ScaledMotion.value = factor * motion(0.0); ConstantMotion.value = the value) */
-    f->a0 = ag->constant ? rk_motion_eval(ag, 0.0, NULL, NULL) : 0.0;
+    f->a0 = f->constant ? rk_motion_eval(ag, 0.0, NULL, NULL) : 0.0;
+    f->v0 = f->constant && ag_v != NULL ? rk_motion_eval(ag_v, 0.0, NULL, NULL) : 0.0;
     rk_error_clear(&f->err);
 }
 
-/** ag(t) as the Python reads it: a0 for a constant input */
-static rk_status ed_ag(ed_fn *f, double t, double *a)
+/** (ag(t), ag_v(t)) as the Python reads them: (a0, v0) for a constant input */
+static rk_status ed_ag(ed_fn *f, double t, double *a, double *av)
 {
     int failed = 0;
     char msg[RK_MSG_LEN];
     if (f->constant) {
         *a = f->a0;
+        *av = f->v0;
         return RK_OK;
     }
     msg[0] = '\0';
     *a = rk_motion_eval(f->ag, t, &failed, msg);
+    *av = f->ag_v != NULL && !failed ? rk_motion_eval(f->ag_v, t, &failed, msg) : 0.0;
     if (failed)
         return rk_fail(&f->err, RK_ERR_VALUE, "%s", msg);
     return RK_OK;
 }
 
-/** ag(t) called directly (the Python's ag(t) at an event) */
-static rk_status ed_ag_call(rk_motion *ag, double t, double *a, rk_error *err)
+/** (ag(t), ag_v(t)) called directly (the Python's ag(t) at an event); ag_v NULL: 0 */
+static rk_status ed_ag_call(rk_motion *ag, rk_motion *ag_v, double t, double *a, double *av, rk_error *err)
 {
     int failed = 0;
     char msg[RK_MSG_LEN];
     msg[0] = '\0';
     *a = rk_motion_eval(ag, t, &failed, msg);
+    *av = ag_v != NULL && !failed ? rk_motion_eval(ag_v, t, &failed, msg) : 0.0;
     if (failed)
         return rk_fail(err, RK_ERR_VALUE, "%s", msg);
     return RK_OK;
@@ -173,11 +180,11 @@ static rk_status ed_ag_call(rk_motion *ag, double t, double *a, rk_error *err)
 static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
 {
     ed_fn *f = (ed_fn *)ctx;
-    double a;
-    rk_status st = ed_ag(f, t, &a);
+    double a, av;
+    rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
-    st = rk_mode_rhs(&f->e->model, f->mode, y, a, dy);
+    st = rk_mode_rhs(&f->e->model, f->mode, y, a, av, dy);
     if (st != RK_OK)
         return rk_fail(&f->err, st, "the acceleration of mode %d has no solution at t = %.17g s", f->mode, t);
     return RK_OK;
@@ -186,38 +193,38 @@ static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
 static rk_status ed_G(void *ctx, double t, const double *y, double *g)
 {
     ed_fn *f = (ed_fn *)ctx;
-    double a;
-    rk_status st = ed_ag(f, t, &a);
+    double a, av;
+    rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
-    rk_mode_monitors(&f->e->model, f->mode, y, a, g, NULL, NULL);
+    rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL);
     return RK_OK;
 }
 
 /** totals(t, y): (sum lambda_N, sum lambda_T) [N]; *has 0 in flight (the Python's totals is None) */
 static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
 {
-    double a, g[RK_MAX_EVENTS];
+    double a, av, g[RK_MAX_EVENTS];
     int has = 0;
-    rk_status st = ed_ag(f, t, &a);
+    rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
     lam[0] = lam[1] = NAN;
-    rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, &has);
+    rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, lam, &has);
     return RK_OK;
 }
 
 /** G(t, y) and, when lam is not NULL, the totals at the same (t, y) in one kernel call */
 static rk_status ed_G_totals(ed_fn *f, double t, const double *y, double *g, double *lam)
 {
-    double a;
+    double a, av;
     int has = 0;
-    rk_status st = ed_ag(f, t, &a);
+    rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
     if (lam != NULL)
         lam[0] = lam[1] = NAN;
-    rk_mode_monitors(&f->e->model, f->mode, y, a, g, lam, lam != NULL ? &has : NULL);
+    rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, lam, lam != NULL ? &has : NULL);
     return RK_OK;
 }
 
@@ -425,7 +432,7 @@ static rk_status ed_record_samples(rk_engine *e, ed_out *o, int mode, double t_l
 
 /* ------------------------------------------------------------------------------------------ contact events */
 
-static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
                            int *mode, double *v_out, int *changed, rk_error *err);
 
 /** `_record_impact` */
@@ -474,7 +481,7 @@ static void ed_wtx(const rk_model *m, const double *W, const double *x, double *
 
 /** `_impact_velocity`: the impact LCP under the Zeno rule; writes the post-impact velocity */
 static rk_status ed_impact_velocity(rk_engine *e, const double *q, const double *v, rk_set cand, rk_set closed,
-                                    double ag_t, double t, double *v_out, rk_error *err)
+                                    double ag_t, double av_t, double t, double *v_out, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
@@ -509,7 +516,7 @@ static rk_status ed_impact_velocity(rk_engine *e, const double *q, const double 
                 int best = -1;
                 double best_key = 0.0;
                 rk_model_inverse_mass(m, q, Minv);
-                m->ops->forces(m, q, sol.v, ag_t, f);
+                m->ops->forces(m, q, sol.v, ag_t, av_t, f);
                 for (i = 0; i < n; i++) {
                     double sacc = 0.0;
                     for (j = 0; j < n; j++)
@@ -546,18 +553,18 @@ static rk_status ed_impact_velocity(rk_engine *e, const double *q, const double 
 }
 
 /** `_select_mode` */
-static rk_status ed_select_mode(rk_engine *e, const double *q, const double *v, double ag_t, double t,
+static rk_status ed_select_mode(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t,
                                 int prefer, int *mode, rk_lcp_solution *sol, int *has_sol, rk_error *err)
 {
     rk_ed_state *s = ED(e);
-    ED_TRY(rk_next_mode(&e->model, q, v, ag_t, s->gap_tol, s->v_tol, prefer, mode, sol, has_sol, err));
+    ED_TRY(rk_next_mode(&e->model, q, v, ag_t, av_t, s->gap_tol, s->v_tol, prefer, mode, sol, has_sol, err));
     if (*has_sol && !sol->exact && !rk_lcp_painleve(sol))
         ed_report_inexact(e, sol, t, "uplift LCP");
     return RK_OK;
 }
 
 /** `_decide`: (mode, v) after the consistent state (q, v); *changed 1 when a Painleve impulse changed v */
-static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
                            int *mode, double *v_out, int *changed, rk_error *err)
 {
     rk_ed_state *s = ED(e);
@@ -566,7 +573,7 @@ static rk_status ed_decide(rk_engine *e, const double *q, const double *v, doubl
     int has = 0;
     *changed = 0;
     memcpy(v_out, v, (size_t)m->ops->n_dof * sizeof(double));
-    ED_TRY(ed_select_mode(e, q, v, ag_t, t, prefer, mode, &sol, &has, err));
+    ED_TRY(ed_select_mode(e, q, v, ag_t, av_t, t, prefer, mode, &sol, &has, err));
     if (has && rk_lcp_painleve(&sol)) {
         /* Painleve: an impact without collision makes the sliding corners stick (Genot & Brogliato 1999),
          * then the acceleration problem at rest tangentially */
@@ -584,24 +591,24 @@ static rk_status ed_decide(rk_engine *e, const double *q, const double *v, doubl
             ed_report_inexact(e, &sol_i, t, "Painleve impact LCP");
         memcpy(v_out, sol_i.v, (size_t)m->ops->n_dof * sizeof(double));
         *changed = 1;
-        ED_TRY(ed_select_mode(e, q, v_out, ag_t, t, -1, mode, &sol, &has, err));
+        ED_TRY(ed_select_mode(e, q, v_out, ag_t, av_t, t, -1, mode, &sol, &has, err));
     }
     return RK_OK;
 }
 
 /** `_enter` */
-static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double ag_t, double t, int prefer,
+static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
                           rk_error *err)
 {
     int mode, changed;
     double v2[RK_MAX_DOF];
-    ED_TRY(ed_decide(e, q, v, ag_t, t, prefer, &mode, v2, &changed, err));
+    ED_TRY(ed_decide(e, q, v, ag_t, av_t, t, prefer, &mode, v2, &changed, err));
     ed_set_state(e, mode, q, v2, 1);
     return RK_OK;
 }
 
 /** `_impact` */
-static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, double t, double ag_t,
+static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, double t, double ag_t, double av_t,
                            rk_error *err)
 {
     rk_ed_state *s = ED(e);
@@ -633,16 +640,16 @@ static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, do
         if (rule) {
             ED_TRY(ed_record_impact(e, t, v, v_plus, err));
             ed_count_painleve(e, q, v, v_plus, cand);
-            return ed_enter(e, q, v_plus, ag_t, t, -1, err);
+            return ed_enter(e, q, v_plus, ag_t, av_t, t, -1, err);
         }
     }
-    ED_TRY(ed_impact_velocity(e, q, v, cand, grazing, ag_t, t, v_impact, err));
-    ED_TRY(ed_decide(e, q, v_impact, ag_t, t, -1, &mode, v_plus, &changed, err));
+    ED_TRY(ed_impact_velocity(e, q, v, cand, grazing, ag_t, av_t, t, v_impact, err));
+    ED_TRY(ed_decide(e, q, v_impact, ag_t, av_t, t, -1, &mode, v_plus, &changed, err));
     if (grazing & ~m->ops->closed_of(m, mode)) {
         /* held closed, the corner is still sent into flight (the sticking LCP has no solution): not held */
         memcpy(q, q_in, (size_t)n * sizeof(double));
-        ED_TRY(ed_impact_velocity(e, q, v, cand, 0, ag_t, t, v_impact, err));
-        ED_TRY(ed_decide(e, q, v_impact, ag_t, t, -1, &mode, v_plus, &changed, err));
+        ED_TRY(ed_impact_velocity(e, q, v, cand, 0, ag_t, av_t, t, v_impact, err));
+        ED_TRY(ed_decide(e, q, v_impact, ag_t, av_t, t, -1, &mode, v_plus, &changed, err));
     }
     m->ops->contact_jacobians(m, q, W_N, W_T);
     ed_wtx(m, W_N, v, U_minus);
@@ -684,7 +691,7 @@ static void ed_note_percussions(rk_engine *e, const double *q, const double *v_m
 static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error *err)
 {
     rk_ed_state *s = ED(e);
-    double q[RK_MAX_DOF], v[RK_MAX_DOF], a;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], a, av;
     int j;
     rk_ed_full_state(e, q, v);
     if (kind == ED_OVERTURN) {
@@ -696,18 +703,18 @@ static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error 
         return RK_OK;
     }
     if (kind == ED_IMPACT) {
-        ED_TRY(ed_ag_call(f->ag, t, &a, err));
-        ED_TRY(ed_impact(e, q, v, t, a, err));
+        ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
+        ED_TRY(ed_impact(e, q, v, t, a, av, err));
         ed_note_percussions(e, q, v);
     } else if (kind == ED_CONE) {
         /* the friction reached mu lambda_N: the corners slide against it */
         double lam[2];
         ED_TRYF(f, ed_totals(f, t, s->y, lam));
-        ED_TRY(ed_ag_call(f->ag, t, &a, err));
-        ED_TRY(ed_enter(e, q, v, a, t, lam[1] > 0.0 ? RK_SLIDE_NEG : RK_SLIDE_POS, err));
+        ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
+        ED_TRY(ed_enter(e, q, v, a, av, t, lam[1] > 0.0 ? RK_SLIDE_NEG : RK_SLIDE_POS, err));
     } else {
-        ED_TRY(ed_ag_call(f->ag, t, &a, err));
-        ED_TRY(ed_enter(e, q, v, a, t, -1, err));
+        ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
+        ED_TRY(ed_enter(e, q, v, a, av, t, -1, err));
     }
     return RK_OK;
 }
@@ -856,7 +863,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
     rk_ed_state *s = ED(e);
     rk_stepper *st = &s->stepper;
     int same_rhs = s->rhs_mode == f->mode
-                   && (f->constant ? (s->rhs_constant && s->rhs_value == f->a0)
+                   && (f->constant ? (s->rhs_constant && s->rhs_value == f->a0 && s->rhs_value_v == f->v0)
                                    : (!s->rhs_constant && s->rhs_motion == s->motion_key));
     if (s->live && st->t == s->t && st->max_step == max_step) {
         st->fun = ed_rhs;
@@ -872,6 +879,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
     s->rhs_mode = f->mode;
     s->rhs_constant = f->constant;
     s->rhs_value = f->a0;
+    s->rhs_value_v = f->v0;
     s->rhs_motion = s->motion_key;
     return RK_OK;
 }
@@ -900,7 +908,8 @@ static rk_status ed_work_limit(rk_engine *e, rk_error *err)
 }
 
 /** `_segment`: integrate the current mode towards t_stop; *event 1 if an event ended it */
-static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *o, int *event, rk_error *err)
+static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motion *ag_v, ed_out *o, int *event,
+                            rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
@@ -910,7 +919,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *
     rk_event_ctx c;
     double lam[2], d_prev = NAN, max_step, g_prev[RK_MAX_EVENTS], g_new[RK_MAX_EVENTS];
     *event = 0;
-    ed_fn_init(&f, e, mode, ag);
+    ed_fn_init(&f, e, mode, ag, ag_v);
     if (ed_pending(o) && o->times[o->next] <= s->t) {
         while (ed_pending(o) && o->times[o->next] <= s->t)
             ed_row(e, o, mode, s->y, 0);
@@ -918,7 +927,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *
             s->work_end = (double)s->n_steps + (double)s->max_work;
     }
     has_totals = ed_has_totals(m, mode);
-    if (k == 0 && ag->constant) {
+    if (k == 0 && f.constant) {
         /* nothing moves and the (positive) contact forces cannot change */
         if (has_totals) {
             ED_TRYF(&f, ed_totals(&f, s->t, s->y, lam));
@@ -1028,17 +1037,17 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, ed_out *
 /* ------------------------------------------------------------------------------------------ settle */
 
 /** `_settle`: re-decide the mode of the current state by the acceleration LCP (after an input change) */
-static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_error *err)
+static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_v, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
     int mode = s->mode, nc = m->ops->n_contacts, n_e, i, ok, new_mode, changed;
     rk_set closed = m->ops->closed_of(m, mode), cc;
     double ev[RK_MAX_EVENTS], clear = e->options.tolerances.clearly_open, q[RK_MAX_DOF], v[RK_MAX_DOF];
-    double v_new[RK_MAX_DOF], a;
+    double v_new[RK_MAX_DOF], a, av;
     ed_fn f;
     int kinds[RK_MAX_EVENTS];
-    ed_fn_init(&f, e, mode, ag);
+    ed_fn_init(&f, e, mode, ag, ag_v);
     n_e = ed_kinds(m, mode, kinds);
     ED_TRYF(&f, ed_G(&f, t, s->y, ev));
     /* fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip going
@@ -1066,8 +1075,8 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_error *err)
         if (all)
             return RK_OK;
     }
-    ED_TRY(ed_ag_call(ag, t, &a, err));
-    ED_TRY(ed_decide(e, q, v, a, t, -1, &new_mode, v_new, &changed, err));
+    ED_TRY(ed_ag_call(ag, ag_v, t, &a, &av, err));
+    ED_TRY(ed_decide(e, q, v, a, av, t, -1, &new_mode, v_new, &changed, err));
     if (new_mode != mode || changed)
         ed_set_state(e, new_mode, q, v_new, 1);
     return RK_OK;
@@ -1075,7 +1084,8 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_error *err)
 
 /* ------------------------------------------------------------------------------------------ run */
 
-rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *samples, long long n_samples,
+rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, const double *samples,
+                    long long n_samples,
                     long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
                     unsigned flags, rk_error *err)
 {
@@ -1096,7 +1106,7 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *sam
         out.row = 0;
         o = &out;
     }
-    if (!ag->constant) {
+    if (!rk_motion_pair_constant(ag, ag_v)) {
         /* the Python's closures of a non-constant input are keyed by id(ag): the same object carries the live
          * stepper on (FSAL, h_abs), a new one restarts it (bit-identically) */
         if (ag->identity != 0)
@@ -1124,11 +1134,11 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *sam
         double tb, t_stop;
         if (t_end - s->t <= end_tol)
             break;
-        tb = rk_motion_next_breakpoint(ag, s->t);
+        tb = rk_motion_pair_next_breakpoint(ag, ag_v, s->t);
         t_stop = t_end < tb ? t_end : tb;
         if (m->ops->closed_of(m, s->mode) && !kink)
-            ED_TRY(ed_settle(e, s->t, ag, err));
-        ED_TRY(ed_segment(e, t_stop, ag, o, &event, err));
+            ED_TRY(ed_settle(e, s->t, ag, ag_v, err));
+        ED_TRY(ed_segment(e, t_stop, ag, ag_v, o, &event, err));
         if (event) {
             s->live = 0;
             kink = 0;
@@ -1141,7 +1151,7 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *sam
         } else if (t_stop == tb) {
             /* a kink of ag (a sample of a record): the mode holds and the step goes on across it; a jump:
              * re-decide the mode and restart */
-            kink = rk_motion_continuous_at(ag, tb);
+            kink = rk_motion_pair_continuous_at(ag, ag_v, tb);
             if (!kink)
                 s->live = 0;
         }

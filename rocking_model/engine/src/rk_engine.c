@@ -540,27 +540,29 @@ const rk_reports *rk_engine_reports(const rk_engine *e)
 /* ------------------------------------------------------------------------------------------ advance */
 
 /** check_real("ag", value, lo=-AG_MAX, hi=AG_MAX) and LinearMotion's checks with checked_motion's peak. */
-static rk_status check_input(rk_engine *e, double t_end, double ag0, double slope, int linear)
+/* name: "ag" (horizontal) or "ag_v" (vertical), the variable the messages name */
+static rk_status check_input(rk_engine *e, double t_end, double ag0, double slope, int linear, const char *name)
 {
     double t = rk_engine_time(e);
     if (!isfinite(ag0))
-        return rk_fail(&e->error, RK_ERR_VALUE, "ag = %s is not finite; allowed range [-1000, 1000]",
+        return rk_fail(&e->error, RK_ERR_VALUE, "%s = %s is not finite; allowed range [-1000, 1000]", name,
                        isnan(ag0) ? "nan" : ag0 > 0 ? "inf" : "-inf");
     if (!linear) {
         if (fabs(ag0) > RK_AG_MAX)
-            return rk_fail(&e->error, RK_ERR_VALUE, "ag = %g is out of range; allowed range [-1000, 1000]", ag0);
+            return rk_fail(&e->error, RK_ERR_VALUE, "%s = %g is out of range; allowed range [-1000, 1000]", name,
+                           ag0);
         return RK_OK;
     }
     if (!isfinite(slope))
-        return rk_fail(&e->error, RK_ERR_VALUE, "ag rate = %s is not finite; allowed range (-inf, inf)",
+        return rk_fail(&e->error, RK_ERR_VALUE, "%s rate = %s is not finite; allowed range (-inf, inf)", name,
                        isnan(slope) ? "nan" : slope > 0 ? "inf" : "-inf");
     {
         double a0 = fabs(ag0 + slope * (t - t)), a1 = fabs(ag0 + slope * (t_end - t));
         double peak = a0 > a1 ? a0 : a1;
         if (!(peak <= RK_AG_MAX))
-            return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion's peak |ag| = %g m/s2 is out of "
+            return rk_fail(&e->error, RK_ERR_VALUE, "%s: the ground motion's peak |%s| = %g m/s2 is out of "
                            "range; allowed range [-1000, 1000] m/s2 (AG_MAX, about 100 g; check the units of "
-                           "the record and its scale factor)", peak);
+                           "the record and its scale factor)", name, name, peak);
     }
     return RK_OK;
 }
@@ -630,35 +632,46 @@ static rk_status guarded_end(rk_engine *e, rk_status st, const rk_core *saved)
     return st;
 }
 
-static rk_status advance_impl(rk_engine *e, double t_end, rk_motion *ag, long long max_steps, unsigned flags)
+static rk_status advance_impl(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, long long max_steps,
+                              unsigned flags)
 {
     rk_core saved;
     rk_status st;
     e->reports.count = 0;
     save_core(e, &saved);
-    if (!ag->constant)
+    if (!rk_motion_pair_constant(ag, ag_v))
         e->motion_calls++;
     if (is_mj(e))
-        st = rk_mj_advance(e, t_end, ag, max_steps, &e->error);
+        st = rk_mj_advance(e, t_end, ag, ag_v, max_steps, &e->error);
     else
-        st = rk_ed_run(e, t_end, ag, NULL, 0, max_steps, NULL, NULL, NULL, NULL, flags, &e->error);
+        st = rk_ed_run(e, t_end, ag, ag_v, NULL, 0, max_steps, NULL, NULL, NULL, NULL, flags, &e->error);
     return guarded_end(e, st, &saved);
 }
 
-rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, long long max_steps,
-                            unsigned flags)
+rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, double ag_v0, double ag_v_slope,
+                            long long max_steps, unsigned flags)
 {
-    rk_motion m;
+    rk_motion m, mv;
     int linear = slope != 0.0 || (flags & RK_ADVANCE_LINEAR) != 0u;
+    int linear_v = ag_v_slope != 0.0 || (flags & RK_ADVANCE_LINEAR_V) != 0u;
+    /* no vertical motion at all: today's path (GroundMotion.vertical is None) */
+    int vertical = linear_v || ag_v0 != 0.0;
     rk_error_clear(&e->error);
     e->fail_t = rk_engine_time(e);
-    if (check_t_end(e, t_end) != RK_OK || check_input(e, t_end, ag0, slope, linear) != RK_OK)
+    if (check_t_end(e, t_end) != RK_OK || check_input(e, t_end, ag0, slope, linear, "ag") != RK_OK
+        || check_input(e, t_end, ag_v0, ag_v_slope, linear_v, "ag_v") != RK_OK)
         return e->error.status;
     if (linear)
         rk_motion_linear(&m, ag0, slope, rk_engine_time(e));
     else
         rk_motion_constant(&m, ag0);
-    return advance_impl(e, t_end, &m, max_steps, flags);
+    if (!vertical)
+        return advance_impl(e, t_end, &m, NULL, max_steps, flags);
+    if (linear_v)
+        rk_motion_linear(&mv, ag_v0, ag_v_slope, rk_engine_time(e));
+    else
+        rk_motion_constant(&mv, ag_v0);
+    return advance_impl(e, t_end, &m, &mv, max_steps, flags);
 }
 
 /** The numbers a motion is made of are finite (the constructors check theirs; a hand-filled CONSTANT, LINEAR
@@ -684,18 +697,28 @@ static int motion_finite(const rk_motion *m)
     return m != NULL;
 }
 
-rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, long long max_steps)
+/** The motions of a call: ag given, both finite (ag_v NULL: none). */
+static rk_status check_motions(rk_engine *e, const rk_motion *ag, const rk_motion *ag_v)
 {
-    rk_error_clear(&e->error);
-    e->fail_t = rk_engine_time(e);
     if (ag == NULL)
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
     if (!motion_finite(ag))
         return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion's value, rate and factor must be finite; "
                        "allowed range (-inf, inf)");
-    if (check_t_end(e, t_end) != RK_OK)
+    if (ag_v != NULL && !motion_finite(ag_v))
+        return rk_fail(&e->error, RK_ERR_VALUE, "ag_v: the ground motion's value, rate and factor must be finite; "
+                       "allowed range (-inf, inf)");
+    return RK_OK;
+}
+
+rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v,
+                                   long long max_steps)
+{
+    rk_error_clear(&e->error);
+    e->fail_t = rk_engine_time(e);
+    if (check_motions(e, ag, ag_v) != RK_OK || check_t_end(e, t_end) != RK_OK)
         return e->error.status;
-    return advance_impl(e, t_end, ag, max_steps, 0u);
+    return advance_impl(e, t_end, ag, ag_v, max_steps, 0u);
 }
 
 /** Integrator._row into row ``r`` of the sample arrays. */
@@ -711,7 +734,7 @@ static void write_row(rk_engine *e, long long r, int *modes, double *values, lon
     overturned[r] = rk_engine_overturned(e);
 }
 
-rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, long long n_times,
+rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
                            long long max_steps, int *modes, double *values, long long *impacts, int *overturned)
 {
     rk_core saved;
@@ -720,11 +743,8 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, lon
     double t = rk_engine_time(e);
     rk_error_clear(&e->error);
     e->fail_t = t;
-    if (ag == NULL)
-        return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion is missing");
-    if (!motion_finite(ag))
-        return rk_fail(&e->error, RK_ERR_VALUE, "ag: the ground motion's value, rate and factor must be finite; "
-                       "allowed range (-inf, inf)");
+    if (check_motions(e, ag, ag_v) != RK_OK)
+        return e->error.status;
     if (n_times < 1)
         return rk_fail(&e->error, RK_ERR_VALUE, "times must hold at least one time after the current one");
     for (i = 0; i < n_times; i++) {
@@ -736,12 +756,12 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, lon
     }
     e->reports.count = 0;
     save_core(e, &saved);
-    if (!ag->constant)
+    if (!rk_motion_pair_constant(ag, ag_v))
         e->motion_calls++;
     if (is_mj(e)) {
         write_row(e, 0, modes, values, impacts, overturned);
         for (i = 0; i < n_times && st == RK_OK; i++) {
-            st = rk_mj_advance(e, times[i], ag, max_steps, &e->error);
+            st = rk_mj_advance(e, times[i], ag, ag_v, max_steps, &e->error);
             if (st == RK_OK) {
                 touch(e);
                 write_row(e, i + 1, modes, values, impacts, overturned);
@@ -752,7 +772,7 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, lon
         int stride = e->model.ops->n_outputs + 2;
         rk_ed_row(e, e->core.s.ed.mode, e->core.s.ed.y, e->core.s.ed.overturned, modes, values, impacts,
                   overturned);
-        st = rk_ed_run(e, times[n_times - 1], ag, times, n_times, max_steps, modes + 1, values + stride,
+        st = rk_ed_run(e, times[n_times - 1], ag, ag_v, times, n_times, max_steps, modes + 1, values + stride,
                        impacts + 1, overturned + 1, 0u, &e->error);
     }
     return guarded_end(e, st, &saved);

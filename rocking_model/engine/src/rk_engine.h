@@ -23,7 +23,8 @@ extern "C" {
 /** The engine's version (the package version it was built with, e.g. "0.9.0") and the API version of this
  *  header (bumped on every incompatible change). */
 const char *rk_engine_version(void);
-#define RK_ENGINE_API_VERSION 1
+/* 2: the vertical ground acceleration ag_v (issue 23) in rk_engine_advance / advance_motion / sample */
+#define RK_ENGINE_API_VERSION 2
 int rk_engine_api_version(void);
 /** The plain-data state format (simulation.STATE_VERSION). */
 #define RK_STATE_VERSION 2
@@ -67,22 +68,31 @@ rk_status rk_engine_status(const rk_engine *e);
                                         stateless phase in steps of stateless_step, as it does under
                                         fmi2SetRealInputDerivatives with a zero rate) */
 
+#define RK_ADVANCE_LINEAR_V 4u     /**< the same for the vertical input: a LinearMotion even when ag_v_slope == 0 */
+
 /** Integrate to exactly t_end [s] (>= the current time) under the first-order hold
  *  ag(t) = ag0 + slope (t - t0), t0 the current time: slope 0 without RK_ADVANCE_LINEAR is the constant path
  *  (ConstantMotion), otherwise LinearMotion(ag0, slope, t_ref = t0). A LinearMotion whose t_ref is not the
  *  current time (the FMU's rate set at another time) goes through rk_engine_advance_motion with
  *  rk_motion_linear, which evaluates value + rate (t - t_ref) exactly as the Python does.
+ *  The vertical ground acceleration [m/s2, positive upward] is held the same way:
+ *  ag_v(t) = ag_v0 + ag_v_slope (t - t0) (RK_ADVANCE_LINEAR_V for a LinearMotion with a zero slope); ag_v0 =
+ *  ag_v_slope = 0 without RK_ADVANCE_LINEAR_V is no vertical motion (today's path, bit-identical). The pair is
+ *  the Python's TwoComponentMotion: constant when both components are.
  *  max_steps: work budget of this call (< 0: none): RK_ERR_WORK_LIMIT beyond it, state restored. */
-rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, long long max_steps,
-                            unsigned flags);
-/** The same under any ground motion (Simulator.advance with a GroundMotion). */
-rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, long long max_steps);
+rk_status rk_engine_advance(rk_engine *e, double t_end, double ag0, double slope, double ag_v0, double ag_v_slope,
+                            long long max_steps, unsigned flags);
+/** The same under any ground motion (Simulator.advance with a GroundMotion): ag the horizontal component, ag_v
+ *  the vertical one (NULL: zero, GroundMotion.vertical is None). */
+rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v,
+                                   long long max_steps);
 
 /** Integrator.sample: advance through the increasing times[0..n_times-1] (> current time) and write the
  *  outputs at the current time and at each of them (n_times + 1 rows): modes[row], values[row * stride + j]
  *  with stride = n_outputs + 2 (the model's outputs, then friction_demand, painleve), impacts[row],
- *  overturned[row]. The work budget applies between consecutive times. Arrays are caller-owned. */
-rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, const double *times, long long n_times,
+ *  overturned[row]. The work budget applies between consecutive times. Arrays are caller-owned. ag_v: the
+ *  vertical component (NULL: zero). */
+rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
                            long long max_steps, int *modes, double *values, long long *impacts, int *overturned);
 
 /* ------------------------------------------------------------------------------------------ read */

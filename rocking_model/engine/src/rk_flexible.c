@@ -144,10 +144,11 @@ static void flexible_mass_matrix(const rk_model *m, const double *q, double *M)
     memcpy(M, row, sizeof row);
 }
 
-static void flexible_forces(const rk_model *m, const double *q, const double *v, double ag, double *f)
+static void flexible_forces(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double *f)
 {
-    /* right-hand sides of Eq. (55): damping, elastic, centrifugal/Coriolis, ground inertia, gravity */
-    double u = q[0], phi = q[3], ud = v[0], w = v[3], sp = sin(phi), cp = cos(phi), D = DD, Mt = MTOT, g = G;
+    /* right-hand sides of Eq. (55): damping, elastic, centrifugal/Coriolis, ground inertia, gravity; the
+     * vertical ground acceleration adds to gravity (g + 0.0 == g: ag_v = 0 rounds as before) */
+    double u = q[0], phi = q[3], ud = v[0], w = v[3], sp = sin(phi), cp = cos(phi), D = DD, Mt = MTOT, g = G + ag_v;
     double Mxp = -(AH * cp + D * u * sp), Myp = -AH * sp + D * u * cp;
     f[0] = -CD * ud - KT * u + MT * u * w * w - D * cp * ag - D * sp * g;
     f[1] = Myp * w * w + 2.0 * D * sp * ud * w - Mt * ag;
@@ -268,9 +269,9 @@ static void flexible_mode_jacobian(const rk_model *m, int mode, const double *r,
 
 /* mode_closures' rocking accel(u, phi, ud, w, a) */
 static void rocking_accel(const rk_model *m, double s, double u, double phi, double ud, double w, double a,
-                          double *udd, double *wd, double *sp_out, double *cp_out)
+                          double a_v, double *udd, double *wd, double *sp_out, double *cp_out)
 {
-    double mt = MT, kt = KT, c = CD, C = CC, D = DD, g = G, A_h = AH;
+    double mt = MT, kt = KT, c = CD, C = CC, D = DD, g = G + a_v, A_h = AH;
     double sb = s * B, sbM = sb * MTOT;
     double sp = sin(phi), cp = cos(phi);
     double K = m->d[D_K0] + mt * u * u - 2.0 * sb * D * u;
@@ -284,9 +285,9 @@ static void rocking_accel(const rk_model *m, double s, double u, double phi, dou
     *cp_out = cp;
 }
 
-static void flexible_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy)
+static void flexible_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
-    double mt = MT, kt = KT, c = CD, C = CC, D = DD, g = G, A_h = AH, Mt = MTOT, J0v = J0;
+    double mt = MT, kt = KT, c = CD, C = CC, D = DD, g = G + ag_v, A_h = AH, Mt = MTOT, J0v = J0;
     if (mode == RK_MODE_FLIGHT) {
         /* M(q) v_dot = f: x and y condensed out (Schur complement), the (u, phi) system by Cramer's rule */
         double u = y[0], phi = y[3], ud = y[4], xd = y[5], yd = y[6], w = y[7], a = ag;
@@ -320,7 +321,7 @@ static void flexible_mode_rhs(const rk_model *m, int mode, const double *y, doub
     }
     {
         double udd, wd, sp, cp;
-        rocking_accel(m, (double)rk_pivot_sign(mode), y[0], y[1], y[2], y[3], ag, &udd, &wd, &sp, &cp);
+        rocking_accel(m, (double)rk_pivot_sign(mode), y[0], y[1], y[2], y[3], ag, ag_v, &udd, &wd, &sp, &cp);
         dy[0] = y[2];
         dy[1] = y[3];
         dy[2] = udd;
@@ -328,10 +329,12 @@ static void flexible_mode_rhs(const rk_model *m, int mode, const double *y, doub
     }
 }
 
-static void flexible_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals)
+static void flexible_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
 {
     double mt = MT, kt = KT, c = CD, C = CC, D = DD, grav = G, A_h = AH, Mt = MTOT, b = B;
-    double W = Mt * grav;
+    /* W the weight (the monitors' scale, always > 0), We = M_t (g + ag_v) the effective weight (== W at
+     * ag_v = 0) that the contacts carry */
+    double ge = grav + ag_v, W = Mt * grav, We = Mt * ge;
     if (mode == RK_MODE_FLIGHT) {
         double yc = y[2], phi = y[3], L = m->d[D_L];
         double bs = b * sin(phi);
@@ -343,13 +346,13 @@ static void flexible_mode_monitors(const rk_model *m, int mode, const double *y,
     if (mode == RK_MODE_FULL) {
         double u = y[0], ud = y[1], a = ag;
         double udd = (-c * ud - kt * u - D * a) / mt;
-        /* phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g D u) */
-        double d = (-C * udd - A_h * a + grav * D * u) / b;
-        g[0] = 0.5 * (W - d) / W;
-        g[1] = 0.5 * (W + d) / W;
+        /* phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - (g + ag_v) D u) */
+        double d = (-C * udd - A_h * a + ge * D * u) / b;
+        g[0] = 0.5 * (We - d) / W;
+        g[1] = 0.5 * (We + d) / W;
         g[2] = RK_HALF_PI;
         if (totals != NULL) {
-            totals[0] = W;
+            totals[0] = We;
             totals[1] = D * (-c * ud - kt * u - D * a) / mt + Mt * a;
         }
         return;
@@ -357,12 +360,12 @@ static void flexible_mode_monitors(const rk_model *m, int mode, const double *y,
     {
         double s = (double)rk_pivot_sign(mode), sb = s * b;
         double u = y[0], phi = y[1], ud = y[2], w = y[3], a = ag, udd, wd, sp, cp, ydd, Mxp, Myp, lam, margin;
-        rocking_accel(m, s, u, phi, ud, w, a, &udd, &wd, &sp, &cp);
+        rocking_accel(m, s, u, phi, ud, w, a, ag_v, &udd, &wd, &sp, &cp);
         /* pivot force = y row of M v_dot - f (the tangential direction is horizontal) */
         ydd = -sb * cp * wd + sb * sp * w * w;
         Mxp = -(A_h * cp + D * u * sp);
         Myp = -A_h * sp + D * u * cp;
-        lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W;
+        lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + We;
         margin = RK_HALF_PI - fabs(phi);
         if (s < 0) {
             g[0] = lam / W; g[1] = -s * phi;
@@ -428,7 +431,7 @@ static void flexible_mode_outputs(const rk_model *m, int mode, const double *y, 
 
 /* FlexibleOscillator.reduced_acceleration of the sticking modes with closed corners (FULL, rocking): its own
  * closed forms (operation order differs from mode_closures' accel: K = J0 + m_tilde u^2 + M_t b^2 - ...) */
-static void reduced_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+static void reduced_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
                                  double *rdd)
 {
     if (mode == RK_MODE_FULL) {
@@ -438,7 +441,7 @@ static void reduced_acceleration(const rk_model *m, int mode, const double *r, c
     {
         double s = (double)rk_pivot_sign(mode);
         double u = r[0], phi = r[1], ud = r_dot[0], w = r_dot[1], sp = sin(phi), cp = cos(phi);
-        double mt = MT, C = CC, D = DD, g = G;
+        double mt = MT, C = CC, D = DD, g = G + ag_v;
         double sbM = s * B * MTOT;
         double K = J0 + mt * u * u + MTOT * pow(B, 2.0) - 2.0 * s * B * D * u;
         double E = mt * u - s * B * D;
@@ -450,7 +453,7 @@ static void reduced_acceleration(const rk_model *m, int mode, const double *r, c
     }
 }
 
-static void flexible_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag,
+static void flexible_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
                                     double *lam)
 {
     int idx[4], k, i, j;
@@ -465,7 +468,7 @@ static void flexible_contact_forces(const rk_model *m, int mode, const double *q
         rd[i] = v[idx[i]];
     }
     flexible_mode_jacobian(m, mode, r, rd, J, jd);
-    reduced_acceleration(m, mode, r, rd, ag, rdd);
+    reduced_acceleration(m, mode, r, rd, ag, ag_v, rdd);
     for (i = 0; i < 4; i++) {
         double s = 0.0;
         for (j = 0; j < k; j++)
@@ -473,7 +476,7 @@ static void flexible_contact_forces(const rk_model *m, int mode, const double *q
         a[i] = s + jd[i];
     }
     flexible_mass_matrix(m, q, M);
-    flexible_forces(m, q, v, ag, f);
+    flexible_forces(m, q, v, ag, ag_v, f);
     for (i = 0; i < 4; i++) {
         double s = 0.0;
         for (j = 0; j < 4; j++)

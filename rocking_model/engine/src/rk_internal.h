@@ -63,6 +63,7 @@ typedef struct rk_ed_state {
     int rhs_mode;
     int rhs_constant;                   /**< 1: built for a constant input of value rhs_value */
     double rhs_value;
+    double rhs_value_v;                 /**< the vertical component's value of that constant input (0: none) */
     unsigned long long rhs_motion;      /**< non-constant: the serial of the motion (motion_serial at its call) */
     unsigned long long motion_serial;   /**< incremented by every advance / sample call with a non-constant
                                              motion (a new GroundMotion object in the Python) */
@@ -150,9 +151,10 @@ void rk_note_demand(double *demand, double mu, double lam_N, double lam_T, doubl
 /* ------------------------------------------------------------------------------------------ event-driven (D) */
 /** EventDriven.from_options + __init__ (options checked with the Python messages). */
 rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, rk_error *err);
-/** EventDriven._run: advance (samples NULL) or sample. Errors leave the state partly advanced: the caller
+/** EventDriven._run: advance (samples NULL) or sample, under the pair (ag, ag_v) (ag_v NULL: no vertical motion,
+ *  GroundMotion.vertical is None). Errors leave the state partly advanced: the caller
  *  (rk_engine.c) restores its checkpoint. */
-rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, const double *samples, long long n_samples,
+rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, const double *samples, long long n_samples,
                     long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
                     unsigned flags, rk_error *err);
 /* (part D) rk_ed_run with samples writes the rows of the samples only, n_samples rows (the Python's ``_run``);
@@ -171,7 +173,8 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *s, const double *i
 
 /* ------------------------------------------------------------------------------------------ Moreau-Jean (E) */
 rk_status rk_mj_init(rk_engine *e, int mode, const double *q, const double *v, rk_error *err);
-rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, long long max_steps, rk_error *err);
+rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, long long max_steps,
+                        rk_error *err);
 void rk_mj_outputs(rk_engine *e, double *out);
 rk_status rk_mj_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
                           rk_error *err);

@@ -178,6 +178,22 @@ static rk_status ag_at(rk_motion *ag, double t, double *out, rk_error *err)
     return RK_OK;
 }
 
+/** ag_v(t) of the vertical component (0 without one), or RK_ERR_VALUE with the callback's message. */
+static rk_status ag_v_at(rk_motion *ag_v, double t, double *out, rk_error *err)
+{
+    int failed = 0;
+    char msg[RK_MSG_LEN];
+    if (ag_v == NULL) {
+        *out = 0.0;
+        return RK_OK;
+    }
+    msg[0] = '\0';
+    *out = rk_motion_eval(ag_v, t, &failed, msg);
+    if (failed)
+        return rk_fail(err, RK_ERR_VALUE, "%s", msg[0] ? msg : "ag_v: the ground motion failed");
+    return RK_OK;
+}
+
 /** The ValueError flexible_impact._inputs raises where the classical rule does not apply (A's kernel returns
  *  -1): a pivot that is not LEFT / RIGHT (a sliding mode), a non-finite input, or a rate that does not close
  *  the other corner. The Python's text (Mode reprs as Python prints them). */
@@ -198,7 +214,7 @@ static rk_status classical_refusal(const rk_model *model, int mode, const double
 }
 
 /** MoreauJean._step. */
-static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_error *err)
+static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_motion *ag_v, rk_error *err)
 {
     rk_mj_state *s = &e->core.s.mj;
     const rk_model *model = &e->model;
@@ -210,7 +226,7 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_er
     double K[RK_MAX_DOF * RK_MAX_DOF], C[RK_MAX_DOF * RK_MAX_DOF], Winv[RK_MAX_DOF * RK_MAX_DOF];
     double v_free[RK_MAX_DOF], g[RK_MAX_CONTACTS], W_N[RK_MAX_DOF * RK_MAX_CONTACTS];
     double W_T[RK_MAX_DOF * RK_MAX_CONTACTS], U[RK_MAX_CONTACTS], Uf[RK_MAX_CONTACTS];
-    double v_new[RK_MAX_DOF], q_new[RK_MAX_DOF], tmp[RK_MAX_DOF], ag0, ag1;
+    double v_new[RK_MAX_DOF], q_new[RK_MAX_DOF], tmp[RK_MAX_DOF], ag0, ag1, av0, av1;
     double margin, v_scale;
     int i, j, rule_impact = 0, sigma = 0, stiff = 0;
     rk_set closed_now, active = 0u, closed = 0u, newly;
@@ -218,15 +234,15 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_er
 
     memcpy(v, s->v, (size_t)n * sizeof(double));
     ops->mass_matrix(model, q, M);
-    if ((st = ag_at(ag, t, &ag0, err)) != RK_OK)
+    if ((st = ag_at(ag, t, &ag0, err)) != RK_OK || (st = ag_v_at(ag_v, t, &av0, err)) != RK_OK)
         return st;
-    ops->forces(model, q, v, ag0, f0);
-    if (ag->constant) {
+    ops->forces(model, q, v, ag0, av0, f0);
+    if (rk_motion_pair_constant(ag, ag_v)) {
         memcpy(f1, f0, (size_t)n * sizeof(double));
     } else {
-        if ((st = ag_at(ag, t + dt, &ag1, err)) != RK_OK)
+        if ((st = ag_at(ag, t + dt, &ag1, err)) != RK_OK || (st = ag_v_at(ag_v, t + dt, &av1, err)) != RK_OK)
             return st;
-        ops->forces(model, q, v, ag1, f1);
+        ops->forces(model, q, v, ag1, av1, f1);
     }
     for (i = 0; i < n; i++)
         rhs[i] = dt * ((1.0 - theta) * f0[i] + theta * f1[i]);
@@ -396,7 +412,8 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_er
     return RK_OK;
 }
 
-rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, long long max_steps, rk_error *err)
+rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, long long max_steps,
+                        rk_error *err)
 {
     rk_mj_state *s = &e->core.s.mj;
     double span = t_end - s->t, steps, t0, dt;
@@ -422,7 +439,7 @@ rk_status rk_mj_advance(rk_engine *e, double t_end, rk_motion *ag, long long max
     dt = span / (double)n;
     for (k = 0; k < n; k++) {
         double t_next = k == n - 1 ? t_end : t0 + (double)(k + 1) * dt;
-        if ((st = mj_step(e, s->t, t_next - s->t, ag, err)) != RK_OK) {
+        if ((st = mj_step(e, s->t, t_next - s->t, ag, ag_v, err)) != RK_OK) {
             e->fail_t = s->t;
             return st;
         }

@@ -537,32 +537,32 @@ int rk_reduce_any(const rk_model *m, int mode, const double *q, const double *v,
     return k;
 }
 
-rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy)
+rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
     int idx[RK_MAX_DOF], k, i;
     if (is_sliding(m, mode)) {
         k = rk_slide_dofs(m, mode, idx);
         for (i = 0; i < k; i++)
             dy[i] = y[k + i];
-        return rk_slide_acceleration(m, mode, y, y + k, ag, dy + k);
+        return rk_slide_acceleration(m, mode, y, y + k, ag, ag_v, dy + k);
     }
     if (m->ops->mode_rhs != NULL)
-        m->ops->mode_rhs(m, mode, y, ag, dy);
+        m->ops->mode_rhs(m, mode, y, ag, ag_v, dy);
     else
-        rk_model_generic_rhs(m, mode, y, ag, dy);
+        rk_model_generic_rhs(m, mode, y, ag, ag_v, dy);
     return RK_OK;
 }
 
 /* the monitors of a sticking mode without the friction cone (mode_closures' / mode_functions') */
-static void stick_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals)
+static void stick_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
 {
     if (m->ops->mode_monitors != NULL)
-        m->ops->mode_monitors(m, mode, y, ag, g, totals);
+        m->ops->mode_monitors(m, mode, y, ag, ag_v, g, totals);
     else
-        rk_model_generic_monitors(m, mode, y, ag, g, totals);
+        rk_model_generic_monitors(m, mode, y, ag, ag_v, g, totals);
 }
 
-int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals,
+int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals,
                      int *has_totals)
 {
     int nc = m->ops->n_contacts;
@@ -576,14 +576,14 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         double base[RK_MAX_EVENTS], F = m->force_scale, V = sqrt(m->g * m->length_scale), tau_sum = 0.0;
         double inv_mu = isinf(m->mu) ? 0.0 : 1.0 / m->mu;
         rk_slide_embed(m, mode, y, y + k, q, v);
-        if (rk_slide_motion(m, mode, q, v, ag, a, tau) != RK_OK)
+        if (rk_slide_motion(m, mode, q, v, ag, ag_v, a, tau) != RK_OK)
             for (i = 0; i < RK_MAX_CONTACTS; i++)
                 tau[i] = NAN;       /* numpy's lstsq failed too: non-finite event functions stop the driver */
         for (i = 0; i < k - 1; i++) {
             ys[i] = y[i];
             ys[k - 1 + i] = y[k + i];
         }
-        stick_monitors(m, stick, ys, ag, base, NULL);
+        stick_monitors(m, stick, ys, ag, ag_v, base, NULL);
         for (i = 0; i < nc; i++)
             g[i] = RK_IN(closed, i) ? tau[c++] / F : base[i];
         g[nc] = (double)sigma * y[2 * k - 1] / V;
@@ -602,7 +602,7 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         rk_set closed = m->ops->closed_of(m, mode);
         int cone = closed && !isinf(m->mu);
         /* the totals only where someone reads them: the caller, or the friction cone */
-        stick_monitors(m, mode, y, ag, g, closed && (totals != NULL || cone) ? tot : NULL);
+        stick_monitors(m, mode, y, ag, ag_v, g, closed && (totals != NULL || cone) ? tot : NULL);
         if (has_totals != NULL)
             *has_totals = closed != 0u;
         if (closed && totals != NULL) {
@@ -668,19 +668,19 @@ double rk_shift_of(const rk_model *m, int mode, const double *q)
 }
 
 /* r_ddot of a sticking mode (RockingModel.reduced_acceleration: the kernel's closed form, else Lagrange) */
-static void reduced_acceleration(const rk_model *m, int mode, const double *y, int k, double ag, double *r_ddot)
+static void reduced_acceleration(const rk_model *m, int mode, const double *y, int k, double ag, double ag_v, double *r_ddot)
 {
     double dy[RK_MAX_Y];
     int i;
     if (m->ops->mode_rhs != NULL)
-        m->ops->mode_rhs(m, mode, y, ag, dy);
+        m->ops->mode_rhs(m, mode, y, ag, ag_v, dy);
     else
-        rk_model_generic_rhs(m, mode, y, ag, dy);
+        rk_model_generic_rhs(m, mode, y, ag, ag_v, dy);
     for (i = 0; i < k; i++)
         r_ddot[i] = dy[k + i];
 }
 
-void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double *totals)
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *totals)
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k, i, j;
     double y[RK_MAX_Y], J[RK_MAX_DOF * RK_MAX_DOF], jd[RK_MAX_DOF], a[RK_MAX_DOF], rdd[RK_MAX_DOF];
@@ -692,7 +692,7 @@ void rk_force_totals(const rk_model *m, int mode, const double *q, const double 
     }
     m->ops->mode_jacobian(m, mode, y, y + k, J, jd);
     if (k > 0) {
-        reduced_acceleration(m, mode, y, k, ag, rdd);
+        reduced_acceleration(m, mode, y, k, ag, ag_v, rdd);
         for (i = 0; i < n; i++) {
             double s = 0.0;
             for (j = 0; j < k; j++)
@@ -704,7 +704,7 @@ void rk_force_totals(const rk_model *m, int mode, const double *q, const double 
             a[i] = jd[i];
     }
     m->ops->mass_matrix(m, q, M);
-    m->ops->forces(m, q, v, ag, f);
+    m->ops->forces(m, q, v, ag, ag_v, f);
     for (i = 0; i < n; i++) {
         double s = 0.0;
         for (j = 0; j < n; j++)
@@ -715,7 +715,7 @@ void rk_force_totals(const rk_model *m, int mode, const double *q, const double 
     totals[1] = resid[m->ops->slide_index];
 }
 
-void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy)
+void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k, i, j, l;
     double q[RK_MAX_DOF], v[RK_MAX_DOF], J[RK_MAX_DOF * RK_MAX_DOF], jd[RK_MAX_DOF], M[RK_MAX_DOF * RK_MAX_DOF];
@@ -728,7 +728,7 @@ void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double a
     m->ops->embed(m, mode, y, y + k, q, v);
     m->ops->mode_jacobian(m, mode, y, y + k, J, jd);
     m->ops->mass_matrix(m, q, M);
-    m->ops->forces(m, q, v, ag, f);
+    m->ops->forces(m, q, v, ag, ag_v, f);
     /* (J^T M J) r_ddot = J^T (f - M jd) */
     for (i = 0; i < n; i++) {
         double s = 0.0;
@@ -762,7 +762,7 @@ void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double a
     }
 }
 
-void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, double ag, double *g,
+void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g,
                                double *totals)
 {
     int nc = m->ops->n_contacts, idx[RK_MAX_DOF], k, i;
@@ -773,11 +773,11 @@ void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, dou
     m->ops->embed(m, mode, y, y + k, q, v);
     if (closed) {
         if (m->ops->contact_forces != NULL) {
-            m->ops->contact_forces(m, mode, q, v, ag, lam);
+            m->ops->contact_forces(m, mode, q, v, ag, ag_v, lam);
         } else {
             /* RockingModel.contact_forces: contact.mode_forces, the contact LCP with the closed set forced */
             rk_error err;
-            if (rk_mode_forces(m, mode, q, v, ag, lam, &err) != RK_OK)
+            if (rk_mode_forces(m, mode, q, v, ag, ag_v, lam, &err) != RK_OK)
                 for (i = 0; i < nc; i++)
                     lam[i] = NAN;   /* where numpy raises: the driver sees non-finite event functions */
         }
@@ -794,5 +794,5 @@ void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, dou
     }
     g[nc] = RK_HALF_PI - fabs(phi);
     if (totals != NULL && closed)
-        rk_force_totals(m, mode, q, v, ag, totals);
+        rk_force_totals(m, mode, q, v, ag, ag_v, totals);
 }

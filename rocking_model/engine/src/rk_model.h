@@ -88,7 +88,7 @@ typedef struct rk_model_ops {
     /** optional (NULL: the generic inverse of rk_model_inverse_mass) */
     void (*inverse_mass_matrix)(const rk_model *m, const double *q, double *Minv);
     /** f(q, v, ag) [N, N m]: non-contact generalized forces. */
-    void (*forces)(const rk_model *m, const double *q, const double *v, double ag, double *f);
+    void (*forces)(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double *f);
     /** optional (NULL: no stiff part, returns 0): K = -df/dq, C = -df/dv of the stiff linear part; returns 1
      *  when filled (RockingModel.stiff_jacobians not None). */
     int (*stiff_jacobians)(const rk_model *m, const double *q, const double *v, double *K, double *C);
@@ -110,19 +110,19 @@ typedef struct rk_model_ops {
     /** dy = [r_dot, r_ddot] of a sticking mode at y under ag: the rhs of mode_closures, SAME operation order
      *  as the Python closed form (DESIGN.md "Numerics"). optional (NULL: rk_model_generic_rhs, Lagrange on the
      *  constrained system as RockingModel.reduced_acceleration). */
-    void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double *dy);
+    void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
     /** The event functions of a sticking mode at (y, ag), in the order of mode_closures' monitors (one per
      *  contact, then the overturning margin HALF_PI - |phi|): writes n_contacts + 1 values into g; when totals
      *  is not NULL and the mode has closed contacts, also (sum lambda_N, sum lambda_T) [N] into totals[0..1]
      *  computed from the same intermediates (mode_closures' totals). optional (NULL: rk_model_generic_monitors,
      *  RockingModel.mode_functions' generic monitors and sliding.force_totals). */
-    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals);
+    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals);
     /** Outputs of the reduced state of a sticking mode (mode_outputs, out in the order of outputs).
      *  optional (NULL: outputs(embed(y))). */
     void (*mode_outputs)(const rk_model *m, int mode, const double *y, double *out);
     /** Normal contact forces [N] of the closed contacts of a sticking mode held closed (contact_forces).
      *  optional (NULL: rk_mode_forces of rk_contact.h). */
-    void (*contact_forces)(const rk_model *m, int mode, const double *q, const double *v, double ag,
+    void (*contact_forces)(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
                            double *lam);
 
     /* ---------------------------------------------------------------- quantities */
@@ -190,13 +190,13 @@ void rk_embed_any(const rk_model *m, int mode, const double *y, double *q, doubl
 /** reduce_any: y = [r, r_dot] of a full state that satisfies the mode's constraints; returns k. */
 int rk_reduce_any(const rk_model *m, int mode, const double *q, const double *v, double *y);
 /** The rhs of any mode (functions_of()[0]). Returns RK_OK (a sliding mode's solve may fail: RK_ERR_SOLVER). */
-rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy);
+rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
 /** The event functions of any mode (functions_of()[1]: with a finite mu a closed sticking mode gets the cone
  *  event (mu lam_N - |lam_T|) / force_scale before the overturning margin; a sliding mode's are
  *  sliding.slide_functions' monitors). Writes them into g and returns their number (n_contacts + 1, or + 2 with
  *  the friction event); totals (may be NULL) receives (sum lambda_N, sum lambda_T) [N] when the mode has
  *  closed contacts (functions_of()[2]) and *has_totals is set to 1 (0 in flight). */
-int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals,
+int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals,
                      int *has_totals);
 /** outputs_of(mode, y, shift): out in the order of ops->output_decls; shift [m] added to the SHIFTED outputs. */
 void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out);
@@ -205,12 +205,12 @@ double rk_model_slip(const rk_model *m, const double *q);
 /** sliding.shift_of: horizontal offset of a full state on the closed contacts of a sticking mode [m]. */
 double rk_shift_of(const rk_model *m, int mode, const double *q);
 /** sliding.force_totals at a full state (sum lambda_N, sum lambda_T) [N] of a sticking mode. */
-void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double *totals);
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *totals);
 
 /** Generic fallbacks (used when the kernel leaves the optional pointer NULL; pinned on both models by
  *  comparing with the Python generic code of RockingModel). */
-void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy);
-void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, double ag, double *g,
+void rk_model_generic_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
+void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g,
                                double *totals);
 
 /* ------------------------------------------------------------------------------------------ sliding modes
@@ -220,9 +220,9 @@ void rk_slide_embed(const rk_model *m, int mode, const double *r, const double *
 int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *v, double *y);
 /** slide_motion: the full acceleration a and tau = mu lambda_N of each closed contact (in increasing contact
  *  order). RK_ERR_SOLVER only where numpy's lstsq fallback would also fail. */
-rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double *a,
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *a,
                           double *tau);
-rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
                                 double *r_ddot);
 void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, double *J, double *jd);
 

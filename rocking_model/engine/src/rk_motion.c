@@ -281,3 +281,34 @@ int rk_motion_continuous_at(const rk_motion *m, double tb)
         return 0;
     }
 }
+
+/* ------------------------------------------------------------------------------------------ two components */
+
+int rk_motion_pair_constant(const rk_motion *ag, const rk_motion *ag_v)
+{
+    return ag->constant && (ag_v == NULL || ag_v->constant);
+}
+
+double rk_motion_pair_next_breakpoint(rk_motion *ag, rk_motion *ag_v, double t)
+{
+    double tb = rk_motion_next_breakpoint(ag, t), tv;
+    if (ag_v == NULL)
+        return tb;
+    tv = rk_motion_next_breakpoint(ag_v, t);
+    return tv < tb ? tv : tb;
+}
+
+/* continuous at tb, or no breakpoint there (the first breakpoint after the float just below tb is not tb) */
+static int component_continuous_at(rk_motion *m, double tb)
+{
+    if (rk_motion_next_breakpoint(m, nextafter(tb, -INFINITY)) != tb)
+        return 1;
+    return rk_motion_continuous_at(m, tb);
+}
+
+int rk_motion_pair_continuous_at(rk_motion *ag, rk_motion *ag_v, double tb)
+{
+    if (ag_v == NULL)
+        return rk_motion_continuous_at(ag, tb);
+    return component_continuous_at(ag, tb) && component_continuous_at(ag_v, tb);
+}

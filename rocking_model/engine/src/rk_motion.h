@@ -78,6 +78,16 @@ double rk_motion_next_breakpoint(rk_motion *m, double t);
 /** GroundMotion.continuous_at. */
 int rk_motion_continuous_at(const rk_motion *m, double tb);
 
+/* The two-component motion (issue 23; ground_motion.TwoComponentMotion): the horizontal ag and the vertical ag_v
+ * (NULL: none, GroundMotion.vertical is None; every function then reduces to the horizontal one's exactly). */
+/** TwoComponentMotion.constant: both components constant. */
+int rk_motion_pair_constant(const rk_motion *ag, const rk_motion *ag_v);
+/** TwoComponentMotion.next_breakpoint: the earlier of both components' next breakpoints after t. */
+double rk_motion_pair_next_breakpoint(rk_motion *ag, rk_motion *ag_v, double t);
+/** TwoComponentMotion.continuous_at: both components continuous at tb (a component without a breakpoint at tb
+ *  is continuous there). */
+int rk_motion_pair_continuous_at(rk_motion *ag, rk_motion *ag_v, double tb);
+
 #ifdef __cplusplus
 }
 #endif

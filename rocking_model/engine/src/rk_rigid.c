@@ -103,12 +103,13 @@ static void rigid_inverse_mass_matrix(const rk_model *m, const double *q, double
     Minv[8] = 1.0 / m->d[D_IC];
 }
 
-static void rigid_forces(const rk_model *m, const double *q, const double *v, double ag, double *f)
+static void rigid_forces(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double *f)
 {
     (void)q; (void)v;
-    /* ground frame: inertial force -m ag along x, gravity along -y */
+    /* ground frame: inertial force -m ag along x, gravity and the inertial force -m ag_v along -y (the
+     * effective gravity g + ag_v; g + 0.0 == g: ag_v = 0 rounds as before) */
     f[0] = -MASS * ag;
-    f[1] = -MASS * G;
+    f[1] = -MASS * (G + ag_v);
     f[2] = 0.0;
 }
 
@@ -221,35 +222,37 @@ static void rigid_mode_jacobian(const rk_model *m, int mode, const double *r, co
 }
 
 /* mode_closures' rhs */
-static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double *dy)
+static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
     if (mode == RK_MODE_FULL)
         return;
     if (mode == RK_MODE_FLIGHT) {
         dy[0] = y[3]; dy[1] = y[4]; dy[2] = y[5];
-        dy[3] = -ag; dy[4] = -G; dy[5] = 0.0;
+        dy[3] = -ag; dy[4] = -(G + ag_v); dy[5] = 0.0;
         return;
     }
     {
         double s = (double)rk_pivot_sign(mode);
         double x = m->d[D_ALPHA] + s * y[0];
         dy[0] = y[1];
-        dy[1] = m->d[D_P2] * (ag / G * cos(x) + s * sin(x));
+        /* (g + ag_v) / g == 1.0 exactly when ag_v = 0: the old operations */
+        dy[1] = m->d[D_P2] * (ag / G * cos(x) + s * ((G + ag_v) / G) * sin(x));
     }
 }
 
 /* mode_closures' monitors and totals (the rocking branch's totals reuse the monitors' acc, sp, cp, lam) */
-static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double *g, double *totals)
+static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
 {
-    double b = B, h = H, grav = G;
+    double b = B, h = H, grav = G, ge = G + ag_v;
     if (mode == RK_MODE_FULL) {
-        double d = 0.5 * ag * h / b / grav;
-        g[0] = 0.5 + d;
-        g[1] = 0.5 - d;
+        /* the corner forces over the weight m g (not m (g + ag_v), which may vanish or change sign) */
+        double d = 0.5 * ag * h / b / grav, gr = ge / grav;
+        g[0] = 0.5 * gr + d;
+        g[1] = 0.5 * gr - d;
         g[2] = RK_HALF_PI;
         if (totals != NULL) {
-            /* vertical and horizontal equilibrium: the weight, and the sticking force m ag */
-            totals[0] = MASS * grav;
+            /* vertical and horizontal equilibrium: the effective weight, and the sticking force m ag */
+            totals[0] = MASS * ge;
             totals[1] = MASS * ag;
         }
         return;
@@ -267,10 +270,10 @@ static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, do
         double s = (double)rk_pivot_sign(mode);
         double phi = y[0], w = y[1];
         double x = m->d[D_ALPHA] + s * phi;
-        double acc = m->d[D_P2] * (ag / grav * cos(x) + s * sin(x));
+        double acc = m->d[D_P2] * (ag / grav * cos(x) + s * (ge / grav) * sin(x));
         double sp = sin(phi), cp = cos(phi);
-        /* vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + 1 */
-        double lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / grav + 1.0;
+        /* vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + (g + ag_v) / g */
+        double lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / grav + ge / grav;
         double margin = RK_HALF_PI - fabs(phi);
         if (s < 0) {
             g[0] = lam; g[1] = -s * phi;
@@ -320,15 +323,15 @@ static void rigid_mode_outputs(const rk_model *m, int mode, const double *y, dou
     out[O_ENERGY] = kin + MASS * G * yc;
 }
 
-static void rigid_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag,
+static void rigid_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
                                  double *lam)
 {
-    double mass = MASS, grav = G;
+    double mass = MASS, grav = G, ge = G + ag_v;
     if (mode == RK_MODE_FULL) {
         /* vertical and moment equilibrium with the horizontal sticking force m ag at y = -h */
         double d = 0.5 * mass * ag * H / B;
-        lam[0] = 0.5 * mass * grav + d;
-        lam[1] = 0.5 * mass * grav - d;
+        lam[0] = 0.5 * mass * ge + d;
+        lam[1] = 0.5 * mass * ge - d;
         return;
     }
     lam[0] = 0.0;
@@ -336,13 +339,13 @@ static void rigid_contact_forces(const rk_model *m, int mode, const double *q, c
     if (mode == RK_MODE_FLIGHT)
         return;
     {
-        /* vertical Newton's law of the centroid: lambda_N = m (y_ddot + g) */
+        /* vertical Newton's law of the centroid: lambda_N = m (y_ddot + g + ag_v) */
         double s = (double)rk_pivot_sign(mode);
         double phi = q[2], w = v[2];
         double a = m->d[D_ALPHA] + s * phi;
-        double acc = m->d[D_P2] * ((ag / grav) * cos(a) + s * sin(a));
+        double acc = m->d[D_P2] * ((ag / grav) * cos(a) + s * (ge / grav) * sin(a));
         double y_dd = (-s * B * cos(phi) - H * sin(phi)) * acc + (s * B * sin(phi) - H * cos(phi)) * w * w;
-        lam[s < 0 ? 0 : 1] = mass * (y_dd + grav);
+        lam[s < 0 ? 0 : 1] = mass * (y_dd + ge);
     }
 }
 

@@ -54,7 +54,7 @@ int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *
     return k0 + 1;
 }
 
-rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double *a,
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *a,
                           double *tau)
 {
     int n = m->ops->n_dof, nc = m->ops->n_contacts, sigma = 0, stick, closed[RK_MAX_CONTACTS], kc = 0, i, j, l;
@@ -75,7 +75,7 @@ rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const do
     for (i = 0; i < n; i++)
         for (j = 0; j < kc; j++)
             C[i * kc + j] = inv_mu * W_N[i * nc + closed[j]] - (double)sigma * W_T[i * nc + closed[j]];
-    m->ops->forces(m, q, v, ag, f);
+    m->ops->forces(m, q, v, ag, ag_v, f);
     for (i = 0; i < n; i++) {
         double s = 0.0;
         for (l = 0; l < n; l++)
@@ -126,7 +126,7 @@ void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const doubl
     }
 }
 
-rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
                                 double *r_ddot)
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k = rk_slide_dofs(m, mode, idx), i;
@@ -134,7 +134,7 @@ rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, co
         jd[RK_MAX_DOF], rhs[RK_MAX_DOF];
     rk_status st;
     rk_slide_embed(m, mode, r, r_dot, q, v);
-    st = rk_slide_motion(m, mode, q, v, ag, a, tau);
+    st = rk_slide_motion(m, mode, q, v, ag, ag_v, a, tau);
     if (st != RK_OK)
         return st;
     rk_slide_jacobian(m, mode, r, r_dot, J, jd);
