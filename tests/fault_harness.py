@@ -70,8 +70,9 @@ PWNED = "pwned"
 
 
 #: the magic that starts the self-contained FMUs' own state payload (a binary record of the slave's fields
-#: and the engine snapshot, fmi_binary/standalone/fmi2_engine.c), behind the same binary header
-STANDALONE_PAYLOAD_MAGIC = b"rocking engine FMU state v1\n"
+#: and the engine snapshot, fmi_binary/standalone/fmi2_engine.c), behind the same binary header; version 2
+#: since the input ag_v (one rate per input), as rocking_model.fmi.standalone.STATE_PAYLOAD_MAGIC
+STANDALONE_PAYLOAD_MAGIC = b"rocking engine FMU state v2\n"
 
 
 def slave_bytes(data: bytes) -> bytes:

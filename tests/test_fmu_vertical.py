@@ -162,10 +162,18 @@ def run_api(name, steps, engine, names):
     return np.array(rows)
 
 
-def assert_close(a, b, what):
+#: [1, relative] friction_demand, max |lambda_T| / lambda_N so far, divides by normal forces that pass near zero
+#: around lift-off: the compiled engine against the Python one measured 9e-9 on the flexible ramp scene (1.6e-11
+#: without ag_v), the other outputs within ROUNDOFF
+FRICTION_DEMAND_RTOL = 1e-7
+
+
+def assert_close(a, b, what, names):
     scale = np.maximum(1.0, np.abs(b))
-    err = np.max(np.abs(a - b) / scale)
-    assert err <= ROUNDOFF, f"{what}: {err:.3g}"
+    err = np.abs(a - b) / scale
+    tol = np.array([FRICTION_DEMAND_RTOL if n == "friction_demand" else ROUNDOFF for n in names])
+    worst = int(np.argmax(np.max(err / tol, axis=0)))
+    assert np.all(err <= tol), f"{what}: {names[worst]} off by {np.max(err[:, worst]):.3g}"
 
 
 # ---------------------------------------------------------------------------------------------- declaration
@@ -222,8 +230,8 @@ def test_fmu_on_the_compiled_engine_equals_the_api(fmus, kind, name, scene):
     steps = steps_of(scene, name)
     names, fmu = run_fmu(fmus[(kind, name)], steps)
     assert np.all(np.isfinite(fmu))
-    assert_close(fmu, run_api(name, steps, "c", names), f"{kind} vs the API (engine c)")
-    assert_close(fmu, run_api(name, steps, "python", names), f"{kind} vs the API (engine python)")
+    assert_close(fmu, run_api(name, steps, "c", names), f"{kind} vs the API (engine c)", names)
+    assert_close(fmu, run_api(name, steps, "python", names), f"{kind} vs the API (engine python)", names)
     if scene == "lift-off" and name == RIGID:
         assert np.max(fmu[:, names.index("y")]) > 1e-3          # g + ag_v < 0: the block left the ground
 
@@ -334,10 +342,10 @@ def test_refused_step_keeps_ag_v_and_its_rate(fmus, kind):
         inst.init()
         inst.fmu.setReal([vr["ag"], vr["ag_v"]], [990.0, -3.0])
         inst.fmu.setRealInputDerivatives([vr["ag"], vr["ag_v"]], [1, 1], [2000.0, 40.0])
-    before = _serialized(subject)
+    before = _serialized(subject)[46:]        # the slave's bytes (the header records the step's fmi2Discard)
     assert subject.step(DT) == FMI2_DISCARD                    # 990 + 2000 * 0.01 > 1000
     assert "ag at the end of the step" in subject.errors()[-1]
-    assert _serialized(subject) == before
+    assert _serialized(subject)[46:] == before
     assert subject.get("ag_v") == [-3.0]
     for inst in (subject, control):
         assert inst.step(0.001) == 0                            # inside the range: ag_v = -3 + 40 t
