@@ -53,6 +53,8 @@ RIGID, FLEX, GMS, STOREY = ("RigidRockingBlock", "FlexibleRockingOscillator", "G
 FMUS = (RIGID, FLEX, GMS, STOREY)
 SHORT = {RIGID: "rigid", FLEX: "flex", GMS: "ground", STOREY: "storey"}
 WITH_INPUT = (RIGID, FLEX, STOREY)
+#: the FMUs with the vertical ground acceleration input ag_v (issue 23) besides ag
+WITH_VERTICAL = (RIGID, FLEX)
 
 #: [m/s2] declared range of the input ag on every FMU that has it (modelDescription min/max)
 AG_LIMIT = 1000.0
@@ -892,32 +894,74 @@ add("doStep/rigid/t=inf", bad_step, fmu=RIGID, what="t=inf", desc="RigidRockingB
 
 
 # ---------------------------------------------------------------------------------------------- inputs
-def bad_input(h: Harness, fmu: str, value: float):
-    """An input outside its declared range: fmi2SetReal answers fmi2Error with a message naming ag and the
-    range, nothing is set; then (out of the error state through a saved state) a valid input steps on like
-    the control."""
+def bad_input(h: Harness, fmu: str, value: float, name: str = "ag"):
+    """An input (ag, or the vertical ag_v) outside its declared range: fmi2SetReal answers fmi2Error with a
+    message naming the input and the range, nothing is set; then (out of the error state through a saved
+    state) a valid input steps on like the control."""
     s, ctrl = h.scene(fmu)
-    refusal(h, s, f"fmi2SetReal(ag = {value!r})", lambda: s.set(ag=value), status=ERROR,
-            fragments=(word("ag"), "1000"), control=ctrl)
+    refusal(h, s, f"fmi2SetReal({name} = {value!r})", lambda: s.set(**{name: value}), status=ERROR,
+            fragments=(word(name), "1000"), control=ctrl)
 
 
 for _fmu in WITH_INPUT:
     for _v in (math.nan, math.inf, -math.inf, 1e308, 1500.0, -1500.0):
         add(f"input/{SHORT[_fmu]}/ag={_v!r}", bad_input, fmu=_fmu, value=_v, desc=f"{_fmu}: input ag = {_v!r}")
+for _fmu in WITH_VERTICAL:
+    for _v in (math.nan, math.inf, -math.inf, 1e308, 1500.0, -1500.0):
+        add(f"input/{SHORT[_fmu]}/ag_v={_v!r}", bad_input, fmu=_fmu, value=_v, name="ag_v",
+            desc=f"{_fmu}: input ag_v = {_v!r}")
+
+
+def both_inputs_bad(h: Harness, fmu: str):
+    """ag and ag_v both refused in one fmi2SetReal: fmi2Error naming both, neither set."""
+    s, ctrl = h.scene(fmu)
+    vrs = [s.vars["ag"].valueReference, s.vars["ag_v"].valueReference]
+    refusal(h, s, "fmi2SetReal(ag = 2000, ag_v = nan)", lambda: s.set_vr("Real", vrs, [2000.0, math.nan]),
+            status=ERROR, fragments=(word("ag"), word("ag_v"), "2000", "nan"), control=ctrl)
+
+
+for _fmu in WITH_VERTICAL:
+    add(f"input/{SHORT[_fmu]}/ag=2000+ag_v=nan", both_inputs_bad, fmu=_fmu,
+        desc=f"{_fmu}: ag and ag_v both invalid in one fmi2SetReal")
 
 
 def declared_input_range(h: Harness):
     for fmu in WITH_INPUT:
         var = h.md(fmu).modelVariables
-        ag = next(v for v in var if v.name == "ag")
-        lo = None if ag.min is None else float(ag.min)
-        hi = None if ag.max is None else float(ag.max)
-        h.check("status", f"{fmu}: ag declares min = -{AG_LIMIT:g}, max = {AG_LIMIT:g} m/s2",
-                (lo, hi) == (-AG_LIMIT, AG_LIMIT), f"min = {ag.min}, max = {ag.max}")
+        for name in ("ag", "ag_v") if fmu in WITH_VERTICAL else ("ag",):
+            inp = next(v for v in var if v.name == name)
+            lo = None if inp.min is None else float(inp.min)
+            hi = None if inp.max is None else float(inp.max)
+            h.check("status", f"{fmu}: {name} declares min = -{AG_LIMIT:g}, max = {AG_LIMIT:g} m/s2",
+                    (lo, hi) == (-AG_LIMIT, AG_LIMIT), f"min = {inp.min}, max = {inp.max}")
 
 
 add("input/all/declared-range", declared_input_range, kinds=("status",),
-    desc="modelDescription: the input ag declares its range |ag| <= 1000 m/s2")
+    desc="modelDescription: the inputs ag and ag_v declare their range |ag|, |ag_v| <= 1000 m/s2")
+
+
+def set_input_after_terminate(h: Harness, fmu: str, name: str):
+    """fmi2SetReal of an input after fmi2Terminate: an illegal call (fmi2Error) naming the call and the
+    state; every variable kept; after fmi2Reset the instance runs like a fresh one."""
+    s = h.scene(fmu, control=False)
+    h.expect_status("fmi2Terminate", s.terminate(), OK)
+    before = s.snapshot()
+    mark = h.mark()
+    h.expect_status(f"fmi2SetReal({name}) after fmi2Terminate", s.set(**{name: 1.0}), ERROR)
+    h.expect_log("the message names the call and the state", mark, s, ("fmi2Set", "illegal call sequence",
+                                                                        "terminated"))
+    h.check("state", "every variable kept", s.values() == before["values"])
+    h.expect_status("fmi2Reset", s.reset(), OK)
+    ctrl = h.instance(fmu, "control")
+    s.init(**SCENES[fmu][1])
+    ctrl.init(**SCENES[fmu][1])
+    h.expect_same_run("after fmi2Reset", s, ctrl)
+
+
+for _fmu in WITH_VERTICAL:
+    for _name in ("ag", "ag_v"):
+        add(f"sequence/{SHORT[_fmu]}/setReal-{_name}-after-terminate", set_input_after_terminate, fmu=_fmu,
+            name=_name, desc=f"{_fmu}: fmi2SetReal({_name}) after fmi2Terminate")
 
 
 # ---------------------------------------------------------------------------------------------- value references
@@ -1708,30 +1752,38 @@ for _fmu, _name, _v in _edges():
 INPUT_0, INPUT_RATE, START_TIME = 0.5, 50.0, 1.0
 
 
-def rate_before_init(h: Harness, fmu: str, where: str):
-    """fmi2SetRealInputDerivatives before initialization (FMI 2.0 section 4.2.1 allows it in the instantiated
-    state and in initialization mode), with startTime = 1 s: the derivative refers to the start of the first
-    communication step (the start time), so the run equals a control that set the same value and rate after
-    initialization, at t = 1 s (today's code measured it from t = 0: ag = 50.5 instead of 0.5)."""
+#: [m/s2], [m/s2 / s] the rate case of ag_v: ag held at AG_HELD while ag_v goes from 0.5 down at 50 m/s3 (the
+#: block lifts off as g + ag_v falls; measured from t = 0 instead of the start time, ag_v would be -49.5)
+AG_HELD, INPUT_RATE_V = 2.0, -50.0
+
+
+def rate_before_init(h: Harness, fmu: str, where: str, name: str = "ag"):
+    """fmi2SetRealInputDerivatives (of ag, or of ag_v with ag held) before initialization (FMI 2.0 section
+    4.2.1 allows it in the instantiated state and in initialization mode), with startTime = 1 s: the
+    derivative refers to the start of the first communication step (the start time), so the run equals a
+    control that set the same value and rate after initialization, at t = 1 s (today's code measured it from
+    t = 0: ag = 50.5 instead of 0.5)."""
     s, ctrl = h.instance(fmu), h.instance(fmu, "control")
-    vr = s.vars["ag"].valueReference
+    vr = s.vars[name].valueReference
+    slope = INPUT_RATE if name == "ag" else INPUT_RATE_V
+    values = {name: INPUT_0} if name == "ag" else {"ag": AG_HELD, name: INPUT_0}
 
     def rate(inst):
-        return inst.call("fmi2SetRealInputDerivatives", inst.fmu.setRealInputDerivatives, [vr], [1], [INPUT_RATE])
+        return inst.call("fmi2SetRealInputDerivatives", inst.fmu.setRealInputDerivatives, [vr], [1], [slope])
 
     if where == "instantiated":
-        h.expect_status("fmi2SetReal(ag) when instantiated", s.set(ag=INPUT_0), OK)
+        h.expect_status(f"fmi2SetReal({name}) when instantiated", s.set(**values), OK)
         h.expect_status("fmi2SetRealInputDerivatives when instantiated", rate(s), OK)
     h.expect_status("fmi2SetupExperiment(startTime = 1)", s.setup(START_TIME), OK)
     h.expect_status("fmi2EnterInitializationMode", s.enter(), OK)
     if where == "initialization":
-        h.expect_status("fmi2SetReal(ag) in initialization mode", s.set(ag=INPUT_0), OK)
+        h.expect_status(f"fmi2SetReal({name}) in initialization mode", s.set(**values), OK)
         h.expect_status("fmi2SetRealInputDerivatives in initialization mode", rate(s), OK)
     h.expect_status("fmi2ExitInitializationMode", s.exit(), OK)
     s.t = s.k = 0
     s.t = START_TIME
     ctrl.init(START_TIME)
-    ctrl.set(ag=INPUT_0)
+    ctrl.set(**values)
     rate(ctrl)
     problems = []
     for i in range(10):  # ag from 0.5 to 1.0 m/s2 over the first step (no uplift), 5.5 m/s2 after the tenth
@@ -1755,6 +1807,67 @@ for _fmu in (RIGID, FLEX):
 add("inputderiv/rigid/rate-when-instantiated-startTime=1", rate_before_init, fmu=RIGID, where="instantiated",
     kinds=("status", "state"), desc="RigidRockingBlock: fmi2SetRealInputDerivatives before fmi2SetupExperiment, "
                                     "startTime = 1 s")
+for _fmu in WITH_VERTICAL:
+    add(f"inputderiv/{SHORT[_fmu]}/ag_v-rate-in-initialization-mode-startTime=1", rate_before_init, fmu=_fmu,
+        where="initialization", name="ag_v", kinds=("status", "state"),
+        desc=f"{_fmu}: fmi2SetRealInputDerivatives of ag_v in initialization mode, startTime = 1 s")
+add("inputderiv/rigid/ag_v-rate-when-instantiated-startTime=1", rate_before_init, fmu=RIGID, where="instantiated",
+    name="ag_v", kinds=("status", "state"),
+    desc="RigidRockingBlock: fmi2SetRealInputDerivatives of ag_v before fmi2SetupExperiment, startTime = 1 s")
+
+
+def bad_derivative(h: Harness, fmu: str, name: str, what: str):
+    """fmi2SetRealInputDerivatives of an input with an unsupported order or a rate that is not finite or too
+    large: fmi2Error naming the input, nothing set; out of the error state by a saved state it steps on like
+    the control."""
+    s, ctrl = h.scene(fmu)
+    vr = s.vars[name].valueReference
+    order, rate, fragments = {"order=2": (2, 1.0, (word(name), "order = 2")),
+                              "rate=nan": (1, math.nan, (f"rate of {name}", "nan")),
+                              "rate=1e9": (1, 1e9, (f"rate of {name}", "out of range"))}[what]
+    refusal(h, s, f"fmi2SetRealInputDerivatives({name}, {what})",
+            lambda: s.call("fmi2SetRealInputDerivatives", s.fmu.setRealInputDerivatives, [vr], [order], [rate]),
+            status=ERROR, fragments=fragments, control=ctrl)
+
+
+for _fmu in WITH_VERTICAL:
+    for _name in ("ag", "ag_v"):
+        for _what in ("order=2", "rate=nan", "rate=1e9"):
+            add(f"inputderiv/{SHORT[_fmu]}/{_name}-{_what}", bad_derivative, fmu=_fmu, name=_name, what=_what,
+                desc=f"{_fmu}: fmi2SetRealInputDerivatives of {_name} with {_what}")
+
+
+def ramp_leaves_range(h: Harness, fmu: str, name: str):
+    """An input whose ramp (value + rate) would leave its declared range within the step: fmi2Discard naming
+    the input, the state (with the other input, its value and its rate) bit-identical; a shorter step stays
+    inside and equals the control's; then both step on alike."""
+    s, ctrl = h.scene(fmu)
+    vrs = [s.vars["ag"].valueReference, s.vars["ag_v"].valueReference]
+    start = {"ag": [995.0, -2.0], "ag_v": [1.0, 995.0]}[name]
+    for inst in (s, ctrl):  # ag_v and ag both with a rate: the refused step must keep both
+        inst.set_vr("Real", vrs, start)
+        inst.call("fmi2SetRealInputDerivatives", inst.fmu.setRealInputDerivatives, vrs, [1, 1],
+                  [1000.0 if name == "ag" else 10.0, 1000.0 if name == "ag_v" else 10.0])
+    label = f"fmi2DoStep with {name} leaving its range over the step"
+    before = s.snapshot()
+    mark = h.mark()
+    h.expect_status(f"{label}: status of the refused call", s.step(), DISCARD)
+    h.expect_log(f"{label}: error message", mark, s, (f"{name} at the end of the step", "1000"))
+    h.expect_same(f"{label}: state (both inputs, their values and rates) bit-identical to before", before,
+                  s.snapshot())
+    h.expect_status("a shorter step inside the range", s.step(0.001), OK)
+    h.expect_status("the control's shorter step", ctrl.step(0.001), OK)
+    h.check("state", "the shorter step equals the control's", s.outputs() == ctrl.outputs(),
+            _dict_diff(s.outputs(), ctrl.outputs()) or None)
+    for inst in (s, ctrl):
+        inst.set(ag_v=0.0)  # held at 0 from here (fmi2SetReal drops the rate); drive_step sets ag
+    h.expect_same_run("after the refused step", s, ctrl)
+
+
+for _fmu in WITH_VERTICAL:
+    for _name in ("ag", "ag_v"):
+        add(f"inputderiv/{SHORT[_fmu]}/{_name}-ramp-leaves-range", ramp_leaves_range, fmu=_fmu, name=_name,
+            desc=f"{_fmu}: fmi2DoStep whose {_name} ramp leaves [-1000, 1000] m/s2")
 
 
 # ---------------------------------------------------------------------------------------------- corrupted bytes
@@ -2178,6 +2291,8 @@ def logging_off_subset(h: Harness, fmu: str):
                ("fmi2ExitInitializationMode again", s.exit, ("fmi2ExitInitializationMode",))]
     if s.amplitude is not None:
         actions.append(("ag = NaN", lambda: s.set(ag=math.nan), (word("ag"),)))
+    if fmu in WITH_VERTICAL:
+        actions.append(("ag_v = NaN", lambda: s.set(ag_v=math.nan), (word("ag_v"),)))
 
     def gadget():
         st, state = s.deserialize(gadget_via_fmi())
@@ -2223,7 +2338,8 @@ FAMILIES = {
                      "the `FMUError` names the variable and its allowed range"),
     "sequence": ("calls out of sequence: `fmi2DoStep` before initialization or after `fmi2Terminate`; "
                  "`fmi2SetupExperiment`, `fmi2EnterInitializationMode`, `fmi2ExitInitializationMode` after "
-                 "initialization; `startTime` NaN or inf; `fmi2FreeInstance` without `fmi2Terminate`",
+                 "initialization; `startTime` NaN or inf; `fmi2FreeInstance` without `fmi2Terminate`; "
+                 "`fmi2SetReal` of `ag` or `ag_v` after `fmi2Terminate`",
                  "fmi2Error (the instance in the error state); `fmi2FreeInstance`: fmi2OK",
                  "the message names the call and the state of the instance; every variable bit-identical; after "
                  "`fmi2SetFMUstate` of a saved state or `fmi2Reset` it steps like a control instance"),
@@ -2232,16 +2348,21 @@ FAMILIES = {
                "fmi2Error",
                "the message names `communicationStepSize` or `currentCommunicationPoint`; the state bit-identical; "
                "out of the error state by a saved state, it steps on like a control instance"),
-    "input": ("the input `ag` NaN, ±inf, 1e308, ±1500 m/s² (declared range [-1000, 1000], written as min and max "
-              "in the modelDescription)",
+    "input": ("the inputs `ag` and `ag_v` (the vertical ground acceleration of the rocking FMUs) NaN, ±inf, 1e308, "
+              "±1500 m/s² (declared range [-1000, 1000], written as min and max in the modelDescription); both "
+              "invalid in one call",
               "`fmi2SetReal`: fmi2Error",
-              "the message names `ag` and its range; nothing is set; the run goes on like a control instance"),
-    "inputderiv": ("`fmi2SetRealInputDerivatives` before initialization (instantiated, initialization mode) "
-                   "with `startTime` = 1 s",
-                   "fmi2OK",
+              "the message names the input (`ag`, `ag_v`, or both) and its range; nothing is set; the run goes "
+              "on like a control instance"),
+    "inputderiv": ("`fmi2SetRealInputDerivatives` of `ag` or `ag_v` before initialization (instantiated, "
+                   "initialization mode) with `startTime` = 1 s; of order 2, a rate NaN or 1e9; a ramp that leaves "
+                   "[-1000, 1000] m/s² within the step",
+                   "before initialization: fmi2OK; a bad order or rate: fmi2Error; the ramp: `fmi2DoStep` "
+                   "fmi2Discard",
                    "the derivative refers to the start of the first communication step (the start time, FMI 2.0 "
                    "§4.2.1): the steps and the serialized state equal those of a control that set value and rate "
-                   "at t = 1 s"),
+                   "at t = 1 s; a refusal names the input, and keeps both inputs, their values and rates, "
+                   "bit-identical; a shorter step then equals a control's"),
     "vr": ("value references: unknown, 2^32-1, of another type, an output set, a `fixed` parameter changed after "
            "initialization, a batch with one bad reference, `nvr` = 0, a fixed parameter set to its own value",
            "fmi2Error; `nvr` = 0 and the same value: fmi2OK",
