@@ -469,3 +469,27 @@ def test_rate_of_ag_v_set_before_initialization_refers_to_the_start_time(fmus, k
     assert _serialized(s) == _serialized(c)
     s.free()
     c.free()
+
+
+# ---------------------------------------------------------------------------------------------- records
+def test_record_with_a_vertical_component_through_input_derivatives(fmus):
+    """`run_fmu_record(..., ag_v_record=...)` drives ag and ag_v as first-order holds at the record's own
+    sampling: the FMU reproduces `simulate((t, ag, ag_v), hold="exact")` to the integrator's tolerance (as
+    tests/test_input_interpolation.py for ag alone), and the vertical component changes the motion."""
+    from rocking_model import simulate
+    from rocking_model.fmi import run_fmu_record
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 3.0 + 1e-9, DT)
+    bell = np.exp(-((t - 1.5) / 0.7) ** 2)
+    ag, ag_v = (np.convolve(rng.standard_normal(t.size), np.ones(15) / 15, "same") * bell for _ in range(2))
+    ag, ag_v = ag * (4.0 / np.abs(ag).max()), ag_v * (3.0 / np.abs(ag_v).max())
+    block = RigidBlock(b=0.2, h=1.0)
+    ref = simulate(block, (t, ag, ag_v), t_end=3.0, scheme="event_driven", tolerance=1e-10, output_interval=DT,
+                   hold="exact")
+    flat = simulate(block, (t, ag), t_end=3.0, scheme="event_driven", tolerance=1e-10, output_interval=DT,
+                    hold="exact")
+    assert ref.impacts[-1] >= 1 and np.abs(ref.phi - flat.phi).max() > 1e-2 * block.alpha
+    out = run_fmu_record(fmus[("pythonfmu", RIGID)][0], t, ag, ag_v_record=ag_v, step=DT, stop_time=3.0,
+                         hold="linear", start_values={"tolerance": 1e-10, "scheme": 1}, output=("phi", "y"))
+    assert np.abs(out["phi"] - np.interp(out["time"], ref.t, ref.phi)).max() <= 1e-9 * block.alpha

@@ -162,7 +162,8 @@ def run_fmu(filename, *, stop_time: float, output_interval: float, start_time: f
 
 
 def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: float, hold: str = "linear",
-                   start_values: Optional[Dict[str, Any]] = None, output: Sequence[str] = ("phi",)):
+                   start_values: Optional[Dict[str, Any]] = None, output: Sequence[str] = ("phi",),
+                   ag_v_record=None):
     """Drive an FMU with input ``ag`` through a sampled record (times ``t_record`` [s], values ``ag_record``
     [m/s2], linear between samples) with communication step ``step`` [s]; return a structured array with
     "time" and the ``output`` variables at t = 0 (after initialization) and after every step, the rows of
@@ -173,7 +174,10 @@ def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: flo
     with ``step`` equal to the record's sampling that is the record itself. ``hold="zoh"``: ag held constant
     over each step (what a master without input derivatives does). fmpy 0.3.32's
     ``simulate_fmu(set_input_derivatives=True)`` cannot serve here: its derivative buffer has a fixed length
-    of 9 (one input raises ValueError) and at a sample point it passes the slope of the previous interval."""
+    of 9 (one input raises ValueError) and at a sample point it passes the slope of the previous interval.
+
+    ``ag_v_record``: the vertical ground acceleration [m/s2, positive upward] at the times ``t_record``, driven
+    into the input ``ag_v`` with the same hold; None: ag_v is left at its start value (0)."""
     import numpy as np
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
@@ -184,6 +188,9 @@ def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: flo
     step = check_real("step", step, lo=0.0, lo_open=True)
     t_record = np.asarray(t_record, dtype=float)
     ag_record = np.asarray(ag_record, dtype=float)
+    records = [("ag", ag_record)]
+    if ag_v_record is not None:
+        records.append(("ag_v", np.asarray(ag_v_record, dtype=float)))
     md = read_model_description(str(filename))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     types = {v.name: v.type for v in md.modelVariables}
@@ -207,11 +214,12 @@ def run_fmu_record(filename, t_record, ag_record, *, step: float, stop_time: flo
             rows.append(tuple([0.0] + [fmu.getReal([vr[o]])[0] for o in output]))  # the initial row
             for k in range(n):
                 t = k * step
-                a0 = float(np.interp(t, t_record, ag_record))
-                fmu.setReal([vr["ag"]], [a0])
-                if hold == "linear":
-                    a1 = float(np.interp(t + step, t_record, ag_record))
-                    fmu.setRealInputDerivatives([vr["ag"]], [1], [(a1 - a0) / step])
+                for name, values in records:
+                    a0 = float(np.interp(t, t_record, values))
+                    fmu.setReal([vr[name]], [a0])
+                    if hold == "linear":
+                        a1 = float(np.interp(t + step, t_record, values))
+                        fmu.setRealInputDerivatives([vr[name]], [1], [(a1 - a0) / step])
                 fmu.doStep(t, step)
                 rows.append(tuple([t + step] + [fmu.getReal([vr[o]])[0] for o in output]))
             fmu.terminate()
