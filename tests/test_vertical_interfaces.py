@@ -1,0 +1,173 @@
+"""The vertical ground acceleration ag_v at the interfaces: records (a third CSV column, a second AT2 file),
+the GroundMotionSource FMU's output ag_v, the CLI's --vertical / --vertical-scale, the ensembles' case fields
+ag_v_scale and vertical (old result files resume), and the three-component example."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rocking_model.records import (G_N, Record, combine, load_motion, read_at2, read_csv, read_record,
+                                   synthetic_record, write_at2, write_csv)
+
+
+def _at2(path, dt, values, units="G"):
+    """A minimal PEER AT2 file with ``values`` (in g) every ``dt`` [s]."""
+    lines = ["TITLE", "EVENT", f"ACCELERATION TIME SERIES IN UNITS OF {units}",
+             f"NPTS= {len(values):6d}, DT= {dt:.4f} SEC"]
+    lines += [" ".join(f"{v:.7E}" for v in values[k:k + 5]) for k in range(0, len(values), 5)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+# ------------------------------------------------------------------------------------------- records: CSV
+def test_three_column_csv_is_a_record_with_a_vertical_component(tmp_path):
+    """The third column is ag_v in the units of the second; a two-column file has no vertical component."""
+    p = tmp_path / "three.csv"
+    p.write_text("time [s],ag [cm/s2],ag_v [cm/s2]\n0,10,-5\n0.01,20,7\n0.02,-30,0\n")
+    r = read_csv(p)
+    assert isinstance(r.vertical, Record) and r.units == "cm/s2" and r.vertical.units == "cm/s2"
+    assert np.array_equal(r.ag_v, np.array([-5.0, 7.0, 0.0]) * 0.01)
+    assert np.array_equal(r.ag, np.array([10.0, 20.0, -30.0]) * 0.01)
+    assert np.array_equal(r.vertical.t, r.t) and r.pga_v == pytest.approx(0.07)
+    assert r(0.005) == pytest.approx(0.15) and r.vertical(0.005) == pytest.approx(0.01)
+    q = tmp_path / "two.csv"
+    q.write_text("time [s],ag [g]\n0,0.1\n0.01,0.2\n")
+    two = read_csv(q)
+    assert two.vertical is None and two.ag_v is None and two.pga_v == 0.0 and two.horizontal is two
+    # units from a comment or given apply to both columns
+    c = tmp_path / "c.txt"
+    c.write_text("# units: g\n0 0.1 0.05\n0.01 0.2 -0.1\n")
+    assert np.allclose(read_record(c).ag_v, [0.05 * G_N, -0.1 * G_N], rtol=1e-15)
+    n = tmp_path / "n.csv"
+    n.write_text("0,1,2\n0.5,3,4\n")
+    assert np.array_equal(read_csv(n, units="m/s2").ag_v, [2.0, 4.0])
+    assert np.array_equal(read_csv(n, default_units="mm/s2").ag_v, [0.002, 0.004])
+
+
+@pytest.mark.parametrize("text, match", [
+    ("time [s],ag [g],ag_v [cm/s2]\n0,1,2\n0.1,2,3\n", r"line 1: the third column \(ag_v\) states units 'cm/s2'"),
+    ("t [s],a [g],v [g]\n0,1,2\n0.1,2\n", r"line 3: 2 columns, expected 3 \(as the rows before it\)"),
+    ("t [s],a [g]\n0,1,2,3\n0.1,2,3,4\n", r"line 2: 4 columns, expected 2 \(time \[s\], acceleration\) or 3"),
+    ("t [s],a [g],v [g]\n0,1,2\n0.1,2,inf\n", r"line 3: values must be finite"),
+])
+def test_malformed_three_column_csv(tmp_path, text, match):
+    p = tmp_path / "bad3.csv"
+    p.write_text(text)
+    with pytest.raises(ValueError, match=match) as exc:
+        read_csv(p)
+    assert "bad3.csv" in str(exc.value)
+
+
+def test_csv_with_vertical_round_trip_is_exact(tmp_path):
+    t, a = synthetic_record(duration=1.0, seed=3)
+    _, v = synthetic_record(duration=1.0, seed=4)
+    r = read_csv(write_csv(tmp_path / "r.csv", t, a, ag_v=v))
+    assert np.array_equal(r.t, t) and np.array_equal(r.ag, a) and np.array_equal(r.ag_v, v)
+    assert (tmp_path / "r.csv").read_text().splitlines()[0] == "time [s],ag [m/s2],ag_v [m/s2]"
+    back = read_csv(write_csv(tmp_path / "g.csv", r, units="g"))            # a Record: its vertical too
+    assert np.allclose(back.ag_v, v, rtol=1e-15, atol=0.0)
+    assert (tmp_path / "g.csv").read_text().splitlines()[0] == "time [s],ag [g],ag_v [g]"
+    with pytest.raises(ValueError, match="ag_v must have the shape of ag"):
+        write_csv(tmp_path / "x.csv", t, a, ag_v=v[:-1])
+
+
+# ------------------------------------------------------------------------------------------- records: AT2 pairs
+def test_at2_pair_reads_the_vertical_from_the_second_file(tmp_path):
+    h = _at2(tmp_path / "H.AT2", 0.005, [0.01, -0.02, 0.3, -0.004, 0.0005, 0.0, -0.01])
+    v = _at2(tmp_path / "V.AT2", 0.005, [0.02, 0.01, -0.1, 0.0, 0.0, 0.005, 0.001])
+    r = read_at2(h, vertical=v)
+    assert np.array_equal(r.t, np.arange(7) * 0.005)
+    assert np.array_equal(r.ag, read_at2(h).ag) and np.array_equal(r.ag_v, read_at2(v).ag)
+    assert r.name == "H" and r.vertical.name == "V" and r.vertical.source == str(v)
+    assert np.array_equal(read_record(h, vertical=v).ag_v, r.ag_v)
+    assert np.array_equal(load_motion(str(h), vertical=str(v)).ag_v, r.ag_v)
+    assert load_motion(str(h), vertical="").vertical is None
+    # the units override applies to both files
+    assert np.allclose(read_at2(h, units="cm/s2", vertical=v).ag_v, np.array(read_at2(v).ag) / G_N * 0.01,
+                       rtol=1e-14)
+
+
+def test_at2_pair_of_unequal_lengths_is_padded_with_zeros(tmp_path):
+    """The shorter component gets zeros up to the longer one's end, whichever it is; the horizontal's own
+    samples are unchanged."""
+    h = _at2(tmp_path / "H.AT2", 0.01, [0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+    v = _at2(tmp_path / "V.AT2", 0.01, [0.05, -0.05, 0.02])
+    r = read_at2(h, vertical=v)
+    assert r.t.size == 6 and np.array_equal(r.t, read_at2(h).t)
+    assert np.array_equal(r.ag_v[3:], [0.0, 0.0, 0.0]) and np.array_equal(r.ag_v[:3], read_at2(v).ag)
+    s = read_at2(v, vertical=h)                          # the vertical longer: the horizontal padded
+    assert np.array_equal(s.t, np.arange(6) * 0.01)
+    assert np.array_equal(s.ag[3:], [0.0, 0.0, 0.0]) and np.array_equal(s.ag_v, read_at2(h).ag)
+    assert s.support == (0.0, 0.05)
+
+
+def test_at2_pair_with_different_time_steps_is_refused_naming_the_file(tmp_path):
+    h = _at2(tmp_path / "H.AT2", 0.005, [0.1, 0.2, 0.3])
+    v = _at2(tmp_path / "V10.AT2", 0.01, [0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match=r"V10\.AT2: DT = 0\.01 s, but the horizontal component .*H\.AT2\) has "
+                                         r"DT = 0\.005 s"):
+        read_at2(h, vertical=v)
+    # CSV files: the sample times must agree, and both must start together
+    a = tmp_path / "a.csv"
+    a.write_text("time [s],ag [g]\n0,0.1\n0.01,0.2\n0.03,0.1\n")
+    b = tmp_path / "b.csv"
+    b.write_text("time [s],ag_v [g]\n0,0.1\n0.01,0.2\n0.02,0.1\n")
+    with pytest.raises(ValueError, match=r"b\.csv: sample 3 is at t = 0\.02 s, but the horizontal"):
+        read_csv(a, vertical=b)
+    c = tmp_path / "c.csv"
+    c.write_text("time [s],ag_v [g]\n0.5,0.1\n0.51,0.2\n0.53,0.1\n")
+    with pytest.raises(ValueError, match=r"c\.csv: starts at t = 0\.5 s, but the horizontal component"):
+        read_record(a, vertical=c)
+    same = read_record(a, vertical=tmp_path / "a.csv")
+    assert np.array_equal(same.ag_v, same.ag)
+    # a vertical file that has two components itself, or a three-column record with a second file
+    three = tmp_path / "three.csv"
+    three.write_text("time [s],ag [g],ag_v [g]\n0,0.1,0\n0.01,0.2,0\n0.03,0.1,0\n")
+    with pytest.raises(ValueError, match=r"three\.csv: the vertical record has two components"):
+        read_record(a, vertical=three)
+    with pytest.raises(ValueError, match=r"three\.csv: the record already has a vertical component"):
+        read_record(three, vertical=a)
+
+
+def test_at2_writer_writes_the_vertical_to_a_second_file(tmp_path):
+    t, a = synthetic_record(duration=1.0, seed=3)
+    _, v = synthetic_record(duration=1.0, seed=4)
+    rec = Record(t, a, "pair", vertical=v)
+    with pytest.raises(ValueError, match=r"needs vertical=<second AT2 file>"):
+        write_at2(tmp_path / "x.AT2", rec)
+    with pytest.raises(ValueError, match="there is no vertical component"):
+        write_at2(tmp_path / "x.AT2", rec.horizontal, vertical=tmp_path / "y.AT2")
+    p = write_at2(tmp_path / "H.AT2", rec, vertical=tmp_path / "UP.AT2")
+    back = read_at2(p, vertical=tmp_path / "UP.AT2")
+    assert np.array_equal(back.t, t) and np.allclose(back.ag, a, rtol=1e-15, atol=0.0)
+    assert np.allclose(back.ag_v, v, rtol=1e-15, atol=0.0)
+    q = write_at2(tmp_path / "H2.AT2", t, a, "cm/s2", vertical=tmp_path / "UP2.AT2", ag_v=v)
+    assert "CM/S2" in (tmp_path / "UP2.AT2").read_text().splitlines()[2]
+    assert np.allclose(read_at2(q, vertical=tmp_path / "UP2.AT2").ag_v, v, rtol=1e-14, atol=0.0)
+
+
+def test_record_operations_act_on_both_components():
+    t = np.arange(5) * 0.1
+    rec = Record(t, [0.0, 1.0, -2.0, 0.5, 0.0], "r", vertical=[0.0, 0.5, 0.5, -1.0, 0.0])
+    s = rec.scaled(2.0)
+    assert np.array_equal(s.ag, 2.0 * rec.ag) and np.array_equal(s.ag_v, 2.0 * rec.ag_v)
+    sv = rec.scaled_vertical(-0.5)
+    assert np.array_equal(sv.ag, rec.ag) and np.array_equal(sv.ag_v, -0.5 * rec.ag_v)
+    with pytest.raises(ValueError, match="vertical_scale: the record 'h' has no vertical component"):
+        Record(t, rec.ag, "h").scaled_vertical(2.0)
+    f = rec.resampled(0.05)
+    assert f.t.size == 9 and np.allclose(f.ag_v[1::2], 0.5 * (rec.ag_v[:-1] + rec.ag_v[1:]))
+    assert np.allclose(f.ag[::2], rec.ag)
+    h = rec.horizontal
+    assert h.vertical is None and np.array_equal(h.ag, rec.ag) and h.name == "r"
+    assert rec.peak_bound == 2.0 and rec.pga_v == 1.0           # the horizontal's peak; the vertical's apart
+    assert "PGA_v" in repr(rec) and "PGA_v" not in repr(h)
+    w = h.with_vertical(Record(t[:3], [1.0, 2.0, 3.0], "v"))      # aligned by combine: zeros after its end
+    assert np.array_equal(w.ag_v, [1.0, 2.0, 3.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="sampled at the record's times"):
+        Record(t, rec.ag, vertical=Record(t + 0.01, rec.ag))
+    with pytest.raises(ValueError, match="must be finite"):
+        Record(t, rec.ag, vertical=[0.0, math.nan, 0.0, 0.0, 0.0])
+    assert combine(h, Record(t, rec.ag_v, "v")).vertical.name == "v"
