@@ -61,16 +61,19 @@ def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates
 
 
 def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candidates,
-           forced=(), slip_tol: float | None = None, count: bool = False, prefer=None) -> ContactSolution:
+           forced=(), slip_tol: float | None = None, count: bool = False, prefer=None,
+           ag_v: float = 0.0) -> ContactSolution:
     """Acceleration-level LCP: which of ``candidates`` stay closed (active), whether they stick or slide
     (Coulomb, a finite ``model.mu``, or where sticking has no solution its mu -> inf limit), and their
     contact forces. Candidates whose tangential velocity exceeds ``slip_tol`` [m/s] already slide: they
     can only open or keep sliding that way (None: none slides). ``count``: count the solutions (Painleve,
-    `FrictionSolution`); ``prefer``: the state tried first for every candidate."""
+    `FrictionSolution`); ``prefer``: the state tried first for every candidate. ag, ag_v [m/s2]: the ground
+    accelerations (ag_v positive upward; where g + ag_v < 0 the free motion leaves the ground and the LCP
+    returns flight)."""
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
-    acc_free = Minv @ model.forces(q, v, ag)
+    acc_free = Minv @ model.forces(q, v, ag, ag_v)
     sliding = None
     if slip_tol is not None:
         U_T = W_T.T @ v
@@ -191,16 +194,16 @@ def painleve_sticks(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, v
 
 
 def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
-              v_tol: float, prefer=None):
+              v_tol: float, prefer=None, ag_v: float = 0.0):
     """(mode, uplift solution) that follow a consistent state (q, v): the active set and the stick / slide
     states of the uplift LCP on the contacts at the ground at rest (`closed_candidates`); (FLIGHT-like mode
     of no closed contact, None) when there is none. ``v_tol`` [m/s] also tells a sliding contact. With
     friction the solutions are counted (Painleve: `FrictionSolution.n_solutions`); ``prefer``: see
-    `solve_with_friction`."""
+    `solve_with_friction`. ag, ag_v [m/s2]: the ground accelerations (ag_v positive upward)."""
     cand = closed_candidates(model, q, v, gap_tol, v_tol)
     if not cand:
         return model.mode_of(()), None
-    sol = uplift(model, q, v, ag, cand, slip_tol=v_tol, count=True, prefer=prefer)
+    sol = uplift(model, q, v, ag, cand, slip_tol=v_tol, count=True, prefer=prefer, ag_v=ag_v)
     return model.mode_of(sol.active, solution_sigma(sol)), sol
 
 
@@ -216,14 +219,15 @@ def solution_sigma(sol: ContactSolution) -> int:
     return 0
 
 
-def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
+def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: float,
+                ag_v: float = 0.0) -> np.ndarray:
     """Normal contact forces [N] of the closed contacts of the sticking ``mode`` held closed (bilateral, stuck),
-    shape (n_contacts,)."""
+    shape (n_contacts,); ag, ag_v [m/s2] the ground accelerations (ag_v positive upward)."""
     closed = model.closed_of(mode)
     if not closed:
         return np.zeros(model.n_contacts)
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
-    return solve_contact_lcp(Minv, W_N, W_T, Minv @ model.forces(q, v, ag), a_N, a_T, closed, closed,
+    return solve_contact_lcp(Minv, W_N, W_T, Minv @ model.forces(q, v, ag, ag_v), a_N, a_T, closed, closed,
                              rtol=DEFAULT_TOLERANCES.lcp_exact).P_N

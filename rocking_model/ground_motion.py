@@ -1,4 +1,9 @@
-"""Horizontal ground accelerations ag(t) [m/s2], positive in +x.
+"""Ground accelerations: horizontal ag(t) [m/s2], positive in +x, and vertical ag_v(t) [m/s2], positive upward.
+
+A `GroundMotion` is the horizontal component; its ``vertical`` is None (no vertical motion: ag_v = 0) except
+for a `TwoComponentMotion`, whose call is the horizontal ag(t) and whose ``vertical`` is another GroundMotion
+giving ag_v(t). In the ground frame (the frame of every state and output) ag_v adds the inertial force
+-m_i ag_v along +y on every mass m_i: an effective gravity g + ag_v.
 
 Every ground motion is a callable ag(t) that also tells the integrators where it has kinks or jumps
 (`next_breakpoint`), so that the event-driven scheme never integrates across one, whether it is
@@ -14,13 +19,13 @@ from typing import Callable
 
 import numpy as np
 
-from .validation import AG_MAX, check_ag, check_real
+from .validation import AG_MAX, check_ag, check_ag_v, check_real
 
 #: the public ground motions (every GroundMotion subclass defined here; all exported by `rocking_model`) and
 #: helpers; tests/test_records.py checks that the package exports every public subclass
 __all__ = ["GroundMotion", "ConstantMotion", "LinearMotion", "FunctionMotion", "CheckedMotion", "SampledMotion",
-           "ScaledMotion", "SinePulse", "CosinePulse", "RickerPulse", "RectangularPulse", "checked_value",
-           "checked_motion", "pulse_from_parameters", "as_ground_motion"]
+           "ScaledMotion", "SinePulse", "CosinePulse", "RickerPulse", "RectangularPulse", "TwoComponentMotion",
+           "checked_value", "checked_motion", "pulse_from_parameters", "as_ground_motion", "as_vertical_motion"]
 
 
 class GroundMotion:
@@ -28,6 +33,20 @@ class GroundMotion:
 
     #: True when ag does not depend on t
     constant = False
+
+    #: the vertical component ag_v(t) [m/s2], positive upward: None (zero) except for a `TwoComponentMotion`
+    vertical: "GroundMotion | None" = None
+
+    @property
+    def horizontal(self) -> "GroundMotion":
+        """The horizontal component (this motion itself; a `TwoComponentMotion`'s first component)."""
+        return self
+
+    def with_vertical(self, ag_v) -> "TwoComponentMotion":
+        """This motion as the horizontal component, with the vertical ground acceleration ``ag_v`` [m/s2],
+        positive upward (anything `as_vertical_motion` accepts: a number, a callable, (t, ag_v) arrays or a
+        GroundMotion)."""
+        return TwoComponentMotion(self, ag_v)
 
     def __call__(self, t: float) -> float:
         raise NotImplementedError
@@ -82,8 +101,8 @@ class ConstantMotion(GroundMotion):
 
     constant = True
 
-    def __init__(self, value: float):
-        self.value = check_ag(value)
+    def __init__(self, value: float, name: str = "ag"):
+        self.value = check_ag(value, name)
 
     def __call__(self, t):
         return self.value
@@ -125,32 +144,34 @@ class FunctionMotion(GroundMotion):
 
     self_checked = True
 
-    def __init__(self, fun: Callable[[float], float], breakpoints=()):
+    def __init__(self, fun: Callable[[float], float], breakpoints=(), name: str = "ag"):
         self.fun = fun
         self._bp = np.sort(np.asarray(breakpoints, dtype=float))
+        #: the variable named in the messages: "ag", or "ag_v" for a vertical component
+        self.name = name
 
     def __call__(self, t):
-        return checked_value(self.fun, t)
+        return checked_value(self.fun, t, self.name)
 
     def next_breakpoint(self, t):
         i = np.searchsorted(self._bp, t, side="right")
         return float(self._bp[i]) if i < self._bp.size else math.inf
 
 
-def checked_value(fun, t: float) -> float:
-    """fun(t) as a float in [-AG_MAX, AG_MAX] or ValueError naming ag and t."""
+def checked_value(fun, t: float, name: str = "ag") -> float:
+    """fun(t) as a float in [-AG_MAX, AG_MAX] or ValueError naming ``name`` (ag, or ag_v) and t."""
     try:
         value = float(fun(t))
     except (TypeError, ValueError, OverflowError) as exc:
-        raise ValueError(f"ag({t:.17g}) must be a real number; the ground motion raised "
+        raise ValueError(f"{name}({t:.17g}) must be a real number; the ground motion raised "
                          f"{type(exc).__name__}: {exc}") from None
     if -AG_MAX <= value <= AG_MAX:
         return value
     if not math.isfinite(value):
-        raise ValueError(f"ag({t:.17g}) = {value!r} is not finite; allowed range [{-AG_MAX:g}, {AG_MAX:g}] "
+        raise ValueError(f"{name}({t:.17g}) = {value!r} is not finite; allowed range [{-AG_MAX:g}, {AG_MAX:g}] "
                          "m/s2 (AG_MAX)")
-    raise ValueError(f"ag({t:.17g}) = {value:g} is out of range; allowed range [{-AG_MAX:g}, {AG_MAX:g}] m/s2 "
-                     "(AG_MAX, about 100 g)")
+    raise ValueError(f"{name}({t:.17g}) = {value:g} is out of range; allowed range [{-AG_MAX:g}, {AG_MAX:g}] "
+                     "m/s2 (AG_MAX, about 100 g)")
 
 
 class CheckedMotion(GroundMotion):
@@ -160,12 +181,13 @@ class CheckedMotion(GroundMotion):
 
     self_checked = True
 
-    def __init__(self, motion: GroundMotion):
+    def __init__(self, motion: GroundMotion, name: str = "ag"):
         self.motion = motion
         self.support = motion.support
+        self.name = name
 
     def __call__(self, t):
-        return checked_value(self.motion, t)
+        return checked_value(self.motion, t, self.name)
 
     def next_breakpoint(self, t):
         return self.motion.next_breakpoint(t)
@@ -174,16 +196,23 @@ class CheckedMotion(GroundMotion):
         return self.motion.continuous_at(tb)
 
 
-def checked_motion(motion: GroundMotion) -> GroundMotion:
+def checked_motion(motion: GroundMotion, name: str = "ag") -> GroundMotion:
     """``motion`` ready for an integrator: refused (ValueError naming ag) when its known peak exceeds
-    AG_MAX, wrapped in `CheckedMotion` when its peak is unknown and it does not check its values itself."""
+    AG_MAX, wrapped in `CheckedMotion` when its peak is unknown and it does not check its values itself.
+    A `TwoComponentMotion` has both components checked (its vertical one's messages name ag_v)."""
+    if motion.vertical is not None:
+        return TwoComponentMotion(checked_motion(motion.horizontal), checked_motion(motion.vertical, "ag_v"))
+    if name != "ag" and isinstance(motion, (FunctionMotion, CheckedMotion)) and motion.name != name:
+        # (a user's callable wrapped for the horizontal component: its messages must name this component)
+        motion = FunctionMotion(motion.fun, motion._bp, name) if isinstance(motion, FunctionMotion) \
+            else CheckedMotion(motion.motion, name)
     peak = motion.peak_bound
     if peak is None:
-        return motion if motion.self_checked else CheckedMotion(motion)
+        return motion if motion.self_checked else CheckedMotion(motion, name)
     if not peak <= AG_MAX:
-        raise ValueError(f"ag: the ground motion's peak |ag| = {peak:g} m/s2 is out of range; allowed range "
-                         f"[{-AG_MAX:g}, {AG_MAX:g}] m/s2 (AG_MAX, about 100 g; check the units of the record "
-                         "and its scale factor)")
+        raise ValueError(f"{name}: the ground motion's peak |{name}| = {peak:g} m/s2 is out of range; allowed "
+                         f"range [{-AG_MAX:g}, {AG_MAX:g}] m/s2 (AG_MAX, about 100 g; check the units of the "
+                         "record and its scale factor)")
     return motion
 
 
@@ -259,6 +288,9 @@ class ScaledMotion(GroundMotion):
 
     def __init__(self, motion: GroundMotion, factor: float):
         self.motion = as_ground_motion(motion)
+        if self.motion.vertical is not None:
+            raise ValueError("ScaledMotion takes a single component; scale a TwoComponentMotion with its "
+                             "scaled(factor) (both components)")
         self.factor = check_real("factor", factor)
         self.constant = self.motion.constant
         self.support = self.motion.support
@@ -457,8 +489,110 @@ def pulse_from_parameters(kind: str, A: float, omega_p: float | None = None, t_s
     return cls(A, omega_p, 0.0 if t_start is None else t_start)
 
 
+def _has_breakpoint(motion: GroundMotion, tb: float) -> bool:
+    """Whether ``tb`` is one of ``motion``'s breakpoints (the first one after the float just below it)."""
+    return motion.next_breakpoint(math.nextafter(tb, -math.inf)) == tb
+
+
+class TwoComponentMotion(GroundMotion):
+    """A horizontal ground acceleration ag(t) [m/s2] (positive along +x) with a vertical one ag_v(t) [m/s2]
+    (positive upward): the call is the horizontal ag(t), ``vertical(t)`` is ag_v(t).
+
+    Both components are GroundMotions (anything `as_ground_motion` / `as_vertical_motion` accepts is
+    converted). ``next_breakpoint`` is the earlier of both components', so that the integrators stop at the
+    breakpoints of either; ``continuous_at(tb)`` holds where both are continuous (a component without a
+    breakpoint at tb is continuous there); ``constant`` where both are (``value``: the horizontal value);
+    ``peak_bound`` is the horizontal one's (the vertical is checked by `checked_motion` on its own, naming
+    ag_v); ``support`` the hull of both supports (None if either is unbounded or unknown)."""
+
+    def __init__(self, horizontal, vertical):
+        h = as_ground_motion(horizontal)
+        v = as_vertical_motion(vertical)
+        if h.vertical is not None or v.vertical is not None:
+            raise ValueError("ag_v: a TwoComponentMotion's components must be single (horizontal or vertical) "
+                             "ground motions; got a component that already has a vertical part")
+        self._horizontal = h
+        self.vertical = v
+        self.constant = bool(h.constant and v.constant)
+        if self.constant:
+            self.value = h.value if hasattr(h, "value") else h(0.0)
+        self.self_checked = bool(h.self_checked)
+
+    @property
+    def horizontal(self) -> GroundMotion:
+        return self._horizontal
+
+    def __call__(self, t):
+        return self._horizontal(t)
+
+    def next_breakpoint(self, t):
+        a = self._horizontal.next_breakpoint(t)
+        b = self.vertical.next_breakpoint(t)
+        return a if a < b else b
+
+    def continuous_at(self, tb):
+        return all(not _has_breakpoint(c, tb) or c.continuous_at(tb) for c in (self._horizontal, self.vertical))
+
+    @property
+    def peak_bound(self):
+        return self._horizontal.peak_bound
+
+    @property
+    def support(self):
+        a, b = self._horizontal.support, self.vertical.support
+        if a is None or b is None:
+            return None
+        return (min(a[0], b[0]), max(a[1], b[1]))
+
+    def scaled(self, factor: float) -> "TwoComponentMotion":
+        """Both components times ``factor`` [1]."""
+        return TwoComponentMotion(self._horizontal.scaled(factor), self.vertical.scaled(factor))
+
+    def resampled(self, dt: float, t_start: float | None = None, t_end: float | None = None) -> "TwoComponentMotion":
+        """Both components sampled on the same grid (see `GroundMotion.resampled`; default span: the hull of
+        both supports)."""
+        span = self.support
+        if (t_start is None or t_end is None) and span is None:
+            raise ValueError("TwoComponentMotion has no finite support: give t_start and t_end [s] to resample it")
+        t_start = span[0] if t_start is None else t_start
+        t_end = span[1] if t_end is None else t_end
+        return TwoComponentMotion(self._horizontal.resampled(dt, t_start, t_end),
+                                  self.vertical.resampled(dt, t_start, t_end))
+
+    def __repr__(self):
+        return f"TwoComponentMotion({self._horizontal!r}, {self.vertical!r})"
+
+
+def as_vertical_motion(ag_v) -> GroundMotion:
+    """The vertical ground acceleration ag_v [m/s2], positive upward, as a GroundMotion: a number (checked,
+    |ag_v| <= AG_MAX), a callable ag_v(t) (values checked, messages naming ag_v), a (t, ag_v) pair of arrays
+    or a GroundMotion without a vertical part of its own."""
+    if isinstance(ag_v, GroundMotion):
+        if ag_v.vertical is not None:
+            raise ValueError("ag_v must be a single (vertical) ground motion, got a TwoComponentMotion")
+        return ag_v
+    if isinstance(ag_v, (int, float)) and not isinstance(ag_v, bool):
+        return ConstantMotion(check_ag_v(ag_v), "ag_v")
+    if callable(ag_v):
+        return FunctionMotion(ag_v, name="ag_v")
+    if isinstance(ag_v, (tuple, list)) and len(ag_v) == 2:
+        t, a = np.asarray(ag_v[0], dtype=float), np.asarray(ag_v[1], dtype=float)
+        if a.shape == t.shape and not np.all(np.isfinite(a)):
+            raise ValueError("ag_v: the vertical record's values must be finite; allowed range "
+                             f"[{-AG_MAX:g}, {AG_MAX:g}] m/s2")
+        return SampledMotion(t, a)
+    try:
+        return ConstantMotion(check_ag_v(ag_v), "ag_v")        # numpy scalars and other real numbers
+    except ValueError:
+        pass
+    raise ValueError("ag_v must be a number, a callable ag_v(t), a (t, ag_v) pair of arrays or a GroundMotion, "
+                     f"got {type(ag_v).__name__}")
+
+
 def as_ground_motion(ag) -> GroundMotion:
-    """Accept a GroundMotion, a number, a callable or a (t, ag) pair of arrays."""
+    """Accept a GroundMotion, a number, a callable, a (t, ag) pair of arrays; for two components a pair of
+    callables (ag(t), ag_v(t)) or three arrays (t, ag, ag_v) (both sampled on t), giving a
+    `TwoComponentMotion` (ag_v [m/s2] positive upward)."""
     if isinstance(ag, GroundMotion):
         return ag
     if ag is None:
@@ -468,6 +602,13 @@ def as_ground_motion(ag) -> GroundMotion:
     if callable(ag):
         return FunctionMotion(ag)
     if isinstance(ag, (tuple, list)) and len(ag) == 2:
+        if callable(ag[0]) and callable(ag[1]):
+            return TwoComponentMotion(ag[0], ag[1])
         return SampledMotion(*ag)
-    raise ValueError("ground_motion must be a number, a callable ag(t), a (t, ag) pair of arrays or a "
-                     f"GroundMotion, got {type(ag).__name__}")
+    if isinstance(ag, (tuple, list)) and len(ag) == 3:
+        t, a, a_v = ag
+        t = np.asarray(t, dtype=float)
+        return TwoComponentMotion(SampledMotion(t, a), as_vertical_motion((t, a_v)))
+    raise ValueError("ground_motion must be a number, a callable ag(t), a (t, ag) pair of arrays, a pair of "
+                     "callables (ag(t), ag_v(t)), three arrays (t, ag, ag_v) or a GroundMotion, got "
+                     f"{type(ag).__name__}")

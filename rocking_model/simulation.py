@@ -9,7 +9,7 @@ import numpy as np
 
 import warnings
 
-from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion, checked_motion
+from .ground_motion import ConstantMotion, GroundMotion, TwoComponentMotion, as_ground_motion, checked_motion
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
 from .models.base import RockingModel
@@ -156,7 +156,7 @@ class Simulator:
         #: `Report`s of the last advance
         self.last_reports: list[Report] = []
         self._out = None              # (state token, model outputs) of the last checked state
-        self._motion = None           # (motion, checked motion) of the last non-constant input
+        self._motion = None           # (motion, vertical motion or None, checked motion) of the last non-constant input
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -173,27 +173,51 @@ class Simulator:
         """Times of the (last ``impact_log_size``) impacts [s]."""
         return self.integrator.impact_times.tail()
 
-    def _ground_motion(self, ag) -> GroundMotion:
-        """``ag`` as a GroundMotion ready for the integrator: |ag| <= AG_MAX checked (constant, known peak)
-        or checked value by value (`rocking_model.ground_motion.checked_motion`)."""
-        if type(ag) is float or type(ag) is int:
-            return ConstantMotion(ag)             # checks |ag| <= AG_MAX
+    def _ground_motion(self, ag, ag_v=None) -> GroundMotion:
+        """``ag`` (and the vertical ``ag_v``, None: none or the one ``ag`` holds) as a GroundMotion ready for the
+        integrator: |ag|, |ag_v| <= AG_MAX checked (constant, known peak) or checked value by value
+        (`rocking_model.ground_motion.checked_motion`)."""
+        if ag_v is None:
+            if type(ag) is float or type(ag) is int:
+                return ConstantMotion(ag)         # checks |ag| <= AG_MAX
+            last = self._motion
+            if last is not None and last[0] is ag and last[1] is None:
+                return last[2]
+            gm = checked_motion(as_ground_motion(ag))
+            if not gm.constant:
+                self._motion = (ag, None, gm)     # the same object each step: keep its integrator caches
+            return gm
         last = self._motion
-        if last is not None and last[0] is ag:
-            return last[1]
-        gm = checked_motion(as_ground_motion(ag))
+        if last is not None and last[0] is ag and last[1] is ag_v:
+            return last[2]
+        horizontal = as_ground_motion(ag)
+        if horizontal.vertical is not None:
+            raise ValueError("ag_v: the ground motion ag already has a vertical component (a TwoComponentMotion, "
+                             "a pair of callables or (t, ag, ag_v) arrays); give the vertical ground acceleration "
+                             "once, either in ag or as ag_v, not both")
+        gm = checked_motion(TwoComponentMotion(horizontal, ag_v))
         if not gm.constant:
-            self._motion = (ag, gm)               # the same object each step: keep its integrator caches
+            self._motion = (ag, ag_v, gm)
         return gm
 
-    def advance(self, t_end: float, ag) -> None:
+    def advance(self, t_end: float, ag, ag_v=None) -> None:
         """Integrate to exactly ``t_end`` [s] under ground acceleration ``ag``: a number [m/s2] held
-        constant, a callable ag(t), a (t, ag) pair of arrays or a GroundMotion; |ag| <= AG_MAX.
+        constant, a callable ag(t), a (t, ag) pair of arrays or a GroundMotion; |ag| <= AG_MAX. Positive ag
+        acts along +x.
 
-        Raises ValueError (bad t_end or ag, or a motion that overflows: the message names the likely
+        ag_v: the vertical ground acceleration [m/s2], positive UPWARD (in the ground frame an effective gravity
+        g + ag_v on every mass), in whatever form ``ag`` takes (number, callable, (t, ag_v) arrays,
+        GroundMotion); |ag_v| <= AG_MAX. None (default) or 0: no vertical motion, exactly today's results.
+        ``ag`` may instead carry it (a `TwoComponentMotion`, a pair of callables, (t, ag, ag_v) arrays); both
+        at once is a ValueError naming ag_v.
+
+        Raises ValueError (bad t_end, ag or ag_v, or a motion that overflows: the message names the likely
         cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
         exactly as before the call."""
-        if self.engine == "c" and type(ag) in _NUMBERS and type(t_end) in _NUMBERS and self.on_report != "raise" \
+        if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
+            ag_v = None                       # no vertical motion: today's code path, bit for bit
+        if self.engine == "c" and ag_v is None and type(ag) in _NUMBERS and type(t_end) in _NUMBERS \
+                and self.on_report != "raise" \
                 and (type(ag) is not np.float64 or math.isfinite(ag)) \
                 and (type(t_end) is not np.float64 or math.isfinite(t_end)):
             # the lean path: one call into C (checks, checkpoint, outputs check in C)
@@ -212,7 +236,9 @@ class Simulator:
         if t_end < integ.t:
             raise ValueError(f"t_end = {t_end:.17g} is before the current time; allowed range "
                              f"[{integ.t:.17g}, inf)")
-        gm = self._ground_motion(ag)
+        # (a nonzero vertical component on the compiled engine goes through CompiledIntegrator.advance with the
+        # TwoComponentMotion: the C part of issue 23 reads its vertical component there)
+        gm = self._ground_motion(ag, ag_v)
         self._guarded(t_end, gm, lambda: integ.advance(t_end, gm, max_steps=self.max_steps))
 
     def _c_failed(self, exc, t_end, ag) -> None:
@@ -231,11 +257,14 @@ class Simulator:
         integ.reports = [Report(kind, t, msg) for kind, t, msg in eng.reports()]
         self._check_reports(integ.reports)
 
-    def sample(self, times, ag) -> tuple:
-        """Advance through the increasing ``times`` [s] under ``ag`` and return the outputs there:
+    def sample(self, times, ag, ag_v=None) -> tuple:
+        """Advance through the increasing ``times`` [s] under ``ag`` (and the vertical ``ag_v`` [m/s2], positive
+        upward, as in `advance`) and return the outputs there:
         (contact codes, {output name: array}, impacts, overturned), arrays of len(times) + 1 that start with
         the current state. The same guarantees as `advance` (the work budget applies between consecutive
         times); the event-driven scheme reads its dense output, so the times do not shorten its steps."""
+        if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
+            ag_v = None                       # no vertical motion: today's code path
         integ = self.integrator
         if self.engine == "c" and isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1:
             # the compiled engine reads the array as is: checked at once (the first bad value named as below)
@@ -251,7 +280,7 @@ class Simulator:
         if (bool(np.any(times[1:] < times[:-1])) if isinstance(times, np.ndarray)
                 else any(b < a for a, b in zip(times, times[1:]))):
             raise ValueError("times must be increasing")
-        gm = self._ground_motion(ag)
+        gm = self._ground_motion(ag, ag_v)
         return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))
 
     def _guarded(self, t_end: float, gm, action):
@@ -308,6 +337,9 @@ class Simulator:
         causes = []
         if peak is not None and peak > 10.0 * model.g:
             causes.append(f"the ground acceleration (|ag| up to {peak:g} m/s2, {peak / model.g:.3g} g)")
+        peak_v = None if gm.vertical is None else gm.vertical.peak_bound
+        if peak_v is not None and peak_v > 10.0 * model.g:
+            causes.append(f"the vertical ground acceleration (|ag_v| up to {peak_v:g} m/s2, {peak_v / model.g:.3g} g)")
         if model.e_N > 0.0:
             causes.append(f"energy created at impacts by e_N = {model.e_N:g} with sticking (physics notes, "
                           "section 6)")
@@ -410,16 +442,31 @@ class Result:
 
 
 def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, scheme="event_driven",
-             output_interval: float = 0.01, hold: str = "exact", **kwargs) -> Result:
+             output_interval: float = 0.01, hold: str = "exact", ag_v=None, **kwargs) -> Result:
     """Simulate ``model`` from t0 to ``t_end`` [s] and return the outputs every ``output_interval`` [s].
 
-    ground_motion: number, callable ag(t), (t, ag) arrays (linear interpolation) or GroundMotion.
-    hold: "exact" integrates the ground motion as given; "zoh" holds ag(t_k) constant over each output
-        interval, as a co-simulation master (fmpy) does with the FMU.
+    ground_motion: the horizontal ground acceleration ag [m/s2], positive along +x: number, callable ag(t),
+        (t, ag) arrays (linear interpolation) or GroundMotion; or both components: a `TwoComponentMotion`, a
+        pair of callables (ag(t), ag_v(t)) or three arrays (t, ag, ag_v).
+    ag_v: the vertical ground acceleration [m/s2], positive UPWARD (an effective gravity g + ag_v), in any
+        form ground_motion takes for one component; None (default) or 0: none. Giving it both here and in
+        ground_motion is a ValueError naming ag_v.
+    hold: "exact" integrates the ground motion as given; "zoh" holds ag(t_k) (and ag_v(t_k)) constant over
+        each output interval, as a co-simulation master (fmpy) does with the FMU.
     Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, max_steps, t0, engine,
     phi_0, ...); the work budget max_steps applies to each output interval.
     """
-    gm = checked_motion(as_ground_motion(ground_motion))
+    if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
+        ag_v = None                           # no vertical motion: today's code path
+    gm = as_ground_motion(ground_motion)
+    if ag_v is not None:
+        if gm.vertical is not None:
+            raise ValueError("ag_v: the ground motion already has a vertical component (a TwoComponentMotion, a "
+                             "pair of callables or (t, ag, ag_v) arrays); give the vertical ground acceleration "
+                             "once, either in ground_motion or as ag_v, not both")
+        gm = TwoComponentMotion(gm, ag_v)
+    gm = checked_motion(gm)
+    vert = gm.vertical
     hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
     kwargs.setdefault("impact_log_size", None)
     sim = Simulator(model, scheme, **kwargs)
@@ -441,7 +488,10 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     else:
         records = [sim.outputs()]
         for k in range(n):
-            sim.advance(times[k + 1], ConstantMotion(gm(times[k])))
+            if vert is None:
+                sim.advance(times[k + 1], ConstantMotion(gm(times[k])))
+            else:
+                sim.advance(times[k + 1], ConstantMotion(gm(times[k])), ag_v=ConstantMotion(vert(times[k]), "ag_v"))
             records.append(sim.outputs())
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
@@ -454,8 +504,12 @@ def _zoh_c(sim: Simulator, gm, times, n: int) -> dict:
     eng = sim.integrator._engine
     tl = times.tolist()
     rows = [eng.output_row()]
+    vert = gm.vertical
     for k in range(n):
-        sim.advance(tl[k + 1], gm(tl[k]))
+        if vert is None:
+            sim.advance(tl[k + 1], gm(tl[k]))
+        else:
+            sim.advance(tl[k + 1], gm(tl[k]), ag_v=vert(tl[k]))
         rows.append(eng.output_row())
     arr = np.array(rows)
     names = list(eng.output_names) + ["contact", "impacts", "overturned", "friction_demand", "painleve"]

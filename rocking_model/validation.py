@@ -55,6 +55,12 @@ def check_ag(value, name: str = "ag") -> float:
     return check_real(name, value, lo=-AG_MAX, hi=AG_MAX)
 
 
+def check_ag_v(value, name: str = "ag_v") -> float:
+    """The vertical ground acceleration ``value`` [m/s2], positive upward, as a float in [-AG_MAX, AG_MAX]
+    (the same range as the horizontal one) or ValueError naming ``name``."""
+    return check_real(name, value, lo=-AG_MAX, hi=AG_MAX)
+
+
 class WorkLimitError(RuntimeError):
     """One `Simulator.advance` would take more internal steps than its budget (``max_steps``): the step is
     refused and the simulator is left as it was before the call. The message names the cause and the way

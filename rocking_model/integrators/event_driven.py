@@ -85,6 +85,13 @@ METHODS = {"DOP853": DOP853, "DOPRI5": DOPRI5}
 METHOD_CHOICES = {"DOP853": "DOP853", "DOPRI5": "DOPRI5", "RK45": "DOPRI5", 0: "DOP853", 1: "DOPRI5"}
 
 
+def _inputs(ag, t: float) -> tuple:
+    """(ag(t), ag_v(t)) [m/s2] of the GroundMotion ``ag`` at t: the horizontal and the vertical ground
+    acceleration (0.0 without a vertical component), what the contact problems at an event take."""
+    vert = ag.vertical
+    return ag(t), 0.0 if vert is None else vert(t)
+
+
 @register_scheme
 class EventDriven(Integrator):
     """Event-driven integration of ``model`` with relative/absolute tolerance ``tolerance``.
@@ -189,7 +196,10 @@ class EventDriven(Integrator):
         the friction events, then the overturning margin) and, with closed corners, `force_totals_of` (the
         friction demand; None in flight); reused while the mode and a constant input stay the same (each
         co-simulation step would otherwise build them twice)."""
-        key = (mode, ag.value) if ag.constant else (mode, id(ag))
+        if ag.constant:
+            key = (mode, ag.value) if ag.vertical is None else (mode, ag.value, ag.vertical.value)
+        else:
+            key = (mode, id(ag))
         cached = self.__dict__.get("_fn_cache")
         if cached is not None and cached[0] == key and (ag.constant or cached[1] is ag):
             return cached[2]
@@ -386,7 +396,7 @@ class EventDriven(Integrator):
         if all(i in closed for i in closed_candidates(self.model, q, v, self.gap_tol, self.v_tol)):
             if all(e[i] > 0.0 for i in closed) and all(g >= 0.0 for g in e[nc:-1]):
                 return
-        new, v_new = self._decide(q, v, ag(t), t)
+        new, v_new = self._decide(q, v, _inputs(ag, t), t)
         if new != mode or v_new is not v:
             self._set_state(new, q, v_new)
 
@@ -640,16 +650,16 @@ class EventDriven(Integrator):
             self._full = None
             return
         if kind == _KIND_IMPACT:
-            self._impact(q, v, t, ag(t))
+            self._impact(q, v, t, _inputs(ag, t))
             self._note_percussions(q, v)
         elif kind == _KIND_CONE:
             # the friction reached mu lambda_N: the corners slide against it (preferred where sticking is
             # still consistent to round-off, as at the far side of the root it is only marginally)
             lam_T = self._functions(self.mode, ag)[2](t, self.y)[1]
             slide = SLIDE_NEG if lam_T > 0.0 else SLIDE_POS
-            self._enter(q, v, ag(t), t, prefer=slide)
+            self._enter(q, v, _inputs(ag, t), t, prefer=slide)
         else:
-            self._enter(q, v, ag(t), t)
+            self._enter(q, v, _inputs(ag, t), t)
 
     def _note_percussions(self, q, v_minus) -> None:
         """Raise ``friction_demand`` to the ratio |sum Lambda_T| / sum Lambda_N of the percussions of the impact
@@ -724,7 +734,7 @@ class EventDriven(Integrator):
                    and (i not in sol.active or U_plus[i] > self.v_tol)]
             if not new and not forced and cand and all(U_plus[i] >= self.v_zeno for i in cand):
                 # bounce test, in flight only: a_N the corner's normal acceleration in free flight
-                acc = inverse_mass(model, q) @ model.forces(q, sol.v, ag_t)
+                acc = inverse_mass(model, q) @ model.forces(q, sol.v, *ag_t)
                 a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
                 falling = [i for i in cand if a_N[i] < 0.0]
                 if falling:
@@ -748,7 +758,7 @@ class EventDriven(Integrator):
         """The mode that the acceleration LCP selects at the consistent state (q, v) (`next_mode`) and the LCP's
         solution; with friction ``prefer`` (a sliding state) is tried first for the closed contacts. An inexact
         solve is reported unless it is a Painleve situation (which `_decide` resolves)."""
-        mode, sol = next_mode(self.model, q, v, ag_t, self.gap_tol, self.v_tol, prefer=prefer)
+        mode, sol = next_mode(self.model, q, v, ag_t[0], self.gap_tol, self.v_tol, prefer=prefer, ag_v=ag_t[1])
         if sol is not None and not sol.exact and not sol.painleve:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol
@@ -758,7 +768,8 @@ class EventDriven(Integrator):
         self._set_state(mode, q, v)
 
     def _decide(self, q, v, ag_t, t, prefer=None):
-        """(mode, v): the mode that follows the consistent state (q, v) (`_select_mode`), and v, changed only
+        """(mode, v): the mode that follows the consistent state (q, v) under the ground accelerations ag_t =
+        (ag(t), ag_v(t)) [m/s2] (`_select_mode`), and v, changed only
         by the impact without collision of a Painleve situation (counted in ``painleve``; the Painleve sticks
         made by an impact LCP are counted by `_count_painleve`)."""
         mode, sol = self._select_mode(q, v, ag_t, t, prefer)

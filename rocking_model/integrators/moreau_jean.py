@@ -3,6 +3,8 @@
 Per step of size dt (Acary & Brogliato 2008, Ch. 10; Siconos' MoreauJeanOSI):
 
     W_hat (v+ - v) = dt [(1 - theta) f(q, v, t) + theta f(q, v, t + dt)] - dt^2 theta K v + W_N P_N + W_T P_T
+
+(f at t and t + dt under both ground accelerations, ag(t) and, for a `TwoComponentMotion`, ag_v(t)),
     W_hat = M(q) + dt theta C + dt^2 theta^2 K        (K, C: stiff linear part of -df/dq, -df/dv)
     q+ = q + dt [(1 - theta) v + theta v+]
 
@@ -115,8 +117,14 @@ class MoreauJean(Integrator):
         model, theta = self.model, self.theta
         q, v = self.q, self.v
         M = model.mass_matrix(q)
-        f0 = model.forces(q, v, ag(t))
-        f1 = f0 if ag.constant else model.forces(q, v, ag(t + dt))
+        vert = ag.vertical
+        if vert is None:
+            f0 = model.forces(q, v, ag(t))
+            f1 = f0 if ag.constant else model.forces(q, v, ag(t + dt))
+        else:
+            # the vertical ground acceleration ag_v at both ends of the step too
+            f0 = model.forces(q, v, ag(t), vert(t))
+            f1 = f0 if ag.constant else model.forces(q, v, ag(t + dt), vert(t + dt))
         rhs = dt * ((1.0 - theta) * f0 + theta * f1)
         kc = model.stiff_jacobians(q, v)
         if kc is None:

@@ -2,8 +2,9 @@
 
 A model bundles, in the Siconos sense,
 - the dynamical system: generalized coordinates q (full description, ground frame), mass matrix M(q),
-  non-contact generalized forces f(q, v, ag) (gravity, elastic, damping, gyroscopic, and the inertial force
-  of the ground acceleration ag);
+  non-contact generalized forces f(q, v, ag, ag_v) (gravity, elastic, damping, gyroscopic, and the inertial
+  forces of the ground acceleration: ag [m/s2] horizontal, positive along +x, and ag_v [m/s2] vertical, positive
+  upward, which adds -m_i ag_v along +y on every mass m_i: an effective gravity g + ag_v);
 - the contact relation: ``n_contacts`` contacts (the rocking models: the two base corners, 0 = left,
   1 = right), their normal gaps g_N(q), the normal and tangential Jacobians W_N, W_T (one column per contact)
   and the drift terms W_dot^T v;
@@ -22,7 +23,7 @@ A subclass must provide:
                                 first; their rows of M a - f carry the total tangential and normal forces)
     e_N, g, mu                  coefficient of restitution [1], gravity [m/s2], friction coefficient [1]
                                 (inf: the paper's sticking law)
-    mass_matrix(q), forces(q, v, ag)
+    mass_matrix(q), forces(q, v, ag, ag_v=0.0)
     gaps(q), contact_jacobians(q), contact_drift(q, v), contact_abscissae(q)
     mode_dofs(mode), embed(mode, r, r_dot), mode_jacobian(mode, r, r_dot)
     rest_position(), energy(q, v), outputs(q, v), initial_state(**initial)
@@ -40,12 +41,15 @@ A subclass may provide (the defaults here are generic and correct, the overrides
                                                 phi, length_scale for the others
     classical_impact_velocity(q, v_minus, mode) an impact rule replacing the impact LCP at a rocking impact;
                                                 default None (the LCP with Newton's law)
-    reduced_acceleration, contact_forces        per mode, from the numpy interface
+    reduced_acceleration, contact_forces        per mode, from the numpy interface (each takes ag, ag_v=0.0)
     mode_functions, mode_outputs(_array)        float-level right-hand sides, event functions and outputs
     force_scale                                 scale of the contact forces [N]; default |f| at rest
     force_totals_of(mode, ag)                   float-level (sum lambda_N, sum lambda_T) of a mode (the
                                                 friction demand and cone); default generic numpy
     mode_closures(mode, ag)                     (rhs, monitors, totals) built together (shared work)
+
+The functions that take a GroundMotion ``ag`` (mode_closures, mode_functions, functions_of, force_totals_of)
+read its vertical component from ``ag.vertical`` (None: ag_v = 0; `vertical_of`).
     SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
 
 The sliding modes (`rocking_model.modes.SLIDING`) need nothing more: their coordinates, right-hand sides and
@@ -73,6 +77,22 @@ HALF_PI = 0.5 * math.pi
 PHI_0 = Param("phi_0", 0.0, "rad", "Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2",
               lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
 PHI_DOT_0 = Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity", lo=-1e4, hi=1e4)
+
+
+def _zero(t: float) -> float:
+    return 0.0
+
+
+def vertical_of(ag):
+    """t -> ag_v(t) [m/s2] of the GroundMotion ``ag``: its vertical component (positive upward), its value when
+    constant, or 0.0 when it has none (``ag.vertical`` is None)."""
+    vert = ag.vertical
+    if vert is None:
+        return _zero
+    if vert.constant:
+        value = vert.value
+        return lambda t: value
+    return vert
 
 
 def body_outputs(body: str, point: str) -> tuple:
@@ -230,8 +250,10 @@ class RockingModel(ABC):
         """M(q), shape (n, n)."""
 
     @abstractmethod
-    def forces(self, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
-        """Non-contact generalized forces f(q, v, ag), shape (n,), so that M q_ddot = f + contact forces."""
+    def forces(self, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
+        """Non-contact generalized forces f(q, v, ag, ag_v), shape (n,), so that M q_ddot = f + contact forces;
+        ag [m/s2] horizontal ground acceleration (+x), ag_v [m/s2] vertical (positive upward: gravity g becomes
+        the effective gravity g + ag_v on every mass)."""
 
     def inverse_mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M(q)^-1, shape (n, n); override with a closed form where there is one."""
@@ -299,22 +321,25 @@ class RockingModel(ABC):
         idx = list(self.mode_dofs(mode))
         return np.array(q, dtype=float)[idx], np.array(v, dtype=float)[idx]
 
-    def reduced_acceleration(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray, ag: float) -> np.ndarray:
-        """r_ddot of ``mode``: (J^T M J) r_ddot = J^T (f - M J_dot r_dot) (Lagrange on the constrained system)."""
+    def reduced_acceleration(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray, ag: float,
+                             ag_v: float = 0.0) -> np.ndarray:
+        """r_ddot of ``mode``: (J^T M J) r_ddot = J^T (f - M J_dot r_dot) (Lagrange on the constrained system);
+        ag, ag_v [m/s2] as in `forces`."""
         if len(r) == 0:
             return np.zeros(0)
         q, v = self.embed(mode, r, r_dot)
         J, jd = self.mode_jacobian(mode, r, r_dot)
         M = self.mass_matrix(q)
-        rhs = J.T @ (self.forces(q, v, ag) - M @ jd)
+        rhs = J.T @ (self.forces(q, v, ag, ag_v) - M @ jd)
         return np.linalg.solve(J.T @ M @ J, rhs)
 
-    def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float) -> np.ndarray:
-        """Normal forces [N] of the closed corners of ``mode`` held closed (bilateral), shape (2,).
+    def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
+        """Normal forces [N] of the closed corners of ``mode`` held closed (bilateral), shape (2,); ag, ag_v
+        [m/s2] as in `forces`.
 
         Generic: the acceleration-level problem with the mode's corners forced closed; models may override
         with a closed form."""
-        return mode_forces(self, mode, q, v, ag)
+        return mode_forces(self, mode, q, v, ag, ag_v)
 
     @property
     def work_note(self) -> str:
@@ -377,20 +402,21 @@ class RockingModel(ABC):
         """float-level (t, y) -> (sum lambda_N, sum lambda_T) [N] of the closed corners of ``mode`` (the
         friction demand); generic numpy code, models may override with closed forms for sticking modes."""
         a_of = (lambda t: ag.value) if ag.constant else ag
+        av_of = vertical_of(ag)
         if mode in SLIDING:
             k = len(sliding.slide_dofs(self, mode))
             sigma, inv_mu = SLIDING[mode][1], 0.0 if math.isinf(self.mu) else 1.0 / self.mu
 
             def slide_totals(t, y):
                 q, v = sliding.slide_embed(self, mode, y[:k], y[k:])
-                tau = float(np.sum(sliding.slide_motion(self, mode, q, v, a_of(t))[1]))
+                tau = float(np.sum(sliding.slide_motion(self, mode, q, v, a_of(t), av_of(t))[1]))
                 return inv_mu * tau, -sigma * tau
             return slide_totals
         k = len(self.mode_dofs(mode))
 
         def totals(t, y):
             q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            return sliding.force_totals(self, mode, q, v, a_of(t))
+            return sliding.force_totals(self, mode, q, v, a_of(t), av_of(t))
         return totals
 
     def outputs_of(self, mode, y, shift: float = 0.0) -> dict:
@@ -438,16 +464,17 @@ class RockingModel(ABC):
         nc = self.n_contacts
         F, L, ip = self.force_scale, self.length_scale, self.phi_index
         a_of = (lambda t: ag.value) if ag.constant else ag
+        av_of = vertical_of(ag)
 
         def rhs(t, y):
             if k == 0:
                 return []
             r, rd = np.array(y[:k]), np.array(y[k:])
-            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t)).tolist()
+            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), av_of(t)).tolist()
 
         def monitors(t, y):
             q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            lam = self.contact_forces(mode, q, v, a_of(t)) if closed else None
+            lam = self.contact_forces(mode, q, v, a_of(t), av_of(t)) if closed else None
             g = self.gaps(q)
             phi = float(q[ip])
             out = []

@@ -10,7 +10,9 @@ psi(xi) = 3 xi^2/(2 h^2) - xi^3/(2 h^3) (Eq. 48) and generalized coordinate u (t
 
 Full coordinates q = [u, x, y, phi] (ground frame): u flexural coordinate, (x, y) base midpoint (y = 0 at
 rest), phi rotation, positive counter-clockwise (phi > 0 pivots on the left corner). Ground acceleration ag
-[m/s2] is horizontal, positive along +x; it enters as the inertial force of the ground-frame formulation.
+[m/s2] is horizontal, positive along +x; it enters as the inertial force of the ground-frame formulation. The
+vertical ground acceleration ag_v [m/s2], positive upward, adds the inertial force -m_i ag_v along +y on every
+mass: gravity g becomes the effective gravity g + ag_v in Eq. (55) (the strain energy and the geometry stay).
 
 Shorthands used below and in `rocking_model.post_impact` (moments of the mass distribution):
     D   = m + 3/8 m_c        (first moment of the shape function, integral of psi dm / 1)
@@ -221,12 +223,13 @@ class FlexibleOscillator(RockingModel):
             [-self.C, Mxp, Myp, self.J0 + self.m_tilde * u * u],
         ])
 
-    def forces(self, q, v, ag):
-        """Right-hand sides of Eq. (55): damping, elastic, centrifugal/Coriolis, ground inertia, gravity."""
+    def forces(self, q, v, ag, ag_v=0.0):
+        """Right-hand sides of Eq. (55): damping, elastic, centrifugal/Coriolis, ground inertia, gravity [N,
+        N m]; ag, ag_v [m/s2] (ag_v positive upward: the effective gravity g + ag_v)."""
         u, phi = float(q[0]), float(q[3])
         ud, w = float(v[0]), float(v[3])
         sp, cp = math.sin(phi), math.cos(phi)
-        D, Mt, g = self.D, self.M_t, self.g
+        D, Mt, g = self.D, self.M_t, self.g + ag_v
         Mxp, Myp = self._M_phi_xy(u, sp, cp)
         return np.array([
             -self.c * ud - self.k_tilde * u + self.m_tilde * u * w * w - D * cp * ag - D * sp * g,
@@ -298,7 +301,7 @@ class FlexibleOscillator(RockingModel):
         jd = np.array([0.0, s * b * cp * w * w, s * b * sp * w * w, 0.0])
         return J, jd
 
-    def reduced_acceleration(self, mode, r, r_dot, ag):
+    def reduced_acceleration(self, mode, r, r_dot, ag, ag_v=0.0):
         """Closed forms for FULL and rocking (equal to the projection J^T M J of the base class).
 
         Rocking on pivot s (-1 left, +1 right), r = [u, phi]: the reduced mass is
@@ -306,18 +309,19 @@ class FlexibleOscillator(RockingModel):
             m_tilde u_dd - C phi_dd = -c u_d - k_tilde u - g D sin(phi) - D cos(phi) ag + E phi_d^2
             -C u_dd + K phi_dd = -2 E u_d phi_d - g (D u - M_t s b) cos(phi) + g A_h sin(phi)
                                  + ag (A_h cos(phi) + (D u - M_t s b) sin(phi))
-        with E = m_tilde u - s b D = K'(u)/2.
+        with E = m_tilde u - s b D = K'(u)/2, and g the effective gravity g + ag_v (ag_v [m/s2], positive upward;
+        full contact does not depend on it: phi = 0).
         """
         if mode == Mode.FULL:
             u, ud = float(r[0]), float(r_dot[0])
             return np.array([(-self.c * ud - self.k_tilde * u - self.D * ag) / self.m_tilde])
         if mode == Mode.FLIGHT:
-            return super().reduced_acceleration(mode, r, r_dot, ag)
+            return super().reduced_acceleration(mode, r, r_dot, ag, ag_v)
         s = pivot_sign(mode)
         u, phi = float(r[0]), float(r[1])
         ud, w = float(r_dot[0]), float(r_dot[1])
         sp, cp = math.sin(phi), math.cos(phi)
-        mt, C, D, g = self.m_tilde, self.C, self.D, self.g
+        mt, C, D, g = self.m_tilde, self.C, self.D, self.g + ag_v
         sbM = s * self.b * self.M_t
         K = self.J0 + mt * u * u + self.M_t * self.b ** 2 - 2.0 * s * self.b * D * u
         E = mt * u - s * self.b * D
@@ -327,7 +331,7 @@ class FlexibleOscillator(RockingModel):
         det = mt * K - C * C
         return np.array([(K * f_u + C * f_p) / det, (C * f_u + mt * f_p) / det])
 
-    def contact_forces(self, mode, q, v, ag):
+    def contact_forces(self, mode, q, v, ag, ag_v=0.0):
         """Normal forces [N] of the closed corners of ``mode`` (bilateral), closed form.
 
         The y row of M v_dot = f + W_N lambda_N + W_T lambda_T carries only the normal forces (the tangential
@@ -337,8 +341,8 @@ class FlexibleOscillator(RockingModel):
             return np.zeros(2)
         r, r_dot = self.reduce(mode, q, v)
         J, jd = self.mode_jacobian(mode, r, r_dot)
-        resid = self.mass_matrix(q) @ (J @ self.reduced_acceleration(mode, r, r_dot, ag) + jd) \
-            - self.forces(q, v, ag)
+        resid = self.mass_matrix(q) @ (J @ self.reduced_acceleration(mode, r, r_dot, ag, ag_v) + jd) \
+            - self.forces(q, v, ag, ag_v)
         if mode == Mode.FULL:
             d = resid[3] / self.b
             return np.array([0.5 * (resid[2] - d), 0.5 * (resid[2] + d)])
@@ -424,6 +428,8 @@ class FlexibleOscillator(RockingModel):
     def mode_closures(self, mode, ag):
         """(rhs, monitors, totals) of ``mode`` in closed form; while rocking the totals reuse what the monitors
         computed at the same (t, y)."""
+        if ag.vertical is not None:
+            return self._vertical_closures(mode, ag)
         const = ag.constant
         a0 = ag.value if const else 0.0
         mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
@@ -520,6 +526,117 @@ class FlexibleOscillator(RockingModel):
             u, phi, ud, w = y
             ww = w * w
             Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+            xdd = sb * sp * wd + sb * cp * ww
+            lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
+            return lam_N, lam_T
+        return rhs, monitors, totals
+
+    def _vertical_closures(self, mode, ag):
+        """`mode_closures` under a ground motion with a vertical component ag_v(t) = ag.vertical(t): the same
+        closed forms with the effective gravity g_e = g + ag_v(t) wherever gravity acts (Eq. 55's gravity terms
+        and the weight carried by the corners; the normalisation by the weight M_t g stays). Written with the
+        same floating-point operations as `mode_closures` where g was, so that ag_v = 0 gives the same results
+        bit for bit."""
+        const = ag.constant
+        a0 = ag.value if const else 0.0
+        hor, vert = ag.horizontal, ag.vertical
+        vconst = vert.constant
+        mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
+        ge0 = g + vert.value if vconst else 0.0
+        A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
+        W = Mt * g
+        if mode == Mode.FLIGHT:
+            L = self.length_scale
+            a11 = mt - D * D / Mt
+
+            def rhs(t, y):
+                u, x, yc, phi, ud, xd, yd, w = y
+                a = a0 if const else hor(t)
+                ge = ge0 if vconst else g + vert(t)
+                sp, cp = math.sin(phi), math.cos(phi)
+                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+                ww = w * w
+                f_u = -c * ud - kt * u + mt * u * ww - D * cp * a - D * sp * ge
+                f_x = Myp * ww + 2.0 * D * sp * ud * w - Mt * a
+                f_y = -Mxp * ww - 2.0 * D * cp * ud * w - Mt * ge
+                f_p = -2.0 * mt * u * ud * w - Mxp * a - ge * Myp
+                a12 = -C - D * (cp * Mxp + sp * Myp) / Mt
+                a22 = J0 + mt * u * u - (Mxp * Mxp + Myp * Myp) / Mt
+                r1 = f_u - D * (cp * f_x + sp * f_y) / Mt
+                r2 = f_p - (Mxp * f_x + Myp * f_y) / Mt
+                det = a11 * a22 - a12 * a12
+                udd = (a22 * r1 - a12 * r2) / det
+                wd = (a11 * r2 - a12 * r1) / det
+                return [ud, xd, yd, w, udd, (f_x - D * cp * udd - Mxp * wd) / Mt,
+                        (f_y - D * sp * udd - Myp * wd) / Mt, wd]
+
+            def monitors(t, y):
+                yc, phi = y[2], y[3]
+                bs = b * math.sin(phi)
+                return [(yc - bs) / L, (yc + bs) / L, HALF_PI - abs(phi)]
+            return rhs, monitors, None
+        if mode == Mode.FULL:
+            def rhs(t, y):
+                u, ud = y
+                return [ud, (-c * ud - kt * u - D * (a0 if const else hor(t))) / mt]
+
+            def monitors(t, y):
+                u, ud = y
+                a = a0 if const else hor(t)
+                ge = ge0 if vconst else g + vert(t)
+                udd = (-c * ud - kt * u - D * a) / mt
+                # phi row at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g_e D u); the corners carry
+                # the effective weight M_t g_e
+                d = (-C * udd - A_h * a + ge * D * u) / b
+                We = Mt * ge
+                return [0.5 * (We - d) / W, 0.5 * (We + d) / W, HALF_PI]
+
+            def totals(t, y):
+                u, ud = y
+                a = a0 if const else hor(t)
+                return Mt * (ge0 if vconst else g + vert(t)), D * (-c * ud - kt * u - D * a) / mt + Mt * a
+            return rhs, monitors, totals
+        s = pivot_sign(mode)
+        sb = s * b
+        sbM = sb * Mt
+        K0 = J0 + Mt * b * b
+        pivot_first = s < 0
+
+        def accel(u, phi, ud, w, a, ge):
+            sp, cp = math.sin(phi), math.cos(phi)
+            K = K0 + mt * u * u - 2.0 * sb * D * u
+            E = mt * u - sb * D
+            f_u = -c * ud - kt * u - ge * D * sp - D * cp * a + E * w * w
+            f_p = -2.0 * E * ud * w - ge * (D * u - sbM) * cp + ge * A_h * sp + a * (A_h * cp + (D * u - sbM) * sp)
+            det = mt * K - C * C
+            return (K * f_u + C * f_p) / det, (C * f_u + mt * f_p) / det, sp, cp
+
+        def rhs(t, y):
+            u, phi, ud, w = y
+            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else hor(t), ge0 if vconst else g + vert(t))
+            return [ud, w, udd, wd]
+
+        def forces(t, y):
+            u, phi, ud, w = y
+            a = a0 if const else hor(t)
+            ge = ge0 if vconst else g + vert(t)
+            udd, wd, sp, cp = accel(u, phi, ud, w, a, ge)
+            # pivot force = y row of M v_dot - f, with the effective weight M_t g_e
+            ydd = -sb * cp * wd + sb * sp * w * w
+            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
+            lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + Mt * ge
+            return a, udd, wd, sp, cp, lam, Mxp, Myp
+
+        def monitors(t, y):
+            lam = forces(t, y)[5]
+            phi = y[1]
+            margin = HALF_PI - abs(phi)
+            return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
+
+        def totals(t, y):
+            a, udd, wd, sp, cp, lam_N, Mxp, Myp = forces(t, y)
+            u, phi, ud, w = y
+            ww = w * w
             xdd = sb * sp * wd + sb * cp * ww
             lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
             return lam_N, lam_T

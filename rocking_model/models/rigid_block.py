@@ -1,7 +1,8 @@
 """Rigid rocking block (Giouvanidis & Dimitrakopoulos 2017, Sect. 2; Housner 1963).
 
 Rectangular block of half-width b [m], half-height h [m] and mass m [kg] on a rigid ground moving
-horizontally with acceleration ag [m/s2]. Full coordinates q = [x, y, phi]: centroid position in the ground
+horizontally with acceleration ag [m/s2] (positive along +x) and vertically with ag_v [m/s2] (positive upward:
+in the ground frame the inertial force -m ag_v along +y, an effective gravity g + ag_v). Full coordinates q = [x, y, phi]: centroid position in the ground
 frame (y absolute, y = h at rest) and rotation phi, positive counter-clockwise; phi > 0 pivots on the left
 corner. Corner i sits at body coordinates (s_i b, -h), s = (-1, +1).
 """
@@ -111,9 +112,10 @@ class RigidBlock(RockingModel):
     def inverse_mass_matrix(self, q):
         return self._Minv
 
-    def forces(self, q, v, ag):
-        # ground frame: inertial force -m ag along x, gravity along -y
-        return np.array([-self.m * ag, -self.m * self.g, 0.0])
+    def forces(self, q, v, ag, ag_v=0.0):
+        """[N]: ground frame: inertial force -m ag along x, gravity and the inertial force of the vertical
+        ground acceleration, -m (g + ag_v), along y (ag, ag_v [m/s2]; ag_v positive upward)."""
+        return np.array([-self.m * ag, -self.m * (self.g + ag_v), 0.0])
 
     # ------------------------------------------------------------------ contact relation
     def gaps(self, q):
@@ -181,20 +183,23 @@ class RigidBlock(RockingModel):
         jd = np.array([(s * b * cp + h * sp) * w * w, (s * b * sp - h * cp) * w * w, 0.0])
         return J, jd
 
-    def rocking_acceleration(self, phi: float, ag: float, s: int) -> float:
-        """phi_ddot on pivot s (-1 left, +1 right): p^2 [(ag/g) cos(alpha + s phi) + s sin(alpha + s phi)]."""
+    def rocking_acceleration(self, phi: float, ag: float, s: int, ag_v: float = 0.0) -> float:
+        """phi_ddot [rad/s2] on pivot s (-1 left, +1 right):
+        p^2 [(ag/g) cos(alpha + s phi) + (1 + ag_v/g) s sin(alpha + s phi)], ag and ag_v [m/s2] (ag_v positive
+        upward: the effective gravity g + ag_v scales the restoring moment)."""
         a = self._alpha + s * phi
-        return self._p ** 2 * ((ag / self.g) * math.cos(a) + s * math.sin(a))
+        # ((g + ag_v) / g) is exactly 1 for ag_v = 0: the same result as without the vertical component
+        return self._p ** 2 * ((ag / self.g) * math.cos(a) + ((self.g + ag_v) / self.g) * s * math.sin(a))
 
-    def reduced_acceleration(self, mode, r, r_dot, ag):
+    def reduced_acceleration(self, mode, r, r_dot, ag, ag_v=0.0):
         if mode == Mode.FULL:
             return np.zeros(0)
         if mode == Mode.FLIGHT:
-            return np.array([-ag, -self.g, 0.0])
-        return np.array([self.rocking_acceleration(float(r[0]), ag, pivot_sign(mode))])
+            return np.array([-ag, -(self.g + ag_v), 0.0])
+        return np.array([self.rocking_acceleration(float(r[0]), ag, pivot_sign(mode), ag_v)])
 
-    def contact_forces(self, mode, q, v, ag):
-        m, g = self.m, self.g
+    def contact_forces(self, mode, q, v, ag, ag_v=0.0):
+        m, g = self.m, self.g + ag_v       # the effective gravity
         if mode == Mode.FULL:
             # vertical and moment equilibrium with the horizontal sticking force m ag at y = -h
             d = 0.5 * m * ag * self.h / self.b
@@ -204,7 +209,7 @@ class RigidBlock(RockingModel):
         # vertical Newton's law of the centroid: lambda_N = m (y_ddot + g)
         s = pivot_sign(mode)
         phi, w = float(q[2]), float(v[2])
-        acc = self.rocking_acceleration(phi, ag, s)
+        acc = self.rocking_acceleration(phi, ag, s, ag_v)
         y_dd = (-s * self.b * math.cos(phi) - self.h * math.sin(phi)) * acc + \
             (s * self.b * math.sin(phi) - self.h * math.cos(phi)) * w * w
         out = np.zeros(2)
@@ -225,6 +230,8 @@ class RigidBlock(RockingModel):
     def mode_closures(self, mode, ag):
         """(rhs, monitors, totals) in closed form; while rocking the totals reuse what the monitors computed at
         the same (t, y)."""
+        if ag.vertical is not None:
+            return self._vertical_closures(mode, ag)
         m, g, b, h = self.m, self.g, self.b, self.h
         const = ag.constant
         a0 = ag.value if const else 0.0
@@ -281,6 +288,73 @@ class RigidBlock(RockingModel):
                 monitors(t, y)            # (fills ``last``)
             a, acc, sp, cp, lam = last[2]
             w = y[1]
+            x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
+            return m * g * lam, m * (x_dd + a)
+        return rhs, monitors, totals
+
+    def _vertical_closures(self, mode, ag):
+        """`mode_closures` under a ground motion with a vertical component ag_v(t) = ag.vertical(t): the same
+        closed forms with the effective gravity g_e = g + ag_v(t) where gravity acts (the normalisations by the
+        weight m g stay). Written so that ag_v = 0 gives the same floating-point operations (g + 0.0 == g,
+        g_e / g == 1.0) and the same results bit for bit."""
+        m, g, b, h = self.m, self.g, self.b, self.h
+        const = ag.constant
+        a0 = ag.value if const else 0.0
+        vert = ag.vertical
+        vconst = vert.constant
+        ge0 = g + vert.value if vconst else 0.0
+        hor = ag.horizontal
+        if mode == Mode.FULL:
+            def rhs(t, y):
+                return []
+
+            def monitors(t, y):
+                a = a0 if const else hor(t)
+                ge = ge0 if vconst else g + vert(t)
+                # the corners' normal forces / (m g): 0.5 m g_e +- 0.5 m ag h / b
+                d = 0.5 * a * h / b / g
+                c = 0.5 * (ge / g)
+                return [c + d, c - d, HALF_PI]
+
+            def totals(t, y):
+                return m * (ge0 if vconst else g + vert(t)), m * (a0 if const else hor(t))
+            return rhs, monitors, totals
+        if mode == Mode.FLIGHT:
+            def rhs(t, y):
+                return [y[3], y[4], y[5], -(a0 if const else hor(t)), -(ge0 if vconst else g + vert(t)), 0.0]
+
+            def monitors(t, y):
+                yc, phi = y[1], y[2]
+                bs, hc = b * math.sin(phi), h * math.cos(phi)
+                L = self._R
+                return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
+            return rhs, monitors, None
+        s = pivot_sign(mode)
+        p2, al = self._p ** 2, self._alpha
+        pivot_first = s < 0
+
+        def accel(t, phi):
+            a = a0 if const else hor(t)
+            ge = ge0 if vconst else g + vert(t)
+            x = al + s * phi
+            return a, ge, p2 * (a / g * math.cos(x) + (ge / g) * s * math.sin(x))
+
+        def rhs(t, y):
+            return [y[1], accel(t, y[0])[2]]
+
+        def monitors(t, y):
+            phi, w = y
+            a, ge, acc = accel(t, phi)
+            sp, cp = math.sin(phi), math.cos(phi)
+            # lambda_N / (m g) = (y_dd + g_e) / g
+            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + ge / g
+            return [lam, -s * phi, HALF_PI - abs(phi)] if pivot_first else [-s * phi, lam, HALF_PI - abs(phi)]
+
+        def totals(t, y):
+            phi, w = y
+            a, ge, acc = accel(t, phi)
+            sp, cp = math.sin(phi), math.cos(phi)
+            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + ge / g
             x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
             return m * g * lam, m * (x_dd + a)
         return rhs, monitors, totals

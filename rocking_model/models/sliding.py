@@ -67,9 +67,10 @@ def shift_of(model: "RockingModel", mode, q) -> float:
     return float(q[model.slide_index]) - float(model.embed(mode, r, rd)[0][model.slide_index])
 
 
-def slide_motion(model: "RockingModel", mode, q, v, ag: float) -> tuple[np.ndarray, np.ndarray]:
+def slide_motion(model: "RockingModel", mode, q, v, ag: float, ag_v: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(a, tau): the full acceleration of sliding ``mode`` at (q, v) and the friction magnitude
-    tau = mu lambda_N of each closed corner (in the order of ``model.closed_of(mode)``)."""
+    tau = mu lambda_N of each closed corner (in the order of ``model.closed_of(mode)``); ag, ag_v [m/s2] the
+    ground accelerations (ag_v positive upward: the normal forces, hence the friction, carry g + ag_v)."""
     stick, sigma = SLIDING[mode]
     closed = list(model.closed_of(stick))
     W_N, W_T = model.contact_jacobians(q)
@@ -77,7 +78,7 @@ def slide_motion(model: "RockingModel", mode, q, v, ag: float) -> tuple[np.ndarr
     Minv = model.inverse_mass_matrix(q)
     inv_mu = 0.0 if math.isinf(model.mu) else 1.0 / model.mu
     C = inv_mu * W_N[:, closed] - sigma * W_T[:, closed]
-    a_free = Minv @ model.forces(q, v, ag)
+    a_free = Minv @ model.forces(q, v, ag, ag_v)
     MC = Minv @ C
     A = W_N[:, closed].T @ MC
     rhs = -(W_N[:, closed].T @ a_free + a_N[closed])
@@ -88,10 +89,10 @@ def slide_motion(model: "RockingModel", mode, q, v, ag: float) -> tuple[np.ndarr
     return a_free + MC @ tau, tau
 
 
-def slide_acceleration(model: "RockingModel", mode, r, r_dot, ag: float) -> np.ndarray:
-    """r_ddot of sliding ``mode`` (see the module docstring)."""
+def slide_acceleration(model: "RockingModel", mode, r, r_dot, ag: float, ag_v: float = 0.0) -> np.ndarray:
+    """r_ddot of sliding ``mode`` (see the module docstring); ag, ag_v [m/s2]."""
     q, v = slide_embed(model, mode, r, r_dot)
-    a, _ = slide_motion(model, mode, q, v, ag)
+    a, _ = slide_motion(model, mode, q, v, ag, ag_v)
     J, jd = slide_jacobian(model, mode, r, r_dot)
     return np.linalg.lstsq(J, a - jd, rcond=None)[0]
 
@@ -109,22 +110,26 @@ def slide_functions(model: "RockingModel", mode, ag):
     """(rhs, monitors) of sliding ``mode`` on lists of floats (`RockingModel.mode_functions`). Monitors:
     per contact the friction magnitude tau / force_scale of a closed corner (>= 0: it stays on the ground)
     or the stick mode's opening measure of an open one; then the slip velocity sigma x_s_dot / sqrt(g L)
-    (it stops or reverses at zero); last the overturning margin."""
+    (it stops or reverses at zero); last the overturning margin. ``ag`` is a GroundMotion; its vertical
+    component (``ag.vertical``, ag_v [m/s2] positive upward) enters too."""
+    from .base import vertical_of
+
     stick, sigma = SLIDING[mode]
     closed = model.closed_of(stick)
     nc = model.n_contacts
     F, V = model.force_scale, math.sqrt(model.g * model.length_scale)
     a_of = (lambda t: ag.value) if ag.constant else ag
+    av_of = vertical_of(ag)
     _, stick_monitors = model.mode_functions(stick, ag)
     k = len(slide_dofs(model, mode))
 
     def rhs(t, y):
         r, rd = np.array(y[:k]), np.array(y[k:])
-        return list(y[k:]) + slide_acceleration(model, mode, r, rd, a_of(t)).tolist()
+        return list(y[k:]) + slide_acceleration(model, mode, r, rd, a_of(t), av_of(t)).tolist()
 
     def monitors(t, y):
         q, v = slide_embed(model, mode, y[:k], y[k:])
-        _, tau = slide_motion(model, mode, q, v, a_of(t))
+        _, tau = slide_motion(model, mode, q, v, a_of(t), av_of(t))
         # the open corners' opening measures of the stick mode do not depend on the offset
         base = stick_monitors(t, list(y[:k - 1]) + list(y[k:2 * k - 1]))
         out = [float(tau[closed.index(i)]) / F if i in closed else base[i] for i in range(nc)]
@@ -132,10 +137,11 @@ def slide_functions(model: "RockingModel", mode, ag):
     return rhs, monitors
 
 
-def force_totals(model: "RockingModel", mode, q, v, ag: float) -> tuple[float, float]:
-    """(sum lambda_N, sum lambda_T) [N] of the closed corners of the sticking ``mode`` at (q, v)."""
+def force_totals(model: "RockingModel", mode, q, v, ag: float, ag_v: float = 0.0) -> tuple[float, float]:
+    """(sum lambda_N, sum lambda_T) [N] of the closed corners of the sticking ``mode`` at (q, v); ag, ag_v
+    [m/s2]."""
     r, rd = model.reduce(mode, q, v)
     J, jd = model.mode_jacobian(mode, r, rd)
-    a = J @ model.reduced_acceleration(mode, r, rd, ag) + jd if len(r) else jd
-    resid = model.mass_matrix(q) @ a - model.forces(q, v, ag)
+    a = J @ model.reduced_acceleration(mode, r, rd, ag, ag_v) + jd if len(r) else jd
+    resid = model.mass_matrix(q) @ a - model.forces(q, v, ag, ag_v)
     return float(resid[model.lift_index]), float(resid[model.slide_index])
