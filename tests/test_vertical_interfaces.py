@@ -224,3 +224,66 @@ def test_three_component_example_runs_and_plots_the_difference(tmp_path):
         assert np.array_equal(ref.phi, h_only.phi), name
     assert mod.main(["--t-end", "2", "--out", str(tmp_path / "short.png")]) == 0
     assert (tmp_path / "short.png").is_file()
+
+
+# ------------------------------------------------------------------------------------------- GroundMotionSource
+def _source(built_fmus, **start_values):
+    from rocking_model.fmi import run_fmu
+    return run_fmu(built_fmus["GroundMotionSource"], stop_time=1.0, output_interval=0.01, start_values=start_values)
+
+
+def test_source_fmu_declares_ag_v(built_fmus):
+    """The output ag_v [m/s2] and the parameters vertical, vertical_scale are declared (fmpy validates the FMU);
+    the variables of before keep their value references."""
+    fmpy = pytest.importorskip("fmpy")
+    from fmpy.validation import validate_fmu
+    path = built_fmus["GroundMotionSource"]
+    assert validate_fmu(str(path)) == []
+    md = {v.name: v for v in fmpy.read_model_description(str(path)).modelVariables}
+    assert md["ag_v"].causality == "output" and md["ag_v"].unit == "m/s2" and md["ag_v"].type == "Real"
+    assert md["vertical"].type == "String" and float(md["vertical_scale"].start) == 1.0
+    assert md["ag_v"].valueReference > md["ag"].valueReference
+
+
+def test_source_fmu_outputs_the_vertical_component_of_a_record(built_fmus, tmp_path):
+    """ag_v is the record's third CSV column, or its second file, times scale and vertical_scale, at the
+    communication points (linear between the samples, as ag); 0 for a motion without one."""
+    t = np.round(np.arange(0.0, 1.0 + 1e-9, 0.02), 12)
+    a = 2.0 * np.sin(2 * np.pi * t)
+    v = 1.5 * np.cos(3 * np.pi * t)
+    three = write_csv(tmp_path / "three.csv", t, a, units="cm/s2", ag_v=v)          # written in cm/s2
+    res = _source(built_fmus, motion=1, record=str(three), scale=2.0, vertical_scale=-0.5)
+    np.testing.assert_allclose(res["ag"], 2.0 * np.interp(res["time"], t, a), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res["ag_v"], -1.0 * np.interp(res["time"], t, v), rtol=0, atol=1e-12)
+    assert np.abs(res["ag_v"]).max() > 1.4
+    h = write_at2(tmp_path / "H.AT2", t, a)
+    up = write_at2(tmp_path / "UP.AT2", t, v)
+    pair = _source(built_fmus, motion=1, record=str(h), vertical=str(up))
+    np.testing.assert_allclose(pair["ag_v"], np.interp(pair["time"], t, v), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(pair["ag"], np.interp(pair["time"], t, a), rtol=0, atol=1e-12)
+    for plain in (_source(built_fmus, motion=1, record=str(h)), _source(built_fmus, A=3.0)):
+        assert np.all(plain["ag_v"] == 0.0) and np.any(plain["ag"] != 0.0)
+
+
+@pytest.mark.parametrize("start_values, fragment", [
+    (dict(motion=0, vertical="UP.AT2"), "vertical = 'UP.AT2': a vertical record needs motion = 1"),
+    (dict(motion=1, vertical_scale=11.0), "vertical_scale = 11 is out of range; allowed range [-10, 10]"),
+    (dict(motion=1, vertical="V10.AT2"), "V10.AT2: DT = 0.01 s, but the horizontal component"),
+    (dict(motion=1, vertical="missing.AT2"), "no such file"),
+    (dict(motion=1, vertical="UP.AT2", scale=400.0),
+     "ag_v: the ground motion's peak |ag_v| = 1200 m/s2 is out of range"),
+])
+def test_source_fmu_refuses_a_bad_vertical_component(built_fmus, tmp_path, start_values, fragment):
+    """The vertical component gets the checks of ag: a file of another time step, a missing file, a scale out
+    of range and values beyond AG_MAX (1000 m/s2) are errors naming the parameter, the file or ag_v."""
+    from rocking_model.fmi import FMUError
+    t = np.round(np.arange(0.0, 1.0 + 1e-9, 0.005), 12)
+    write_at2(tmp_path / "H.AT2", t, np.sin(t))
+    write_at2(tmp_path / "UP.AT2", t, 3.0 * np.ones_like(t))
+    write_at2(tmp_path / "V10.AT2", t[::2], np.sin(t[::2]))
+    values = dict(start_values, record=str(tmp_path / "H.AT2"))
+    if "vertical" in values and values.get("motion") == 1:
+        values["vertical"] = str(tmp_path / values["vertical"])
+    with pytest.raises(FMUError) as exc:
+        _source(built_fmus, **values)
+    assert fragment in str(exc.value)
