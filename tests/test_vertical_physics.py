@@ -374,12 +374,15 @@ def test_contact_problem_returns_flight_when_g_plus_ag_v_is_negative(model_kind,
 @pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
 @pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("init", [{}, dict(phi_0=0.05)])
-def test_flight_under_a_downward_pulse(model_kind, scheme, init):
-    """ag_v = -1.5 g for 0.15 s (the ground falls faster than g): the body leaves the ground from full contact
+@pytest.mark.parametrize("kind", ["rectangular", "sine"])
+def test_flight_under_a_downward_pulse(model_kind, scheme, init, kind):
+    """ag_v = -1.5 g for 0.15 s, or a one-sine pulse of -1.5 g below -g from 0.146 s to 0.253 s (the ground falls
+    faster than g; a jump, or the normal forces crossing zero): the body leaves the ground from full contact
     and from rocking, flies (outputs finite, no corner below the ground beyond PEN_TOL), and lands again
     after the pulse."""
     model = MODELS[model_kind]()
-    pulse = RectangularPulse(-1.5 * model.g, 0.15, t0=0.1)
+    pulse = RectangularPulse(-1.5 * model.g, 0.15, t0=0.1) if kind == "rectangular" else \
+        SinePulse(-1.5 * model.g, 2.0 * math.pi / 0.4, t0=0.1)
     sim = Simulator(model, scheme, **init, **PY)
     flew, y_max, worst = False, 0.0, 0.0
     impacts_after = None
@@ -394,7 +397,7 @@ def test_flight_under_a_downward_pulse(model_kind, scheme, init):
             y_max = max(y_max, out["y"])
         if t > 0.25 and impacts_after is None:
             impacts_after = out["impacts"]
-    assert flew and y_max > 0.01, y_max
+    assert flew and y_max > (0.01 if kind == "rectangular" else 1e-3), y_max
     assert worst <= PEN_TOL, worst
     out = sim.outputs()
     assert out["impacts"] > impacts_after             # it came down again
@@ -467,6 +470,7 @@ def scene(draw):
     return model, init, TwoComponentMotion(h, v), draw(st.sampled_from(SCHEMES))
 
 
+@pytest.mark.filterwarnings("ignore::rocking_model.SolverWarning")    # (an inexact LCP is allowed: reported)
 @settings(max_examples=40, **SETTINGS)
 @given(scene())
 def test_random_scenes_with_both_components(case):
