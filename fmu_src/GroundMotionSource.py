@@ -1,10 +1,11 @@
-"""FMI 2.0 co-simulation FMU that outputs a horizontal ground acceleration ag(t) (no inputs).
+"""FMI 2.0 co-simulation FMU that outputs a horizontal ground acceleration ag(t) and a vertical one ag_v(t)
+(positive upward; 0 without a vertical component) (no inputs).
 
 Thin wrapper: the motion is chosen from the parameters by `rocking_model.cosim.ground_motion_from_parameters`
 -- the pulse by `rocking_model.ground_motion.pulse_from_parameters` and the record file by
 `rocking_model.records` (PEER AT2 and CSV, units from the file), both exactly as the ``rocking`` CLI and the
 ensembles build them; the FMI plumbing is `rocking_model.fmi`.
-At every communication point t the output is ag(t); an importer that holds it over the next step (any
+At every communication point t the outputs are ag(t) and ag_v(t); an importer that holds it over the next step (any
 fixed-step master) drives a connected rocking FMU exactly like a standalone run with the table ag(t_n).
 """
 from rocking_model.fmi import DefaultExperiment, Fmi2Status, RockingSlave, Var
@@ -18,7 +19,9 @@ class GroundMotionSource(RockingSlave):
                    "(motion = 0: A sin(omega_p (t - t_start)) for one period) or of a sampled record (motion = "
                    "1: a PEER .AT2 file, a two-column .csv/.txt/.dat/.tsv file time [s], acceleration in the "
                    "units its header states, or synthetic[:seed]; linear interpolation, 0 outside), times "
-                   "scale. ag is the value at the communication point.")
+                   "scale. ag is the value at the communication point. ag_v is the record's vertical "
+                   "component (a third CSV column, or the file vertical; positive upward) times scale and "
+                   "vertical_scale, 0 when it has none.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
     freeze_output = None
 
@@ -42,6 +45,16 @@ class GroundMotionSource(RockingSlave):
                         "ft/s2: the units of a CSV file that states none (an error if it states others), or "
                         "they replace those on the 3rd line of an AT2 file"),
         Var("ag", "output", unit="m/s2", description="Horizontal ground acceleration, positive in +x"),
+        Var("vertical", "parameter", "", type="String",
+            description="Vertical component for motion = 1: '' = the record's third CSV column if it has one, "
+                        "else none (ag_v = 0); or a second file (.AT2, or a two-column .csv/.txt/.dat/.tsv in the "
+                        "same units rules as record) holding ag_v, positive upward, on the record's time step "
+                        "(the shorter of the two padded with zeros)"),
+        Var("vertical_scale", "parameter", 1.0, unit="1",
+            description="Scale factor applied to the vertical component (after scale), in [-10, 10]"),
+        Var("ag_v", "output", unit="m/s2",
+            description="Vertical ground acceleration, positive upward (0 when the motion has no vertical "
+                        "component)"),
     )
 
     def create_simulator(self, p, t0):

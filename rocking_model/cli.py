@@ -3,6 +3,7 @@
     rocking simulate --model rigid --b 0.2 --h 1.0 --pulse sine --amplitude 3 --frequency 2 --out results/
         (writes results/rigid_b0.2_h1_sine-A3ms2-f2Hz.csv and .png; --name to choose, --force to overwrite)
     rocking simulate --record RSN6_IMPVALL.I_I-ELC180.AT2 --scale 1.5 --scheme moreau_jean
+    rocking simulate --record H.AT2 --vertical UP.AT2 --vertical-scale 1.2   (vertical ag_v, positive upward)
     rocking ensemble --pulse sine --amplitude-ratios 1:6:11 --frequency-ratios 1:10:10 --workers 2
     rocking build-fmu [--dest dist]          (source checkout only)
     rocking benchmark [--quick] [--ensemble] (source checkout only)
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .ensemble import AG_V_SCALE_MAX as VERTICAL_SCALE_MAX   # [1] range of --vertical-scale(s): ag_v_scale's
 from .ground_motion import PULSES
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -146,6 +148,9 @@ def scene_name(args) -> str:
     if args.record:
         rec = str(args.record)
         parts.append(rec.replace(":", "-") if rec.startswith("synthetic") else Path(rec).stem)
+        if args.vertical:
+            ver = str(args.vertical)
+            parts.append("V-" + (ver.replace(":", "-") if ver.startswith("synthetic") else Path(ver).stem))
     elif args.pulse:
         unit = (args.amplitude_units or "").replace("/", "").replace("2", "2")
         motion = f"{args.pulse}-A{args.amplitude:g}{unit}" if args.amplitude is not None else args.pulse
@@ -160,6 +165,8 @@ def scene_name(args) -> str:
         parts.append("free")
     if args.scale != 1.0:
         parts.append(f"x{args.scale:g}")
+    if args.vertical_scale is not None:
+        parts.append(f"vx{args.vertical_scale:g}")
     if args.resample:
         parts.append(f"dt{args.resample:g}")
     if args.scheme != "event_driven":
@@ -168,25 +175,49 @@ def scene_name(args) -> str:
     return "".join(c if c.isalnum() or c in "._-+" else "_" for c in text)
 
 
+def _vertical_scale(args) -> float | None:
+    """--vertical-scale checked: None when not given."""
+    from .validation import check_real
+
+    if args.vertical_scale is None:
+        return None
+    return check_real("--vertical-scale", args.vertical_scale, lo=-VERTICAL_SCALE_MAX, hi=VERTICAL_SCALE_MAX)
+
+
 def _motion(args):
-    """(GroundMotion, description, default t_end [s])."""
+    """(GroundMotion, description, default t_end [s]). The vertical component ag_v: the record's (a third CSV
+    column, or --vertical FILE) times --vertical-scale (default 1), or, for a record without one and for a
+    pulse, --vertical-scale times the horizontal motion (default 0: none)."""
     from . import ground_motion as gm
     from .records import load_motion, unit_factor
     from .validation import check_real
 
     if args.record and args.pulse:
         raise UsageError("give either --record or --pulse, not both")
+    vs = _vertical_scale(args)
+    if args.vertical and not args.record:
+        raise UsageError("--vertical (the vertical component of a record) needs --record; a pulse takes "
+                         "--vertical-scale (ag_v = scale x the pulse)")
     if args.record:
-        rec = load_motion(args.record, args.units)
+        rec = load_motion(args.record, args.units, vertical=args.vertical)
         if args.resample:
             rec = rec.resampled(args.resample)
         if args.scale != 1.0:
             rec = rec.scaled(args.scale)
+        if vs is not None:
+            if vs == 0.0:
+                rec = rec.horizontal             # no vertical component: the horizontal run, bit for bit
+            elif rec.vertical is not None:
+                rec = rec.scaled_vertical(vs)
+            else:
+                rec = rec.with_vertical(vs * rec.ag)
         desc = f"record {rec.name}: {rec.t.size} samples, dt = {rec.dt:g} s, PGA = {rec.pga:.3g} m/s2"
+        if rec.vertical is not None:
+            desc += f", vertical {rec.vertical.name}: PGA_v = {rec.pga_v:.3g} m/s2"
         return rec, desc, float(rec.t[-1]) + 5.0
     if not args.pulse:
-        if args.scale != 1.0 or args.resample:
-            raise UsageError("--scale and --resample apply to a --record or --pulse")
+        if args.scale != 1.0 or args.resample or vs is not None:
+            raise UsageError("--scale, --resample and --vertical-scale apply to a --record or --pulse")
         return gm.ConstantMotion(0.0), "no ground motion", 5.0
     if args.amplitude is None:
         raise UsageError("--pulse needs --amplitude (in --amplitude-units, default m/s2)")
@@ -204,7 +235,11 @@ def _motion(args):
         desc = f"{args.pulse} pulse A = {m.A:.4g} m/s2, f_p = {args.frequency:g} Hz"
     if args.resample:
         m = m.resampled(args.resample)
-    return m, desc, m.support[1] + 5.0
+    end = m.support[1] + 5.0
+    if vs:
+        m = gm.TwoComponentMotion(m, m.scaled(vs))
+        desc += f", vertical {vs:g} x the pulse"
+    return m, desc, end
 
 
 # --------------------------------------------------------------------------------------------- commands
@@ -239,9 +274,14 @@ def cmd_simulate(args) -> int:
     csv_path = targets[0]
     names = list(res.values)
     ag = np.array([motion(float(t)) for t in res.t])
-    cols = [res.t, ag] + [np.asarray(res.values[n], dtype=float) for n in names]
+    cols = [res.t, ag]
+    header = ["time [s]", "ag [m/s2]"]
+    if motion.vertical is not None:             # the vertical ground acceleration, positive upward
+        cols.append(np.array([motion.vertical(float(t)) for t in res.t]))
+        header.append("ag_v [m/s2]")
+    cols += [np.asarray(res.values[n], dtype=float) for n in names]
     units = {**{p.name: p.unit for p in model.OUTPUTS}, **UNITS_OF}
-    header = ["time [s]", "ag [m/s2]"] + [f"{n} [{units[n]}]" if n in units else n for n in names]
+    header += [f"{n} [{units[n]}]" if n in units else n for n in names]
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.10g")
 
     rigid = args.model == "rigid"
@@ -310,12 +350,23 @@ def cmd_ensemble(args) -> int:
     if bool(args.record) == bool(args.pulse):
         raise UsageError("give either --record FILE... (with --scales) or --pulse KIND (with amplitudes and "
                          "frequencies)")
+    vscales = _flat(args.vertical_scales)
+    if vscales is not None:
+        from .validation import check_real
+        vscales = [check_real("--vertical-scales", v, lo=-VERTICAL_SCALE_MAX, hi=VERTICAL_SCALE_MAX)
+                   for v in vscales]
+    if args.vertical and not args.record:
+        raise UsageError("--vertical (the vertical records) needs --record; a pulse grid takes --vertical-scales")
+    if args.vertical and len(args.vertical) != len(args.record):
+        raise UsageError(f"--vertical: give one vertical record per --record ({len(args.record)}), got "
+                         f"{len(args.vertical)} ('' for a record without one)")
     if args.record:
-        cases = E.record_cases(args.record, _flat(args.scales) or [1.0], units=args.units, **common)
+        cases = E.record_cases(args.record, _flat(args.scales) or [1.0], units=args.units, vertical=args.vertical,
+                               ag_v_scales=vscales, **common)
     else:
         cases = E.pulse_cases(args.pulse, amplitude_ratios=_flat(args.amplitude_ratios),
                               frequency_ratios=_flat(args.frequency_ratios), amplitudes=_flat(args.amplitudes),
-                              frequencies=_flat(args.frequencies), **common)
+                              frequencies=_flat(args.frequencies), ag_v_scales=vscales or [0.0], **common)
     where = f"on the Dask cluster at {args.address}" if args.address else \
         ("serially (no Dask)" if args.workers == 0 else f"on a local Dask cluster of {args.workers} worker(s)")
     print(f"{len(cases)} cases -> {args.out}, {where}")
@@ -416,7 +467,14 @@ def build_parser() -> argparse.ArgumentParser:
                                    "<out>/<name>.png (phi, ag and contact state over time); print a summary.")
     _model_options(s)
     g = s.add_argument_group("ground motion (a record or a pulse; none: free rocking)")
-    g.add_argument("--record", help="PEER .AT2 or two-column .csv file, or synthetic[:seed]")
+    g.add_argument("--record", help="PEER .AT2 or .csv file (time, ag and optionally a third column, the "
+                                    "vertical ag_v), or synthetic[:seed]")
+    g.add_argument("--vertical", metavar="FILE", help="the record's vertical component ag_v (positive upward): a "
+                   "second .AT2 or two-column .csv file of the same time step (the shorter one padded with zeros)")
+    g.add_argument("--vertical-scale", dest="vertical_scale", type=float, metavar="F",
+                   help=f"factor on the vertical component [1], in [-{VERTICAL_SCALE_MAX:g}, {VERTICAL_SCALE_MAX:g}] "
+                        "(default 1); for a record without one or a pulse: ag_v = F x the horizontal motion "
+                        "(default 0: none)")
     g.add_argument("--units", help="units of a CSV record when its header does not state them (g, m/s2, cm/s2...)")
     g.add_argument("--pulse", choices=PULSES)
     g.add_argument("--amplitude", type=float, help="pulse amplitude (peak) in --amplitude-units")
@@ -457,6 +515,12 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--record", nargs="+", help="record files (.AT2, .csv) or synthetic:<seed>")
     g.add_argument("--units", help="units of CSV records without stated units")
     g.add_argument("--scales", type=_values, nargs="+", help="scale factors on the records (default 1)")
+    g.add_argument("--vertical", nargs="+", metavar="FILE", help="one vertical record (ag_v, positive upward) per "
+                   "--record, '' for none (.AT2 or two-column .csv, the same time step as its record)")
+    g.add_argument("--vertical-scales", dest="vertical_scales", type=_values, nargs="+", metavar="F",
+                   help=f"factors on the vertical components [1], in [-{VERTICAL_SCALE_MAX:g}, "
+                        f"{VERTICAL_SCALE_MAX:g}] (case field ag_v_scale; default 1 for records with a vertical "
+                        "component, else 0: none); without one, ag_v = F x the horizontal record or pulse")
     g.add_argument("--pulse", choices=PULSES)
     g.add_argument("--amplitude-ratios", type=_values, nargs="+", metavar="A", help="A / (g tan alpha) [1]")
     g.add_argument("--frequency-ratios", type=_values, nargs="+", metavar="W", help="omega_p / p [1]")

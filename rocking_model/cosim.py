@@ -51,15 +51,18 @@ NS = 1_000_000_000  #: nanoseconds per second (libcosim's time unit)
 #: units of a CSV record for the GroundMotionSource FMU when neither the file nor the ``units`` parameter
 #: states them (the FMU's historical reading)
 RECORD_DEFAULT_UNITS = "m/s2"
+#: [1] allowed range of the GroundMotionSource parameter vertical_scale (the ensembles' ag_v_scale range)
+VERTICAL_SCALE_MAX = 10.0
 
 
-def load_record(path, units: Optional[str] = None) -> Record:
+def load_record(path, units: Optional[str] = None, vertical: Optional[str] = None) -> Record:
     """Read the ground-motion record of the GroundMotionSource FMU with `rocking_model.records` (the reader
     of the CLI and the ensembles, with the same errors): a PEER ``.AT2`` file (units from its line 3, else
     g), a two-column ``.csv``/``.txt``/``.dat``/``.tsv`` file (time [s], acceleration; units from the header
-    ``time [s], ag [cm/s2]`` or a ``# units: g`` comment, else ``units``, else m/s2) or ``synthetic[:seed]``.
+    ``time [s], ag [cm/s2]`` or a ``# units: g`` comment, else ``units``, else m/s2; a third column is the
+    vertical ag_v) or ``synthetic[:seed]``; ``vertical`` a second such file holding the vertical component.
     ``units`` that contradict the units the file states are an error. Returns a `Record` (ag in m/s2)."""
-    return load_motion(str(path), units or None, default_units=RECORD_DEFAULT_UNITS)
+    return load_motion(str(path), units or None, default_units=RECORD_DEFAULT_UNITS, vertical=vertical or None)
 
 
 def ground_motion_from_parameters(p: Mapping[str, Any]) -> GroundMotion:
@@ -67,55 +70,67 @@ def ground_motion_from_parameters(p: Mapping[str, Any]) -> GroundMotion:
     (``A`` [m/s2], ``omega_p`` [rad/s], ``t_start`` [s], built by
     `rocking_model.ground_motion.pulse_from_parameters` like the CLI's and the ensembles' pulses), 1 = the
     record ``record`` (a file or ``synthetic[:seed]``, read by `load_record` in ``units``; "" = as the file
-    states, else m/s2); both multiplied by ``scale`` [1]. Raises ValueError naming the parameter and its
-    allowed values."""
+    states, else m/s2); both multiplied by ``scale`` [1]. A record's vertical component ag_v (its third CSV
+    column, or the file ``vertical``) is multiplied by ``vertical_scale`` [1] too (default 1); a motion
+    without one has ag_v = 0. Raises ValueError naming the parameter and its allowed values."""
     motion = p.get("motion", 0)
     scale = check_real("scale", p.get("scale", 1.0))
+    vertical_scale = check_real("vertical_scale", p.get("vertical_scale", 1.0), lo=-VERTICAL_SCALE_MAX,
+                                hi=VERTICAL_SCALE_MAX)
+    vertical = str(p.get("vertical", "") or "")
     units = str(p.get("units", "") or "")
     if units:
         unit_factor(units)          # a misspelt unit is an error whatever the motion
     if motion == 0:
+        if vertical:
+            raise ValueError(f"vertical = {vertical!r}: a vertical record needs motion = 1 (a record)")
         return pulse_from_parameters("sine", p["A"], p["omega_p"], p.get("t_start", 0.0), scale=scale)
     if motion == 1:
         record = str(p.get("record", ""))
         if not record:
             raise ValueError("record = '': motion = 1 needs a record file (.AT2, .csv) or synthetic[:seed]")
-        return load_record(record, units).scaled(scale)
+        rec = load_record(record, units, vertical).scaled(scale)
+        if rec.vertical is not None and vertical_scale != 1.0:
+            rec = rec.scaled_vertical(vertical_scale)
+        return rec
     raise ValueError(f"motion = {motion!r} is not supported; allowed values: 0 (sine pulse), 1 (record)")
 
 
 class MotionSource:
-    """A ground motion as a stepwise component (``t``, ``advance(t_end)``, ``outputs()``): the output
-    ``ag`` at a communication point t is ag(t), exactly as the standalone FMU would be driven by a table
+    """A ground motion as a stepwise component (``t``, ``advance(t_end)``, ``outputs()``): the outputs
+    ``ag`` and ``ag_v`` at a communication point t are ag(t) and the vertical ag_v(t) (positive upward; 0
+    for a motion without a vertical component), exactly as the standalone FMU would be driven by a table
     sampled at the communication points.
 
-    Every value must be a finite number with |ag| <= AG_MAX (1000 m/s2): a motion whose known peak exceeds
-    it is refused here, and a step whose end value is out of range is refused by `advance` (ValueError
-    naming ag, the time kept). `get_state` / `set_state` save and load the time as plain data."""
+    Every value must be a finite number with |ag|, |ag_v| <= AG_MAX (1000 m/s2): a motion whose known peak
+    exceeds it is refused here, and a step whose end value is out of range is refused by `advance`
+    (ValueError naming ag or ag_v, the time kept). `get_state` / `set_state` save and load the time as plain
+    data."""
 
     def __init__(self, motion: GroundMotion, t0: float = 0.0):
         from .ground_motion import checked_motion
 
         self.motion = checked_motion(motion)
         self.t = check_real("t0", t0)
-        self._ag = self._value(self.t)
+        self._ag, self._ag_v = self._value(self.t)
 
-    def _value(self, t: float) -> float:
-        # self.motion is a checked motion (`checked_motion`): its values are finite and within AG_MAX, or it
-        # raises ValueError naming ag and t
-        return float(self.motion(t))
+    def _value(self, t: float) -> tuple:
+        # self.motion is a checked motion (`checked_motion`, both components): its values are finite and within
+        # AG_MAX, or it raises ValueError naming ag (or ag_v) and t
+        vertical = self.motion.vertical
+        return float(self.motion(t)), (0.0 if vertical is None else float(vertical(t)))
 
     def advance(self, t_end: float) -> None:
-        """Move to ``t_end`` [s]; the output becomes ag(t_end). Raises ValueError (state kept) for a t_end
-        before the current time or not finite, or an ag(t_end) out of range."""
+        """Move to ``t_end`` [s]; the outputs become ag(t_end) and ag_v(t_end). Raises ValueError (state kept)
+        for a t_end before the current time or not finite, or a value out of range."""
         t_end = check_real("t_end", t_end)
         if t_end < self.t:
             raise ValueError(f"t_end = {t_end!r} is before the current time {self.t!r}")
         value = self._value(t_end)
-        self.t, self._ag = t_end, value
+        self.t, (self._ag, self._ag_v) = t_end, value
 
     def outputs(self) -> dict:
-        return {"ag": self._ag}
+        return {"ag": self._ag, "ag_v": self._ag_v}
 
     #: the `get_state` fields
     STATE_KEYS = ("version", "model", "t")
@@ -132,7 +147,7 @@ class MotionSource:
         check_state_header(state, "MotionSource", self.STATE_KEYS)
         t = state_float(state, "t")
         value = self._value(t)
-        self.t, self._ag = t, value
+        self.t, (self._ag, self._ag_v) = t, value
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -9,6 +9,14 @@ the case ids already in the output, so an interrupted run loses nothing and resu
 its output (`OutputLock`) from start to end, so two runs never write to one output; outputs are only
 appended to, and a resume sets aside what an interruption broke (rows, parts) without losing good rows.
 
+A vertical ground acceleration ag_v [m/s2] (positive upward) enters through two case fields: ``ag_v_scale``
+[1] (0, the default, means no vertical component) and ``vertical`` (the vertical record's file for a record
+given as two files, "" otherwise). ag_v is ``ag_v_scale`` times the record's vertical component (its third CSV
+column or its ``vertical`` file) or, for a record without one and for the pulses, times the horizontal motion
+itself; the record's ``scale`` applies to both components. A case without a vertical component has the
+case id it had before these fields existed, and a result file written before them (without their columns)
+resumes: its header is completed on the first resume (`RepairWarning`).
+
 Dimensionless pulse grids follow Makris' overturning spectra: amplitude ratio A / (g tan(alpha)) and
 frequency ratio omega_p / p of the rigid block (alpha = atan(b/h), p = sqrt(3g/(4R))).
 """
@@ -41,13 +49,21 @@ SCHEMES = tuple(sorted(_SCHEME_CLASSES, key=lambda name: -_SCHEME_CLASSES[name].
 
 #: case fields, in output column order
 CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "motion", "A", "omega_p", "a_ratio", "w_ratio",
-               "record", "units", "scale", "scheme", "t_end", "output_interval", "tolerance", "dt_max")
+               "record", "units", "scale", "vertical", "ag_v_scale", "scheme", "t_end", "output_interval",
+               "tolerance", "dt_max")
+#: the case fields of the vertical ground acceleration and their values in a case without one (the rows of
+#: result files written before they existed, the cases whose ids stay those of earlier versions)
+VERTICAL_DEFAULTS = {"vertical": "", "ag_v_scale": 0.0}
+#: [1] allowed range of ag_v_scale: a vertical component up to 10 times the record's (or the horizontal's);
+#: the simulators refuse any |ag_v| above AG_MAX anyway
+AG_V_SCALE_MAX = 10.0
 #: result fields appended by `run_case`
 RESULT_FIELDS = ("alpha", "p", "max_abs_phi", "max_phi_over_alpha", "overturned", "t_overturn", "impacts",
                  "max_abs_slip", "friction_demand", "wall_time", "error")
 FIELDS = CASE_FIELDS + RESULT_FIELDS
 
-_FLOATS = {"b", "h", "e_N", "mu", "max_abs_slip", "friction_demand", "A", "omega_p", "a_ratio", "w_ratio", "scale", "t_end", "output_interval",
+_FLOATS = {"b", "h", "e_N", "mu", "max_abs_slip", "friction_demand", "A", "omega_p", "a_ratio", "w_ratio", "scale",
+           "ag_v_scale", "t_end", "output_interval",
            "tolerance", "dt_max", "alpha", "p", "max_abs_phi", "max_phi_over_alpha", "t_overturn",
            "wall_time"}
 _INTS = {"impacts"}
@@ -59,7 +75,21 @@ def case_id(case: dict) -> str:
     key = {k: case.get(k) for k in CASE_FIELDS if k != "case_id"}
     if key.get("mu") in (None, math.inf):
         del key["mu"]             # the default law: the ids of the cases of earlier versions stay valid
+    if not _ag_v_scale(case):
+        del key["vertical"], key["ag_v_scale"]      # no vertical component: the ids of earlier versions
     return hashlib.sha1(json.dumps(key, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+
+
+def _ag_v_scale(case: dict) -> float:
+    """The case's ag_v_scale [1]; 0 when absent, empty or NaN (a case or row without a vertical component)."""
+    v = case.get("ag_v_scale")
+    if v in (None, ""):
+        return 0.0
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return v                  # kept as it is, so that the case's own check names it
+    return 0.0 if v != v else v
 
 
 def _rigid_scales(b: float, h: float, g: float = 9.81) -> tuple[float, float]:
@@ -69,8 +99,8 @@ def _rigid_scales(b: float, h: float, g: float = 9.81) -> tuple[float, float]:
 
 
 def _finish(case: dict) -> dict:
-    case = {k: case.get(k, "" if k in ("record", "units") else math.inf if k == "mu" else math.nan)
-            for k in CASE_FIELDS}
+    case = {k: case.get(k, "" if k in ("record", "units") else math.inf if k == "mu" else
+                        VERTICAL_DEFAULTS.get(k, math.nan)) for k in CASE_FIELDS}
     case["case_id"] = case_id(case)
     return case
 
@@ -103,6 +133,14 @@ def _check_case_fields(model: str, geometries, e_N, mu, t_end, output_interval, 
         solver["dt_max"].check(dt_max)
 
 
+def _check_ag_v_scales(values) -> list[float]:
+    from .validation import check_real
+    out = [check_real("ag_v_scale", v, lo=-AG_V_SCALE_MAX, hi=AG_V_SCALE_MAX) for v in values]
+    if not out:
+        raise ValueError("ag_v_scale: give at least one value")
+    return out
+
+
 def _check_list(name: str, values, lo=0.0) -> list[float]:
     from .validation import check_real
     out = [check_real(name, v, lo=lo, lo_open=True) for v in values]
@@ -116,13 +154,15 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
                 frequencies: Sequence[float] | None = None, geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),),
                 schemes: Sequence[str] = ("event_driven",), model: str = "rigid", e_N: float = 0.0,
                 mu: float = math.inf, t_end: float | None = None, output_interval: float = 0.01, tolerance: float = 1e-8,
-                dt_max: float | None = None) -> list[dict]:
-    """Grid of pulse cases: pulse ``kind`` x amplitudes x frequencies x geometries (b, h) [m] x schemes.
+                dt_max: float | None = None, ag_v_scales: Sequence[float] = (0.0,)) -> list[dict]:
+    """Grid of pulse cases: pulse ``kind`` x amplitudes x frequencies x geometries (b, h) [m] x schemes x
+    ag_v_scales.
 
     Amplitudes either as ratios A / (g tan(alpha)) or in m/s2; frequencies as ratios omega_p / p or in Hz
     (omega_p = 2 pi f). Ratios need the rigid block. t_end [s] defaults to the end of the pulse plus 15/p
     (enough for overturning after an impact). dt_max: Moreau-Jean step [s] (default 1e-3). e_N, mu: the
-    model's coefficient of restitution and friction coefficient (inf: the paper's sticking law)."""
+    model's coefficient of restitution and friction coefficient (inf: the paper's sticking law).
+    ag_v_scales: vertical components [1], in [-10, 10]: ag_v = ag_v_scale x the pulse (0, the default: none)."""
     if kind not in PULSES:
         raise ValueError(f"pulse = {kind!r} is not supported; allowed values: {', '.join(PULSES)}")
     model_class(model)                    # ValueError naming the registered models
@@ -138,11 +178,12 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
                        amplitude_ratios if amplitudes is None else amplitudes)
     freqs = _check_list("frequency ratio" if frequencies is None else "frequency",
                         frequency_ratios if frequencies is None else frequencies)
+    vscales = _check_ag_v_scales(ag_v_scales)
     for s in schemes:
         if s not in SCHEMES:
             raise ValueError(f"scheme = {s!r} is not supported; allowed values: {', '.join(SCHEMES)}")
     cases = []
-    for (b, h), scheme, a, f in itertools.product(geometries, schemes, amps, freqs):
+    for (b, h), scheme, a, f, v in itertools.product(geometries, schemes, amps, freqs, vscales):
         alpha, p = _rigid_scales(b, h) if model == "rigid" else (math.nan, math.nan)
         A = a * 9.81 * math.tan(alpha) if amplitudes is None else a
         omega_p = f * p if frequencies is None else 2.0 * math.pi * f
@@ -153,7 +194,8 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
         cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion=kind, A=A,
                                   omega_p=omega_p, a_ratio=A / (9.81 * math.tan(alpha)) if model == "rigid"
                                   else math.nan, w_ratio=omega_p / p if model == "rigid" else math.nan,
-                                  scale=1.0, scheme=scheme, t_end=float(te), output_interval=output_interval,
+                                  scale=1.0, ag_v_scale=float(v), scheme=scheme, t_end=float(te),
+                                  output_interval=output_interval,
                                   tolerance=tolerance, dt_max=math.nan if dt_max is None else dt_max)))
     return cases
 
@@ -161,27 +203,44 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
 def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, units: str | None = None,
                  geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),), schemes: Sequence[str] = ("event_driven",),
                  model: str = "rigid", e_N: float = 0.0, mu: float = math.inf, t_end: float | None = None,
-                 output_interval: float = 0.01, tolerance: float = 1e-8, dt_max: float | None = None) -> list[dict]:
+                 output_interval: float = 0.01, tolerance: float = 1e-8, dt_max: float | None = None,
+                 vertical: Sequence[str] | None = None, ag_v_scales: Sequence[float] | None = None) -> list[dict]:
     """Grid of record cases: records (file paths or ``synthetic:<seed>``) x scale factors x geometries x
-    schemes. t_end [s] defaults to the record's end plus 5 s. The records are read here once (so a bad
-    file fails before anything runs) and again, once per worker, by `run_case`."""
+    schemes x ag_v_scales. t_end [s] defaults to the record's end plus 5 s. The records are read here once
+    (so a bad file fails before anything runs) and again, once per worker, by `run_case`.
+
+    vertical: one vertical record (file or synthetic:<seed>; "" for none) per record, its vertical component
+    (see `rocking_model.records.combine`); a three-column CSV record has its own. ag_v_scales [1], in
+    [-10, 10]: ag_v = ag_v_scale x the vertical component, or x the horizontal record for a record without
+    one; default 1 for records with a vertical component, 0 (none) for the others. ``scale`` applies to
+    both components."""
     from .records import load_motion
 
     model_class(model)
     _check_case_fields(model, geometries, e_N, mu, t_end, output_interval, tolerance, dt_max)
     scales = _check_list("scale", scales)
+    records = list(records)
+    verticals = [""] * len(records) if vertical is None else ["" if v is None else str(v) for v in vertical]
+    if len(verticals) != len(records):
+        raise ValueError(f"vertical: give one vertical record per record ({len(records)}), got {len(verticals)} "
+                         "(\"\" for a record without one)")
+    if ag_v_scales is not None:
+        ag_v_scales = _check_ag_v_scales(ag_v_scales)
     for s in schemes:
         if s not in SCHEMES:
             raise ValueError(f"scheme = {s!r} is not supported; allowed values: {', '.join(SCHEMES)}")
     cases = []
-    for spec in records:
-        rec = load_motion(spec, units)
+    for spec, vspec in zip(records, verticals):
+        rec = load_motion(spec, units, vertical=vspec or None)
         spec = spec if str(spec).startswith("synthetic") else str(Path(spec).resolve())
+        vspec = vspec if not vspec or vspec.startswith("synthetic") else str(Path(vspec).resolve())
         te = t_end if t_end is not None else float(rec.t[-1]) + 5.0
-        for (b, h), scheme, s in itertools.product(geometries, schemes, scales):
+        vscales = ag_v_scales if ag_v_scales is not None else [0.0 if rec.vertical is None else 1.0]
+        for (b, h), scheme, s, v in itertools.product(geometries, schemes, scales, vscales):
             alpha, p = _rigid_scales(b, h) if model == "rigid" else (math.nan, math.nan)
             cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion="record",
-                                      record=spec, units=units or "", scale=float(s), scheme=scheme,
+                                      record=spec, units=units or "", scale=float(s), vertical=vspec,
+                                      ag_v_scale=float(v), scheme=scheme,
                                       A=rec.pga * s, a_ratio=rec.pga * s / (9.81 * math.tan(alpha)),
                                       t_end=float(te), output_interval=output_interval, tolerance=tolerance,
                                       dt_max=math.nan if dt_max is None else dt_max)))
@@ -190,22 +249,32 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
 
 # --------------------------------------------------------------------------------------------- one case
 @functools.lru_cache(maxsize=32)
-def _record(spec: str, units: str):
+def _record(spec: str, units: str, vertical: str = ""):
     from .records import load_motion
-    return load_motion(spec, units or None)
+    return load_motion(spec, units or None, vertical=vertical or None)
 
 
 def case_motion(case: dict):
-    """The GroundMotion of a case."""
+    """The GroundMotion of a case: horizontal only when its ag_v_scale is 0 (or absent), else with the vertical
+    component ag_v_scale x (the record's vertical component, or the horizontal motion)."""
     from . import ground_motion as gm
+    from .validation import check_real
 
     kind = case["motion"]
+    v = _ag_v_scale(case)
+    if v:
+        v = check_real("ag_v_scale", v, lo=-AG_V_SCALE_MAX, hi=AG_V_SCALE_MAX)
     if kind == "record":
-        return _record(case["record"], case.get("units") or "").scaled(case["scale"])
+        rec = _record(case["record"], case.get("units") or "", (case.get("vertical") or "") if v else "")
+        if not v:
+            return rec.horizontal.scaled(case["scale"])
+        rec = rec.scaled(case["scale"])
+        return rec.scaled_vertical(v) if rec.vertical is not None else rec.with_vertical(v * rec.ag)
     if kind not in PULSES:
         raise ValueError(f"motion = {kind!r} is not supported; allowed values: record, {', '.join(PULSES)}")
     # the pulse starts at t = 0 (Ricker: centred at 1.5 T_p); a rectangular pulse lasts 2 pi / omega_p
-    return gm.pulse_from_parameters(kind, case["A"], case["omega_p"], scale=case.get("scale", 1.0))
+    m = gm.pulse_from_parameters(kind, case["A"], case["omega_p"], scale=case.get("scale", 1.0))
+    return gm.TwoComponentMotion(m, m.scaled(v)) if v else m
 
 
 def case_model(case: dict):
@@ -329,6 +398,8 @@ def _parse(row: dict) -> dict:
             out[k] = v if isinstance(v, bool) else str(v).strip().lower() in ("true", "1")
         else:
             out[k] = "" if v is None else str(v)
+    for k, v in VERTICAL_DEFAULTS.items():
+        out.setdefault(k, v)          # a row of a file written before these fields existed
     return out
 
 
@@ -376,6 +447,9 @@ def _fsync_dir(path: Path) -> None:
 
 #: the header line of a CSV output
 _HEADER = ",".join(FIELDS)
+#: the columns and header of a CSV output written before the vertical fields existed (completed on resume)
+_FIELDS_BEFORE_VERTICAL = tuple(k for k in FIELDS if k not in VERTICAL_DEFAULTS)
+_HEADER_BEFORE_VERTICAL = ",".join(_FIELDS_BEFORE_VERTICAL)
 #: [lines] longest record joined when a quoted field spans lines (rows of earlier versions could hold a
 #: multi-line error message; rows are now written on one line)
 _MAX_JOIN = 20
@@ -450,6 +524,13 @@ def _repair_csv(path: Path) -> list[str]:
     data = path.read_bytes()
     text = data.decode("utf-8", "surrogateescape")
     head, sep, body = text.partition("\n")
+    notes = []
+    if head.rstrip("\r") == _HEADER_BEFORE_VERTICAL:
+        data = _add_vertical_columns(path, body)
+        text = data.decode("utf-8", "surrogateescape")
+        head, sep, body = text.partition("\n")
+        notes.append(f"{path}: written before the columns {', '.join(VERTICAL_DEFAULTS)} existed: added to its "
+                     "header and rows (no vertical component; its cases keep their ids)")
     problem = _header_problem(path, head, bool(sep))
     if problem:
         if _HEADER.startswith(head.rstrip("\r")) and not body.strip():
@@ -458,7 +539,7 @@ def _repair_csv(path: Path) -> list[str]:
         raise ValueError(problem)
     good, broken = _scan_csv(body, FIELDS)
     if not broken:
-        return []
+        return notes
     rejected = path.with_name(path.name + ".rejected")
     with open(rejected, "a", encoding="utf-8", errors="surrogateescape", newline="") as f:
         for _, raw in broken:
@@ -472,7 +553,31 @@ def _repair_csv(path: Path) -> list[str]:
     else:
         _rewrite(path, (head + "\n" + "".join(raw + "\n" for raw, _ in good)).encode("utf-8", "surrogateescape"))
     lines = ", ".join(str(n) for n, _ in broken[:10]) + (", ..." if len(broken) > 10 else "")
-    return [f"{path}: {len(broken)} broken row(s) (line {lines}) set aside in {rejected}; their cases run again"]
+    return notes + [f"{path}: {len(broken)} broken row(s) (line {lines}) set aside in {rejected}; their cases run "
+                    "again"]
+
+
+def _add_vertical_columns(path: Path, body: str) -> bytes:
+    """Rewrite a CSV output written before the vertical fields existed with today's header, each good row
+    with the fields of a case without a vertical component (`VERTICAL_DEFAULTS`; its other cells as they were)
+    and each broken row, and an unfinished last row, as they were (the repair that follows sets them aside).
+    Returns the new contents."""
+    lines = body.split("\n")
+    tail = lines.pop()
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\r\n")
+    w.writerow(FIELDS)
+    for raw in lines:
+        row = _csv_record(raw, _FIELDS_BEFORE_VERTICAL)
+        if row is None:
+            out.write(raw + "\n")
+            continue
+        cells = dict(zip(_FIELDS_BEFORE_VERTICAL, next(csv.reader([raw.rstrip("\r")]))))
+        w.writerow([cells[k] if k in cells else VERTICAL_DEFAULTS[k] for k in FIELDS])
+    out.write(tail)
+    data = out.getvalue().encode("utf-8", "surrogateescape")
+    _rewrite(path, data)
+    return data
 
 
 def _rewrite(path: Path, data: bytes) -> None:

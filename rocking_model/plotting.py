@@ -1,7 +1,8 @@
 """Plots (matplotlib, Agg backend; optional dependency: pip install 'rocking-model[plot]').
 
 - `plot_response`: rotation phi, top displacement (flexible oscillator), base slip (where the base slid),
-  ground acceleration and contact state (sliding shaded) over time, for one simulation (`response_figure`: the same as a matplotlib figure).
+  ground acceleration (and the vertical one, positive upward, with the uplift threshold it moves) and contact
+  state (sliding shaded) over time, for one simulation (`response_figure`: the same as a matplotlib figure).
   An overturning is drawn as one: the curves of the motion stop at the overturning time (marked in every
   panel), the time after it is hatched "overturned" and the contact panel shows the level "overturned"
   (`contact_levels`), never a sliding or rocking state.
@@ -98,11 +99,22 @@ def response_figure(result, ground_motion, *, title: str = "", alpha: float | No
         panel += 1
     ax = axes[panel]
     ax.plot(tf, ag, color="C1", lw=1.0, label=r"$a_g$")
-    if alpha is not None:
+    vertical = getattr(ground_motion, "vertical", None)
+    if vertical is not None:
+        # the vertical ground acceleration (positive upward) moves the uplift threshold: (g + ag_v) tan(alpha)
+        ag_v = np.array([vertical(float(x)) for x in tf])
+        ax.plot(tf, ag_v, color="C9", lw=1.0, label=r"$a_{g,v}$ (vertical, up)")
+        if alpha is not None:
+            for s in (1, -1):
+                ax.plot(tf, s * (g + ag_v) * math.tan(alpha), color="grey", ls=":", lw=0.8,
+                        label=r"$\pm (g + a_{g,v})\,\tan\alpha$ (uplift)" if s == 1 else None)
+        ax.set_ylabel("ground acc.\n" + r"$a_g$, $a_{g,v}$ [m/s$^2$]")
+    elif alpha is not None:
         for s in (1, -1):
             ax.axhline(s * g * math.tan(alpha), color="grey", ls=":", lw=0.8,
                        label=r"$\pm g\,\tan\alpha$ (uplift)" if s == 1 else None)
-    ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
+    if vertical is None:
+        ax.set_ylabel(r"ground acc. $a_g$ [m/s$^2$]")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     ax = axes[panel + 1]
     # the closed corners of each mode (sliding modes drawn on their sticking mode, shaded) up to the
@@ -134,7 +146,8 @@ def plot_response(result, ground_motion, path, *, title: str = "", alpha: float 
     overturning time), the top displacement [m] when the result has one (flexible oscillator), ground
     acceleration ag [m/s2] (with +-g tan(alpha), the uplift threshold of the rigid block) and the contact
     state; legends sit right of the panels, clear of the curves. ``result`` is a `Result`;
-    ``ground_motion`` a callable ag(t) [m/s2]; ``alpha`` [rad] the slenderness (None: not drawn);
+    ``ground_motion`` a callable ag(t) [m/s2] (one with a ``vertical`` component ag_v(t) has it drawn with ag,
+    and the uplift threshold (g + ag_v) tan(alpha)); ``alpha`` [rad] the slenderness (None: not drawn);
     g [m/s2]."""
     plt = _pyplot()
     fig = response_figure(result, ground_motion, title=title, alpha=alpha, g=g)

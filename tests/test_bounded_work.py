@@ -274,10 +274,10 @@ def test_motion_source_refuses_out_of_range_values_and_keeps_its_time():
             return 600.0 * t
     src = MotionSource(Ramp())
     src.advance(1.0)
-    assert src.outputs() == {"ag": 600.0}
+    assert src.outputs() == {"ag": 600.0, "ag_v": 0.0}      # no vertical component: ag_v = 0
     with pytest.raises(ValueError, match=r"^ag\(2\) = 1200 is out of range"):
         src.advance(2.0)
-    assert src.t == 1.0 and src.outputs() == {"ag": 600.0}
+    assert src.t == 1.0 and src.outputs() == {"ag": 600.0, "ag_v": 0.0}
     for t_end in (math.nan, 0.5):
         with pytest.raises(ValueError, match="t_end"):
             src.advance(t_end)

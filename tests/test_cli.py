@@ -221,3 +221,124 @@ def test_ensemble_reports_repairs_and_a_truncated_header_in_one_line(tmp_path, c
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "its header is truncated" in err and "move it aside" in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------------------------- vertical
+def _three_column_record(tmp_path):
+    from rocking_model.records import synthetic_record
+    t, a = synthetic_record(duration=2.0, seed=21)
+    _, v = synthetic_record(duration=2.0, seed=22, pga_g=0.3)
+    return t, a, v, write_csv(tmp_path / "rec3.csv", t, a, units="g", ag_v=v)
+
+
+def test_simulate_three_column_record_writes_ag_v(tmp_path, capsys):
+    """A three-column record's third column is ag_v: the CSV output gets the column ``ag_v [m/s2]`` after ag,
+    the response is the simulation of the two-component record, the summary names its vertical PGA, and
+    --vertical-scale scales that column (0: the horizontal run, without the column)."""
+    from rocking_model.records import read_record
+
+    t, a, v, rec = _three_column_record(tmp_path)
+    assert main(["simulate", "--record", str(rec), "--t-end", "2", "--out", str(tmp_path), "--name", "v"]) == 0
+    assert "PGA_v = 2.94 m/s2" in capsys.readouterr().out
+    with open(tmp_path / "v.csv") as f:
+        header = next(csv.reader(f))
+    assert header[:4] == ["time [s]", "ag [m/s2]", "ag_v [m/s2]", "phi [rad]"]
+    data = np.loadtxt(tmp_path / "v.csv", delimiter=",", skiprows=1)
+    assert np.allclose(data[::10, 2], v[::10], rtol=1e-9, atol=1e-12)
+    ref = simulate(RigidBlock(), read_record(rec), 2.0)
+    assert np.allclose(data[:, 3], ref.phi, rtol=1e-9, atol=1e-12)
+    assert (tmp_path / "v.png").read_bytes()[:4] == b"\x89PNG"
+    assert main(["simulate", "--record", str(rec), "--t-end", "2", "--out", str(tmp_path), "--name", "v2",
+                 "--vertical-scale", "-2", "--no-plot"]) == 0
+    data2 = np.loadtxt(tmp_path / "v2.csv", delimiter=",", skiprows=1)
+    assert np.allclose(data2[::10, 2], -2.0 * v[::10], rtol=1e-9, atol=1e-12)
+    assert main(["simulate", "--record", str(rec), "--t-end", "2", "--out", str(tmp_path), "--name", "v0",
+                 "--vertical-scale", "0", "--no-plot"]) == 0
+    with open(tmp_path / "v0.csv") as f:
+        assert next(csv.reader(f))[:3] == ["time [s]", "ag [m/s2]", "phi [rad]"]
+    h = simulate(RigidBlock(), read_record(rec).horizontal, 2.0)
+    assert np.allclose(np.loadtxt(tmp_path / "v0.csv", delimiter=",", skiprows=1)[:, 2], h.phi, rtol=1e-9,
+                       atol=1e-12)
+
+
+def test_simulate_vertical_file_and_vertical_scale_of_a_pulse(tmp_path, capsys):
+    """--vertical FILE (AT2 pair) gives the record's ag_v, scaled with --scale and --vertical-scale; a pulse's
+    --vertical-scale F gives ag_v = F x ag; the scene name carries both."""
+    from rocking_model.records import synthetic_motion, write_at2
+
+    h = synthetic_motion(31, duration=2.0)
+    v = synthetic_motion(32, duration=2.0)
+    write_at2(tmp_path / "H.AT2", h)
+    write_at2(tmp_path / "UP.AT2", v)
+    assert main(["simulate", "--record", str(tmp_path / "H.AT2"), "--vertical", str(tmp_path / "UP.AT2"),
+                 "--scale", "0.5", "--vertical-scale", "1.5", "--t-end", "2", "--out", str(tmp_path),
+                 "--no-plot"]) == 0
+    out = tmp_path / "rigid_H_V-UP_x0.5_vx1.5.csv"
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert np.allclose(data[::10, 1], 0.5 * h.ag[::10], rtol=1e-9, atol=1e-12)
+    assert np.allclose(data[::10, 2], 0.75 * v.ag[::10], rtol=1e-9, atol=1e-12)
+    assert main(["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--vertical-scale", "0.5",
+                 "--t-end", "1", "--out", str(tmp_path), "--name", "p", "--no-plot"]) == 0
+    p = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1)
+    assert np.any(p[:, 1] != 0.0) and np.allclose(p[:, 2], 0.5 * p[:, 1], rtol=1e-9, atol=1e-12)
+    from rocking_model import TwoComponentMotion
+    pulse = SinePulse(3.0, 4 * math.pi)
+    ref = simulate(RigidBlock(), TwoComponentMotion(pulse, pulse.scaled(0.5)), 1.0)
+    assert np.allclose(p[:, 3], ref.phi, rtol=1e-9, atol=1e-12)
+    assert "vertical 0.5 x the pulse" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--vertical-scale", "11"],
+     "rocking simulate: error: --vertical-scale = 11 is out of range; allowed range [-10, 10]\n"),
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--vertical-scale", "nan"],
+     "rocking simulate: error: --vertical-scale = nan is not finite; allowed range [-10, 10]\n"),
+    (["simulate", "--vertical-scale", "0.5"],
+     "rocking simulate: error: --scale, --resample and --vertical-scale apply to a --record or --pulse\n"),
+    (["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--vertical", "x.AT2"],
+     "rocking simulate: error: --vertical (the vertical component of a record) needs --record; a pulse takes "
+     "--vertical-scale (ag_v = scale x the pulse)\n"),
+    (["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3", "--vertical-scales",
+      "-20"], "rocking ensemble: error: --vertical-scales = -20 is out of range; allowed range [-10, 10]\n"),
+    (["ensemble", "--record", "synthetic:1", "synthetic:2", "--vertical", "synthetic:3"],
+     "rocking ensemble: error: --vertical: give one vertical record per --record (2), got 1 ('' for a record "
+     "without one)\n"),
+])
+def test_bad_vertical_input_is_one_line_and_exit_2(argv, msg, capsys, tmp_path):
+    out = tmp_path / "o.csv" if argv[0] == "ensemble" else tmp_path
+    assert main(argv + ["--out", str(out), "--no-plot"]) == 2
+    assert capsys.readouterr().err == msg
+
+
+def test_simulate_refuses_a_vertical_record_of_another_time_step(tmp_path, capsys):
+    from rocking_model.records import synthetic_motion, write_at2
+    write_at2(tmp_path / "H.AT2", synthetic_motion(31, duration=1.0))
+    write_at2(tmp_path / "V.AT2", synthetic_motion(32, duration=1.0, dt=0.02))
+    assert main(["simulate", "--record", str(tmp_path / "H.AT2"), "--vertical", str(tmp_path / "V.AT2"),
+                 "--out", str(tmp_path), "--no-plot"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "V.AT2: DT = 0.02 s, but the horizontal component" in err
+
+
+def test_ensemble_vertical_scales_and_records(tmp_path, capsys):
+    """--vertical-scales is a grid dimension (case field ag_v_scale); 0 keeps the ids of the runs without it,
+    so a result file of a run without vertical resumes; --vertical pairs one file with each record."""
+    from rocking_model.ensemble import read_results
+    from rocking_model.records import synthetic_motion, write_at2
+
+    out = tmp_path / "ens.csv"
+    base = ["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3", "--t-end", "1",
+            "--workers", "0", "--no-progress", "--no-plot", "--out", str(out)]
+    assert main(base) == 0
+    assert main(base + ["--vertical-scales", "0", "0.5"]) == 0
+    assert "ran 1 cases (1 already" in capsys.readouterr().out
+    assert sorted(r["ag_v_scale"] for r in read_results(out)) == [0.0, 0.5]
+    write_at2(tmp_path / "H.AT2", synthetic_motion(31, duration=1.0))
+    write_at2(tmp_path / "UP.AT2", synthetic_motion(32, duration=1.0))
+    rec = tmp_path / "rec.csv"
+    assert main(["ensemble", "--record", str(tmp_path / "H.AT2"), "synthetic:4", "--vertical",
+                 str(tmp_path / "UP.AT2"), "", "--t-end", "1", "--workers", "0", "--no-progress", "--no-plot",
+                 "--out", str(rec)]) == 0
+    rows = sorted(read_results(rec), key=lambda r: r["record"])
+    assert [r["ag_v_scale"] for r in rows] == [1.0, 0.0] and rows[0]["vertical"].endswith("UP.AT2")
+    assert all(r["error"] == "" for r in rows)

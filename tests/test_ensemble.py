@@ -1,5 +1,6 @@
 """Ensembles: case grids, one case against a direct simulation, incremental output, resume, Dask."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -202,3 +203,131 @@ def test_default_batches_are_a_few_per_worker():
     n, w = 1001, 2
     size = default_batch_size(n, w)
     assert math.ceil(n / size) <= TASKS_PER_WORKER * w
+
+
+# --------------------------------------------------------------------------------------------- vertical
+#: a result file written by the code before the vertical fields existed (commit d11cb94, rocking_model.ensemble:
+#: run_ensemble(_BEFORE_VERTICAL_CASES(), out, workers=0)); flexible pulse cases given in m/s2 and Hz, so that
+#: their ids hold no libm round-off (tan, atan2) and are the same on every machine
+BEFORE_VERTICAL = Path(__file__).resolve().parent / "data" / "ensemble_before_vertical.csv"
+
+
+def _before_vertical_cases():
+    kw = dict(model="flexible", geometries=[(0.25, 1.5)], t_end=0.5)
+    return pulse_cases("sine", amplitudes=[2.0, 6.0], frequencies=[1.0, 2.5], **kw) + \
+        pulse_cases("rectangular", amplitudes=[4.0], frequencies=[2.0], mu=0.5, **kw)
+
+
+#: the case fields before the vertical ones existed and their id (a copy of that version's `case_id`)
+_OLD_CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "motion", "A", "omega_p", "a_ratio", "w_ratio",
+                    "record", "units", "scale", "scheme", "t_end", "output_interval", "tolerance", "dt_max")
+
+
+def _old_case_id(case):
+    import hashlib
+    import json
+    key = {k: case.get(k) for k in _OLD_CASE_FIELDS if k != "case_id"}
+    if key.get("mu") in (None, math.inf):
+        del key["mu"]
+    return hashlib.sha1(json.dumps(key, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+
+
+def test_cases_without_vertical_keep_their_ids(tmp_path):
+    """ag_v_scale = 0 (the default) leaves the id of every kind of case as it was before the vertical fields;
+    a vertical component, or another vertical record, gives another id."""
+    from rocking_model.records import synthetic_record, write_at2
+    t, a = synthetic_record(duration=2.0, seed=11)
+    p = write_at2(tmp_path / "s.AT2", t, a)
+    cases = _grid(mu=0.4) + _grid(geometries=[(0.3, 1.2)], schemes=["moreau_jean"], dt_max=1e-3) + \
+        record_cases([str(p), "synthetic:5"], scales=[0.5, 1.0], t_end=2.0) + _before_vertical_cases()
+    for c in cases:
+        assert c["ag_v_scale"] == 0.0 and c["vertical"] == ""
+        assert c["case_id"] == _old_case_id(c)
+    v = record_cases([str(p)], t_end=2.0, ag_v_scales=[0.0, 0.5, -0.5])
+    assert v[0]["case_id"] == _old_case_id(v[0]) and len({c["case_id"] for c in v}) == 3
+    w = record_cases([str(p)], t_end=2.0, vertical=[str(p)])
+    assert w[0]["ag_v_scale"] == 1.0 and w[0]["vertical"] == str(p.resolve())     # default 1 with a vertical
+    assert w[0]["case_id"] not in {c["case_id"] for c in v}
+    assert pulse_cases("sine", amplitude_ratios=[2.0], frequency_ratios=[3.0], ag_v_scales=[0.3])[0]["case_id"] \
+        != _grid()[0]["case_id"]
+
+
+def test_result_file_written_before_vertical_resumes_with_zero_new_cases(tmp_path):
+    """A CSV output written by the previous version (no vertical columns) resumes: today's cases have its ids,
+    nothing runs again, its header and rows gain the vertical columns (its cells otherwise unchanged, one
+    RepairWarning) and a vertical case runs on top of it; the same for Parquet parts of the old schema."""
+    import shutil
+
+    cases = _before_vertical_cases()
+    old_text = BEFORE_VERTICAL.read_text()
+    old_ids = [line.split(",")[0] for line in old_text.splitlines()[1:]]
+    assert [c["case_id"] for c in cases] == old_ids
+    out = tmp_path / "old.csv"
+    shutil.copy(BEFORE_VERTICAL, out)
+    with pytest.warns(RepairWarning, match="vertical, ag_v_scale existed: added"):
+        s = run_ensemble(cases, out, workers=0, progress=False)
+    assert s["n_run"] == 0 and s["n_skipped"] == len(cases)
+    lines = out.read_text().splitlines()
+    assert lines[0] == ",".join(FIELDS)
+    i = FIELDS.index("vertical")
+    for old, new in zip(old_text.splitlines()[1:], lines[1:]):
+        cells = new.split(",")
+        assert cells[i:i + 2] == ["", "0.0"] and cells[:i] + cells[i + 2:] == old.split(",")
+    rows = {r["case_id"]: r for r in read_results(out)}
+    assert set(rows) == set(old_ids) and all(r["ag_v_scale"] == 0.0 for r in rows.values())
+    more = pulse_cases("sine", amplitudes=[2.0], frequencies=[1.0], model="flexible", geometries=[(0.25, 1.5)],
+                       t_end=0.5, ag_v_scales=[0.0, 0.5])
+    s = run_ensemble(cases + more, out, workers=0, progress=False)
+    assert s["n_run"] == 1 and s["n_errors"] == 0
+    assert {r["case_id"]: r for r in read_results(out)}[more[1]["case_id"]]["ag_v_scale"] == 0.5
+    # Parquet parts of the old schema: read with the no-vertical defaults, resumed with zero new cases
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+    from rocking_model.ensemble import _parse
+    pdir = tmp_path / "old.parquet"
+    pdir.mkdir()
+    old_rows = [_parse(r) for r in read_results(BEFORE_VERTICAL)]
+    schema = pa.schema([(k, pa.string() if k in ("case_id", "model", "motion", "record", "units", "scheme", "error")
+                         else pa.bool_() if k == "overturned" else pa.int64() if k == "impacts" else pa.float64())
+                        for k in old_text.splitlines()[0].split(",")])
+    pq.write_table(pa.Table.from_pylist([{k: r[k] for k in schema.names} for r in old_rows], schema=schema),
+                   pdir / "part-00000-old.parquet")
+    s = run_ensemble(cases, pdir, workers=0, progress=False)
+    assert s["n_run"] == 0 and s["n_skipped"] == len(cases)
+    assert all(r["vertical"] == "" and r["ag_v_scale"] == 0.0 for r in read_results(pdir))
+
+
+def test_vertical_case_motion_and_rows(tmp_path):
+    """ag_v of a case is ag_v_scale x the record's vertical component (scaled with the record), x the horizontal
+    record without one, x the pulse; ag_v_scale = 0 gives the horizontal motion of before (a record's third
+    column ignored); a row equals the direct simulation of its motion; a bad ag_v_scale names the field."""
+    from rocking_model.ensemble import ENGINE, case_model, case_motion
+    from rocking_model.records import synthetic_record, write_csv
+    t, a = synthetic_record(duration=3.0, seed=11)
+    _, v = synthetic_record(duration=3.0, seed=12)
+    p = write_csv(tmp_path / "three.csv", t, a, ag_v=v)
+    h = write_csv(tmp_path / "h.csv", t, a)
+    c3 = record_cases([str(p)], scales=[2.0], ag_v_scales=[0.0, 0.5], t_end=3.0)
+    m0, m1 = case_motion(c3[0]), case_motion(c3[1])
+    assert m0.vertical is None and np.array_equal(m0.ag, 2.0 * a)
+    assert np.array_equal(m1.ag, 2.0 * a) and np.allclose(m1.vertical.ag, 0.5 * 2.0 * v, rtol=1e-15, atol=0)
+    assert record_cases([str(p)], t_end=3.0)[0]["ag_v_scale"] == 1.0
+    c2 = record_cases([str(h)], scales=[2.0], ag_v_scales=[-0.25], t_end=3.0)[0]
+    m2 = case_motion(c2)
+    assert np.array_equal(m2.ag, 2.0 * a) and np.allclose(m2.vertical.ag, -0.5 * a, rtol=1e-15, atol=0)
+    cv = record_cases([str(h)], vertical=[str(p.with_name("h.csv"))], ag_v_scales=[1.0], t_end=3.0)[0]
+    assert np.array_equal(case_motion(cv).vertical.ag, case_motion(cv).ag)
+    pc = pulse_cases("sine", amplitude_ratios=[2.0], frequency_ratios=[3.0], ag_v_scales=[0.4])[0]
+    mp = case_motion(pc)
+    assert mp.vertical is not None and mp.vertical(0.1) == pytest.approx(0.4 * mp(0.1), rel=1e-15)
+    row = run_case(c3[1])
+    assert row["error"] == "" and row["ag_v_scale"] == 0.5
+    res = simulate(case_model(c3[1]), case_motion(c3[1]), 3.0, engine=ENGINE)
+    assert row["max_abs_phi"] == float(np.max(np.abs(res.phi))) and row["impacts"] == int(res.impacts[-1])
+    with pytest.raises(ValueError, match=r"ag_v_scale = 11 is out of range; allowed range \[-10, 10\]"):
+        record_cases([str(p)], ag_v_scales=[11.0])
+    with pytest.raises(ValueError, match=r"ag_v_scale = nan is not finite"):
+        pulse_cases("sine", amplitude_ratios=[2.0], frequency_ratios=[3.0], ag_v_scales=[math.nan])
+    with pytest.raises(ValueError, match="give one vertical record per record"):
+        record_cases([str(p), str(h)], vertical=[str(h)])
+    assert "ag_v_scale = -20 is out of range" in run_case(dict(c3[1], ag_v_scale=-20.0, case_id=""))["error"]

@@ -165,6 +165,33 @@ def test_cli_ensemble_and_fmu_read_the_same_record(tmp_path):
         np.testing.assert_allclose(from_fmu.ag, 1.5 * a, rtol=1e-14, atol=1e-14)
 
 
+def test_cli_ensemble_and_fmu_read_the_same_three_component_record(tmp_path):
+    """A three-column CSV (ag, ag_v in cm/s2) and an AT2 pair: the CLI (--vertical, --vertical-scale), the
+    ensembles (case fields vertical, ag_v_scale) and the GroundMotionSource FMU (vertical, vertical_scale)
+    build identical two-component records: both components scaled by the scale, the vertical one by the
+    vertical scale too."""
+    from rocking_model import cli, cosim, ensemble
+
+    t, a = synthetic_record(duration=2.0, seed=5)
+    _, v = synthetic_record(duration=2.0, seed=6)
+    three = write_csv(tmp_path / "r3.csv", t, a, units="cm/s2", ag_v=v)
+    h, up = write_at2(tmp_path / "h.AT2", t, a), write_at2(tmp_path / "up.AT2", t, v)
+    for path, vertical in ((three, None), (h, up)):
+        argv = ["simulate", "--record", str(path), "--scale", "1.5", "--vertical-scale", "0.5"]
+        from_cli, _, _ = cli._motion(cli.build_parser().parse_args(
+            argv + (["--vertical", str(vertical)] if vertical else [])))
+        case = ensemble.record_cases([str(path)], scales=[1.5], ag_v_scales=[0.5],
+                                     vertical=[str(vertical)] if vertical else None)[0]
+        from_ensemble = ensemble.case_motion(case)
+        from_fmu = cosim.ground_motion_from_parameters(dict(motion=1, record=str(path), scale=1.5,
+                                                            vertical=str(vertical or ""), vertical_scale=0.5))
+        for m in (from_cli, from_ensemble, from_fmu):
+            assert type(m) is Record and np.array_equal(m.t, t)
+            np.testing.assert_allclose(m.ag, 1.5 * a, rtol=1e-14, atol=1e-14)
+            np.testing.assert_allclose(m.ag_v, 0.75 * v, rtol=1e-14, atol=1e-14)
+        assert np.array_equal(from_ensemble.ag_v, from_cli.ag_v) and np.array_equal(from_fmu.ag_v, from_cli.ag_v)
+
+
 def test_fmu_record_parameters(tmp_path):
     """GroundMotionSource's record/units parameters: units from the file, else the units parameter, else m/s2;
     the reader's errors unchanged."""
