@@ -2047,7 +2047,8 @@ def importer_helpers(h: Harness, helper: str):
 
         def system(p):
             return System([Component("ground", p[GMS]), Component("block", p[RIGID])],
-                          [Connection(("ground", "ag"), ("block", "ag"))], step_size=DT)
+                          [Connection(("ground", "ag"), ("block", "ag")),
+                           Connection(("ground", "ag_v"), ("block", "ag_v"))], step_size=DT)
 
         res = run_fmpy(system(paths), 0.5, ["ground.ag", "block.phi"])
         ref = run_fmpy(system({k: Path(h.fmu_path(k)) for k in paths}), 0.5, ["ground.ag", "block.phi"])

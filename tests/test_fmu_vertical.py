@@ -493,3 +493,35 @@ def test_record_with_a_vertical_component_through_input_derivatives(fmus):
     out = run_fmu_record(fmus[("pythonfmu", RIGID)][0], t, ag, ag_v_record=ag_v, step=DT, stop_time=3.0,
                          hold="linear", start_values={"tolerance": 1e-10, "scheme": 1}, output=("phi", "y"))
     assert np.abs(out["phi"] - np.interp(out["time"], ref.t, ref.phi)).max() <= 1e-9 * block.alpha
+
+
+def test_source_drives_both_components_through_the_fmpy_master(fmus, built_fmus, tmp_path):
+    """GroundMotionSource (a three-column record: time, ag, ag_v) -> RigidRockingBlock with ag -> ag and
+    ag_v -> ag_v in rocking_model.cosim's fmpy master: the block equals the block FMU driven step by step by
+    the table ag(t_n), ag_v(t_n), and the Python API with both held, to round-off (the master's
+    communication points n h against the sums of h)."""
+    from rocking_model.cosim import Component, Connection, System, run_fmpy
+
+    t = np.round(np.arange(0.0, 1.5 + 1e-9, DT), 12)
+    # |ag| <= 1.8 < g tan(alpha) = 1.96 m/s2: the block rocks only because g + ag_v drops to 6.8 m/s2
+    ag = np.where(t < 1.0, 1.8 * np.sin(2 * np.pi * t), 0.0)
+    ag_v = np.where(t < 1.0, -3.0 * np.sin(np.pi * t), 0.0)
+    record = tmp_path / "three.csv"
+    record.write_text("time [s],ag [m/s2],ag_v [m/s2]\n"
+                      + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in zip(t.tolist(), ag.tolist(), ag_v.tolist())))
+    system = System([Component("ground", built_fmus["GroundMotionSource"],
+                               start_values={"motion": 1, "record": str(record)}),
+                     Component("block", built_fmus[RIGID], start_values={"scheme": 1})],
+                    [Connection(("ground", "ag"), ("block", "ag")), Connection(("ground", "ag_v"), ("block", "ag_v"))],
+                    step_size=DT)
+    res = run_fmpy(system, 1.5, ["ground.ag", "ground.ag_v", "block.phi", "block.y", "block.impacts"])
+    np.testing.assert_allclose(res["ground.ag_v"], np.interp(res["time"], t, ag_v), rtol=0, atol=1e-12)
+    steps = [(float(a), None, float(v), None) for a, v in zip(res["ground.ag"][:-1], res["ground.ag_v"][:-1])]
+    names, alone = run_fmu(fmus[("pythonfmu", RIGID)], steps)
+    for out in ("phi", "y", "impacts"):
+        np.testing.assert_allclose(res[f"block.{out}"], alone[:, names.index(out)], rtol=0, atol=ROUNDOFF,
+                                   err_msg=out)
+    assert_close(alone, run_api(RIGID, steps, "c", names), "the block FMU vs the API", names)
+    flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], "c", names)
+    assert 0.01 < np.abs(res["block.phi"]).max() < 0.5 * RigidBlock().alpha and res["block.impacts"][-1] >= 1
+    assert np.all(flat[:, names.index("phi")] == 0.0)                  # without ag_v: no uplift
