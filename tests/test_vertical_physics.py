@@ -373,6 +373,18 @@ def test_contact_problem_returns_flight_when_g_plus_ag_v_is_negative(model_kind,
 
 @pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
 @pytest.mark.parametrize("scheme", SCHEMES)
+def test_constant_downward_ag_v_beyond_g_is_a_free_fall_of_the_ground(model_kind, scheme):
+    """From rest under a constant ag_v = -15 m/s2 (< -g) the body rises relative to the ground as
+    y(t) = 1/2 (-(g + ag_v)) t^2, without rotating or deforming (both schemes are exact for a constant
+    acceleration)."""
+    model = MODELS[model_kind]()
+    res = simulate(model, 0.0, 0.5, scheme=scheme, ag_v=-15.0, output_interval=0.05, **PY)
+    np.testing.assert_allclose(res.y, 0.5 * (15.0 - model.g) * res.t ** 2, rtol=1e-12, atol=1e-14)
+    assert np.all(res.contact[1:] == Mode.FLIGHT) and np.all(res.phi == 0.0)
+
+
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("init", [{}, dict(phi_0=0.05)])
 @pytest.mark.parametrize("kind", ["rectangular", "sine"])
 def test_flight_under_a_downward_pulse(model_kind, scheme, init, kind):
