@@ -271,18 +271,22 @@ def _same(ra, rb):
 SCENES = {
     "rigid": (lambda: RigidBlock(b=0.2, h=1.0, e_N=0.2), SinePulse(4.0, 12.0, t0=0.1), 2.5),
     "flexible": (lambda: FlexibleOscillator(), SinePulse(4.0, 6.0, t0=0.05), 1.5),
+    # Coulomb friction: rocking and sliding phases (the generic sliding functions)
+    "friction": (lambda: RigidBlock(b=0.3, h=0.6, mu=0.52), SinePulse(7.0, 8.0, t0=0.1), 1.5),
 }
 
 
-@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible", "friction"])
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_zero_vertical_is_bit_identical(model_kind, scheme):
     """ag_v = None, 0.0, a zero callable, a zero ConstantMotion: the same outputs, impacts and steps, bit for
-    bit, as a run without a vertical component (a rocking scene with impacts)."""
+    bit, as a run without a vertical component (a rocking scene with impacts; with friction, rocking and
+    sliding)."""
     make, pulse, t_end = SCENES[model_kind]
     kw = dict(scheme=scheme, output_interval=0.01, dt_max=2e-3 if scheme == "moreau_jean" else 0.0, **PY)
     ref = simulate(make(), pulse, t_end, **kw)
     assert ref.impacts[-1] >= 1 and np.max(np.abs(ref.phi)) > 0.01 and not ref.overturned[-1]
+    assert model_kind != "friction" or np.max(np.abs(ref.slip)) > 1e-3
     for ag_v in (None, 0.0, lambda t: 0.0, ConstantMotion(0.0)):
         _same(simulate(make(), pulse, t_end, ag_v=ag_v, **kw), ref)
     _same(simulate(make(), (pulse, lambda t: 0.0), t_end, **kw), ref)
