@@ -448,6 +448,23 @@ def test_sliding_block_under_constant_ag_and_ag_v(scheme):
     assert np.all(res.contact[1:] == Mode.FULL_SLIDE_NEG) and np.all(res.phi == 0.0)
 
 
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("ag_v", [-4.0, 5.0])
+def test_sliding_friction_is_mu_times_the_effective_weight(model_kind, ag_v):
+    """A base sliding in full contact: the normal forces carry the effective weight M (g + ag_v), so the
+    friction magnitudes sum to mu M (g + ag_v); the sticking totals give the same normal force."""
+    from rocking_model.models import sliding
+    model = RigidBlock(b=0.5, h=0.5, mu=0.4) if model_kind == "rigid" else FlexibleOscillator(mu=0.4)
+    mass = model.m if model_kind == "rigid" else model.M_t
+    mode, q, v = model.initial_state()
+    v = np.array(v, dtype=float)
+    v[model.slide_index] = -0.3                    # sliding towards -x
+    _, tau = sliding.slide_motion(model, Mode.FULL_SLIDE_NEG, q, v, 6.0, ag_v)
+    assert float(np.sum(tau)) == pytest.approx(0.4 * mass * (model.g + ag_v), rel=1e-12)
+    lam_N, _ = sliding.force_totals(model, Mode.FULL, *model.initial_state()[1:], 1.0, ag_v)
+    assert lam_N == pytest.approx(mass * (model.g + ag_v), rel=1e-12)
+
+
 def test_friction_cone_of_a_rocking_pivot_scales_with_g_plus_ag_v():
     """Rocking on a corner with finite mu: the normal force of the pivot carries g + ag_v, so the sliding mode
     forces (friction mu lambda_N) do too; with mu = inf the closed-form totals give m (y_dd + g + ag_v)."""
