@@ -296,7 +296,7 @@ class ConstantModel:
     def inverse_mass_matrix(self, q):
         return self.Minv
 
-    def forces(self, q, v, ag):
+    def forces(self, q, v, ag, ag_v=0.0):
         return self.f
 
     def gaps(self, q):
@@ -617,6 +617,48 @@ def test_contact_functions_on_the_models(kind):
     assert ties <= TIE_SHARE * total
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_contact_functions_with_a_vertical_ground_acceleration(kind):
+    """uplift, next_mode and mode_forces under a vertical ground acceleration ag_v (issue 23) on both C kernels:
+    the same active sets, stick/slide states and forces as contact.py, also where g + ag_v < 0 (the ground falls
+    faster than g: the uplift LCP returns flight, every corner open)."""
+    rng = np.random.default_rng(900 + KINDS.index(kind))
+    ties = total = 0
+    for _ in range(60):
+        model = random_model(rng, kind)
+        spec = (kind, real_params(model))
+        for mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT):
+            q, v = random_state(rng, model, mode)
+            closed = list(model.closed_of(mode))
+            ag = float(rng.normal()) * 3.0
+            ag_v = float(rng.uniform(-3.0, 3.0)) * model.g
+            for slip in (None, 1e-9):
+                count = slip is not None
+                py = contact.uplift(model, q, v, ag, closed, slip_tol=slip, count=count, ag_v=ag_v)
+                c = _engine.contact_model_call("uplift", spec, q.tolist(), v.tolist(), ag, closed, [], slip, count, -1,
+                                               ag_v)
+                ties += compare_solution(py, c, W_T=model.contact_jacobians(q)[1])
+                total += 1
+                if kind == "rigid" and model.g + ag_v < -0.1 * model.g and mode == Mode.FULL:
+                    # far from the threshold g + ag_v = 0 the block at rest on the ground leaves it (the flexible
+                    # column's elastic force may still press one corner down)
+                    assert c["active"] == () and tuple(py.active) == ()
+            mode_py, sol = contact.next_mode(model, q, v, ag, 1e-9, 1e-9, ag_v=ag_v)
+            mode_c, c_sol = _engine.contact_model_call("next_mode", spec, q.tolist(), v.tolist(), ag, 1e-9, 1e-9, -1,
+                                                       ag_v)
+            assert (sol is None) == (c_sol is None)
+            if sol is None or not compare_solution(sol, c_sol, W_T=model.contact_jacobians(q)[1]):
+                assert int(mode_py) == mode_c
+            py = contact.mode_forces(model, mode, q, v, ag, ag_v)
+            c = _engine.contact_model_call("mode_forces", spec, int(mode), q.tolist(), v.tolist(), ag, ag_v)
+            assert np.max(np.abs(py - np.array(c))) <= 1e-12 * max(1.0, float(np.max(np.abs(py))))
+            # ag_v = 0 is the call without a vertical component, bit for bit
+            assert _engine.contact_model_call("mode_forces", spec, int(mode), q.tolist(), v.tolist(), ag, 0.0) == \
+                _engine.contact_model_call("mode_forces", spec, int(mode), q.tolist(), v.tolist(), ag)
+            total += 1
+    assert ties <= TIE_SHARE * total
+
+
 def test_sources_compile_without_warnings(tmp_path):
     """rk_lcp.c, rk_contact.c and py_contact.c compile cleanly with -Wall -Wextra -pedantic -Werror (the
     engine's flags otherwise), so that warnings do not accumulate."""
@@ -682,10 +724,11 @@ class ContactSpy:
         self.note("impact")
         return py
 
-    def next_mode(self, model, q, v, ag, gap_tol, v_tol, prefer=None):
-        mode, sol = contact.next_mode(model, q, v, ag, gap_tol, v_tol, prefer)
+    def next_mode(self, model, q, v, ag, gap_tol, v_tol, prefer=None, ag_v=0.0):
+        mode, sol = contact.next_mode(model, q, v, ag, gap_tol, v_tol, prefer, ag_v=ag_v)
         c_mode, c_sol = _engine.contact_model_call("next_mode", self.spec, list(map(float, q)), list(map(float, v)),
-                                                   float(ag), gap_tol, v_tol, -1 if prefer is None else int(prefer))
+                                                   float(ag), gap_tol, v_tol, -1 if prefer is None else int(prefer),
+                                                   float(ag_v))
         assert (sol is None) == (c_sol is None)
         if sol is None or not compare_solution(sol, c_sol, W_T=model.contact_jacobians(q)[1]):
             assert int(mode) == c_mode

@@ -794,3 +794,122 @@ def test_part_a_sources_compile_without_warnings(tmp_path):
                               "-pedantic", "-Werror", "-c", os.path.join(src, name), "-o", str(tmp_path / "x.o")],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 0, out.stderr
+
+
+# ------------------------------------------------------------------------------------------ vertical (issue 23)
+#: the vertical ground acceleration [m/s2] (positive upward): exactly 0 (the bit-identity case) or any value up
+#: to AG_MAX, g + ag_v < 0 included (the ground falls faster than g)
+AG_V = st.one_of(st.just(0.0), st.floats(-1000.0, 1000.0))
+
+
+#: [1] smallest singular value of a sliding problem's Delassus matrix, relative to the product of its factors'
+#: norms, below which the problem is singular (numpy's LU then returns round-off noise of order 1/eps, the C's
+#: least squares a finite answer: neither is meaningful to compare)
+SLIDE_SINGULAR_RTOL = 1e-8
+
+
+def slide_singular(model, mode, q) -> bool:
+    """Whether sliding.slide_motion's Delassus matrix at q is singular (see SLIDE_SINGULAR_RTOL)."""
+    stick, sigma = SLIDING[mode]
+    closed = list(model.closed_of(stick))
+    W_N, W_T = model.contact_jacobians(np.asarray(q, dtype=float))
+    inv_mu = 0.0 if math.isinf(model.mu) else 1.0 / model.mu
+    Minv = model.inverse_mass_matrix(np.asarray(q, dtype=float))
+    C = inv_mu * W_N[:, closed] - sigma * W_T[:, closed]
+    A = W_N[:, closed].T @ Minv @ C
+    scale = np.linalg.norm(W_N[:, closed]) * np.linalg.norm(Minv) * np.linalg.norm(C)
+    return bool(np.linalg.svd(A, compute_uv=False).min() <= SLIDE_SINGULAR_RTOL * scale)
+
+
+def two_component(ag, ag_v):
+    from rocking_model.ground_motion import TwoComponentMotion
+    return TwoComponentMotion(ConstantMotion(ag), ConstantMotion(ag_v))
+
+
+def vertical_pins(kind, model, state_of, ag, ag_v, acc, sliding_rtol):
+    """Every kernel function that takes ag, called with ag_v, against the Python under the two-component motion:
+    closed forms bitwise, numpy linear algebra (generic fallbacks, sliding modes) to round-off."""
+    p = values_of(model)
+    motion = two_component(ag, ag_v)
+    for mode in STICK:
+        y = state_of(mode)
+        k = len(y) // 2
+        pq, pv = model.embed(mode, np.array(y[:k]), np.array(y[k:]))
+        same(call(kind, p, "forces", a=pq.tolist(), b=pv.tolist(), ag=ag, ag_v=ag_v),
+             model.forces(pq, pv, ag, ag_v))
+        rhs, monitors, totals = model.mode_closures(mode, motion)
+        same(call(kind, p, "kernel_rhs", mode=mode, a=y, ag=ag, ag_v=ag_v), rhs(0.0, list(y)))
+        g, tot = call(kind, p, "kernel_monitors", mode=mode, a=y, ag=ag, ag_v=ag_v)
+        same(g, monitors(0.0, list(y)))
+        if totals is None:
+            assert tot is None
+        else:
+            same(tot, totals(0.0, list(y)))
+        frhs, fmon, ftot = model.functions_of(mode, motion)
+        same(call(kind, p, "rhs", mode=mode, a=y, ag=ag, ag_v=ag_v), frhs(0.0, list(y)))
+        g, tot = call(kind, p, "monitors", mode=mode, a=y, ag=ag, ag_v=ag_v)
+        same(g, fmon(0.0, list(y)))
+        if ftot is not None:
+            same(tot, ftot(0.0, list(y)))
+        if ag_v == 0.0:
+            # ag_v = 0: the same numbers as without a vertical component (today's closures)
+            rhs0, mon0, _ = model.mode_closures(mode, ConstantMotion(ag))
+            same(rhs(0.0, list(y)), rhs0(0.0, list(y)))
+            same(monitors(0.0, list(y)), mon0(0.0, list(y)))
+        cond = np.linalg.cond(model.mass_matrix(pq))
+        force = model.force_scale * acc / model.g
+        if kind == "rigid" or mode != Mode.FLIGHT:
+            c = call(kind, p, "contact_forces", mode=mode, a=pq.tolist(), b=pv.tolist(), ag=ag, ag_v=ag_v)
+            if kind == "rigid":
+                same(c, model.contact_forces(mode, pq, pv, ag, ag_v))
+            else:
+                close(c, model.contact_forces(mode, pq, pv, ag, ag_v), rtol=1e-12, scale=force)
+        if k:
+            pr = RockingModel.reduced_acceleration(model, mode, np.array(y[:k]), np.array(y[k:]), ag, ag_v)
+            close(call(kind, p, "generic_rhs", mode=mode, a=y, ag=ag, ag_v=ag_v), list(y[k:]) + pr.tolist(),
+                  1e-12 * cond, scale=acc)
+        g, tot = call(kind, p, "generic_monitors", mode=mode, a=y, ag=ag, ag_v=ag_v)
+        close(g, RockingModel.mode_functions(model, mode, motion)[1](0.0, list(y)), 1e-12 * cond, scale=acc / model.g)
+        if CLOSED[mode]:
+            pt = sliding.force_totals(model, mode, pq, pv, ag, ag_v)
+            close(tot, pt, 1e-12 * cond, scale=force)
+            close(call(kind, p, "force_totals", mode=mode, a=pq.tolist(), b=pv.tolist(), ag=ag, ag_v=ag_v), pt,
+                  1e-12 * cond, scale=force)
+    for mode in SLIDING:
+        y = state_of(mode)
+        k = len(y) // 2
+        pq, pv = model.embed_any(mode, y[:k], y[k:])
+        if slide_singular(model, mode, pq):
+            continue        # a singular sliding problem (mu = inf at phi = 0): numpy's solve returns noise
+        rtol = sliding_rtol(mode, pq)
+        a, tau = call(kind, p, "slide_motion", mode=mode, a=pq.tolist(), b=pv.tolist(), ag=ag, ag_v=ag_v)
+        pa, ptau = sliding.slide_motion(model, mode, pq, pv, ag, ag_v)
+        close(a, pa, rtol, scale=acc)
+        close(tau, ptau, rtol, scale=model.force_scale * acc / model.g)
+        frhs, fmon, ftot = model.functions_of(mode, motion)
+        close(call(kind, p, "rhs", mode=mode, a=y, ag=ag, ag_v=ag_v), frhs(0.0, list(y)), rtol, scale=acc)
+        g, tot = call(kind, p, "monitors", mode=mode, a=y, ag=ag, ag_v=ag_v)
+        close(g, fmon(0.0, list(y)), rtol, scale=acc / model.g)
+        close(tot, ftot(0.0, list(y)), rtol, scale=model.force_scale * acc / model.g)
+
+
+@SETTINGS
+@given(rigid_params(), STATE, AG, AG_V)
+def test_rigid_kernels_with_a_vertical_ground_acceleration(kw, state, ag, ag_v):
+    """Issue 23: the rigid kernel with ag_v (forces, closures' rhs / monitors / totals, contact forces, the
+    generic fallbacks, the sliding modes) equals the Python under TwoComponentMotion(ag, ag_v)."""
+    model = RigidBlock(**kw)
+    acc = model.g + abs(ag) + abs(ag_v) + model.R * state[1] ** 2        # [m/s2] the scale of the accelerations
+    vertical_pins("rigid", model, lambda mode: rigid_state(model, mode, *state), ag, ag_v, acc,
+                  lambda mode, q: LA_RTOL * slide_cond(model, mode, q))
+
+
+@SETTINGS
+@given(flexible_params(), FSTATE, AG, AG_V)
+def test_flexible_kernels_with_a_vertical_ground_acceleration(kw, state, ag, ag_v):
+    """Issue 23: the flexible kernel with ag_v, as the rigid one above."""
+    model = FLEX(**kw)
+    acc = model.g + abs(ag) + abs(ag_v) + model.length_scale * state[3] ** 2 \
+        + model.omega ** 2 * model.h * abs(state[0]) + model.omega * abs(state[2])
+    vertical_pins("flexible", model, lambda mode: flexible_state(model, mode, *state), ag, ag_v, acc,
+                  lambda mode, q: LA_RTOL * slide_cond(model, mode, q) * np.linalg.cond(model.mass_matrix(q)))

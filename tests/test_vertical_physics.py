@@ -271,18 +271,22 @@ def _same(ra, rb):
 SCENES = {
     "rigid": (lambda: RigidBlock(b=0.2, h=1.0, e_N=0.2), SinePulse(4.0, 12.0, t0=0.1), 2.5),
     "flexible": (lambda: FlexibleOscillator(), SinePulse(4.0, 6.0, t0=0.05), 1.5),
+    # Coulomb friction: rocking and sliding phases (the generic sliding functions)
+    "friction": (lambda: RigidBlock(b=0.3, h=0.6, mu=0.52), SinePulse(7.0, 8.0, t0=0.1), 1.5),
 }
 
 
-@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible", "friction"])
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_zero_vertical_is_bit_identical(model_kind, scheme):
     """ag_v = None, 0.0, a zero callable, a zero ConstantMotion: the same outputs, impacts and steps, bit for
-    bit, as a run without a vertical component (a rocking scene with impacts)."""
+    bit, as a run without a vertical component (a rocking scene with impacts; with friction, rocking and
+    sliding)."""
     make, pulse, t_end = SCENES[model_kind]
     kw = dict(scheme=scheme, output_interval=0.01, dt_max=2e-3 if scheme == "moreau_jean" else 0.0, **PY)
     ref = simulate(make(), pulse, t_end, **kw)
     assert ref.impacts[-1] >= 1 and np.max(np.abs(ref.phi)) > 0.01 and not ref.overturned[-1]
+    assert model_kind != "friction" or np.max(np.abs(ref.slip)) > 1e-3
     for ag_v in (None, 0.0, lambda t: 0.0, ConstantMotion(0.0)):
         _same(simulate(make(), pulse, t_end, ag_v=ag_v, **kw), ref)
     _same(simulate(make(), (pulse, lambda t: 0.0), t_end, **kw), ref)
@@ -373,6 +377,18 @@ def test_contact_problem_returns_flight_when_g_plus_ag_v_is_negative(model_kind,
 
 @pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
 @pytest.mark.parametrize("scheme", SCHEMES)
+def test_constant_downward_ag_v_beyond_g_is_a_free_fall_of_the_ground(model_kind, scheme):
+    """From rest under a constant ag_v = -15 m/s2 (< -g) the body rises relative to the ground as
+    y(t) = 1/2 (-(g + ag_v)) t^2, without rotating or deforming (both schemes are exact for a constant
+    acceleration)."""
+    model = MODELS[model_kind]()
+    res = simulate(model, 0.0, 0.5, scheme=scheme, ag_v=-15.0, output_interval=0.05, **PY)
+    np.testing.assert_allclose(res.y, 0.5 * (15.0 - model.g) * res.t ** 2, rtol=1e-12, atol=1e-14)
+    assert np.all(res.contact[1:] == Mode.FLIGHT) and np.all(res.phi == 0.0)
+
+
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("init", [{}, dict(phi_0=0.05)])
 @pytest.mark.parametrize("kind", ["rectangular", "sine"])
 def test_flight_under_a_downward_pulse(model_kind, scheme, init, kind):
@@ -430,6 +446,23 @@ def test_sliding_block_under_constant_ag_and_ag_v(scheme):
     a_rel = -ag + 0.3 * (G + ag_v)
     np.testing.assert_allclose(res.x, 0.5 * a_rel * res.t ** 2, rtol=1e-9, atol=1e-12)
     assert np.all(res.contact[1:] == Mode.FULL_SLIDE_NEG) and np.all(res.phi == 0.0)
+
+
+@pytest.mark.parametrize("model_kind", ["rigid", "flexible"])
+@pytest.mark.parametrize("ag_v", [-4.0, 5.0])
+def test_sliding_friction_is_mu_times_the_effective_weight(model_kind, ag_v):
+    """A base sliding in full contact: the normal forces carry the effective weight M (g + ag_v), so the
+    friction magnitudes sum to mu M (g + ag_v); the sticking totals give the same normal force."""
+    from rocking_model.models import sliding
+    model = RigidBlock(b=0.5, h=0.5, mu=0.4) if model_kind == "rigid" else FlexibleOscillator(mu=0.4)
+    mass = model.m if model_kind == "rigid" else model.M_t
+    mode, q, v = model.initial_state()
+    v = np.array(v, dtype=float)
+    v[model.slide_index] = -0.3                    # sliding towards -x
+    _, tau = sliding.slide_motion(model, Mode.FULL_SLIDE_NEG, q, v, 6.0, ag_v)
+    assert float(np.sum(tau)) == pytest.approx(0.4 * mass * (model.g + ag_v), rel=1e-12)
+    lam_N, _ = sliding.force_totals(model, Mode.FULL, *model.initial_state()[1:], 1.0, ag_v)
+    assert lam_N == pytest.approx(mass * (model.g + ag_v), rel=1e-12)
 
 
 def test_friction_cone_of_a_rocking_pivot_scales_with_g_plus_ag_v():
