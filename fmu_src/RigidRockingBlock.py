@@ -12,14 +12,15 @@ from rocking_model.models import RigidBlock
 
 
 class RigidRockingBlock(ModelSlave):
-    """Rigid rectangular block rocking on a horizontally accelerating rigid ground."""
+    """Rigid rectangular block rocking on a rigid ground accelerating horizontally (ag) and vertically (ag_v)."""
 
     model_class = RigidBlock
     description = ("Rigid rocking block (half-width b, half-height h) on a rigid ground with horizontal "
-                   "acceleration ag: unilateral corner contacts, Newton impact law (e_N = 0: Housner's "
-                   "restitution), sticking, uplift and flight; Moreau-Jean time-stepping (scheme = 0) or "
-                   "event-driven integration (scheme = 1). The input ag is held constant over each "
-                   "communication step (or interpolated linearly with fmi2SetRealInputDerivatives). Outputs "
-                   "freeze once the block overturns.")
+                   "acceleration ag and vertical acceleration ag_v: unilateral corner contacts, Newton impact "
+                   "law (e_N = 0: Housner's restitution), sticking, uplift and flight; Moreau-Jean time-stepping "
+                   "(scheme = 0) or event-driven integration (scheme = 1). The input ag is held constant over "
+                   "each communication step (or interpolated linearly with fmi2SetRealInputDerivatives); so is "
+                   "the vertical ground acceleration ag_v (positive upward: an effective gravity g + ag_v). "
+                   "Outputs freeze once the block overturns.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
     variables = ModelSlave.variables_of(RigidBlock)

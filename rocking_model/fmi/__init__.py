@@ -94,6 +94,7 @@ def __getattr__(name):
         return getattr(importer, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
-__all__ = ["AG_INPUT", "AG_V_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "ModelSlave", "DefaultExperiment",
+__all__ = ["AG_INPUT", "AG_V_INPUT", "AG_MAX", "MAX_STEPS_PARAMETER", "UNITS", "Var", "RockingSlave", "ModelSlave",
+           "DefaultExperiment",
            "Fmi2Status", "FMUError", "run_fmu", "run_fmu_record", "fmpy_callbacks", "collect_fmu_messages",
            "INPUT_RATE_MAX"]

@@ -856,7 +856,8 @@ class ModelSlave(RockingSlave):
     """The FMU of a registered model (`rocking_model.models.MODELS`), its whole interface derived from the
     model's declarations: parameters (start values, units, ranges, descriptions), initial values, the solver
     options (`rocking_model.simulation.SOLVER_PARAMETERS`), the work budget, the inputs ag and ag_v (horizontal
-    and vertical ground acceleration), the model's outputs and the simulator's (contact, impacts, overturned). An FMU script only names the model::
+    and vertical ground acceleration), the model's outputs and the simulator's (contact, impacts,
+    overturned). An FMU script only names the model::
 
         class RigidRockingBlock(ModelSlave):
             model_class = RigidBlock
