@@ -525,3 +525,68 @@ def test_source_drives_both_components_through_the_fmpy_master(fmus, built_fmus,
     flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], "c", names)
     assert 0.01 < np.abs(res["block.phi"]).max() < 0.5 * RigidBlock().alpha and res["block.impacts"][-1] >= 1
     assert np.all(flat[:, names.index("phi")] == 0.0)                  # without ag_v: no uplift
+
+
+# ---------------------------------------------------------------------------------------------- lean path
+def _slave(name):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "fmu_src" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    slave = getattr(module, name)(instance_name="vertical-lean")
+    vr = {v.name: v.value_reference for v in slave.vars.values()}
+    slave.setup_experiment(0.0)
+    slave.enter_initialization_mode()
+    slave.exit_initialization_mode()
+    return slave, vr
+
+
+def test_held_ag_v_takes_the_lean_path(monkeypatch):
+    """A nonzero ag_v held over the step is one Engine.advance with ag_v (the lean path, no checked path)."""
+    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
+    slave, vr = _slave(RIGID)
+    assert slave._lean is not None and slave._lean[3] == "ag_v"
+    monkeypatch.setattr(slave, "_do_step", lambda *a: pytest.fail("the checked path was taken"))
+    slave.set_real([vr["ag"]], [2.5])
+    slave.set_real([vr["ag_v"]], [-3.0])
+    assert slave.do_step(0.0, 0.2)
+    assert slave.get_real([vr["phi"]])[0] != 0.0
+
+
+def test_overflowing_step_under_ag_v_names_it_as_the_simulator_does(fmus, monkeypatch):
+    """A huge state (the column deflected by 1e148 m while rocking) whose motion overflows within a step under
+    ag_v = 500 m/s2 (> 10 g): the lean path refuses it (fmi2Discard, state kept) with Simulator._diverged's
+    message word for word, which names the vertical ground acceleration as a likely cause; the standalone FMU
+    (the state crafted into its serialized form) says the same."""
+    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
+    slave, vr = _slave(FLEX)
+    state = slave._sim.get_state()
+    state.update(mode=1, y=[1e148, 0.01, 0.0, 0.1])                   # mode LEFT, y = [u, phi, u', phi']
+    slave._sim.set_state(state)
+    slave.set_real([vr["ag_v"]], [500.0])
+    before = slave._sim.get_state()
+    assert not slave.do_step(0.0, 0.01)
+    assert slave._sim.get_state() == before
+    sim = Simulator(FlexibleOscillator(), "event_driven", engine="c", impact_log_size=0, on_report="raise")
+    sim.set_state(state)
+    with pytest.raises(ValueError, match=r"the vertical ground acceleration \(\|ag_v\| up to 500 m/s2") as info:
+        sim.advance(0.01, 0.0, ag_v=500.0)
+    expected = f"step [0.0, 0.01] refused, the FMU state is unchanged: {info.value}"
+    assert [m.msg for m in slave.log_queue if m.status == 3] == [expected]
+    if not HAS_STANDALONE:
+        return
+    fmu = fmus[("standalone", FLEX)]
+    inst = Instance(fmu)
+    inst.init()
+    inst.set(ag_v=500.0)
+    blob = bytearray(_serialized(inst))
+    n_vars = len(fmu[1].modelVariables)
+    # the engine's plain state: header, magic, GUID, n_vars, values, 4 flags, t, t0, n_inputs, 2 x (has_rate,
+    # rate, rate_t), the error's length, has_engine
+    off = 46 + 28 + 36 + 4 + 8 * n_vars + 16 + 16 + 4 + 2 * 20 + 4 + 4
+    struct.pack_into("<ii4d", blob, off + 8, 1, 4, 1e148, 0.01, 0.0, 0.1)
+    blob[-4:] = struct.pack("<I", zlib.crc32(bytes(blob[46:-4])))
+    inst.fmu.setFMUstate(inst.fmu.deSerializeFMUstate(_with_crc(bytes(blob))))
+    assert inst.step() == FMI2_DISCARD
+    assert inst.errors()[-1] == expected
