@@ -143,11 +143,12 @@ class FunctionMotion(GroundMotion):
     that is not a finite number in [-AG_MAX, AG_MAX] raises ValueError naming ag (and the time)."""
 
     self_checked = True
+    #: the variable named in the messages: "ag", or "ag_v" for a vertical component
+    name = "ag"
 
     def __init__(self, fun: Callable[[float], float], breakpoints=(), name: str = "ag"):
         self.fun = fun
         self._bp = np.sort(np.asarray(breakpoints, dtype=float))
-        #: the variable named in the messages: "ag", or "ag_v" for a vertical component
         self.name = name
 
     def __call__(self, t):
@@ -180,6 +181,8 @@ class CheckedMotion(GroundMotion):
     with a ValueError naming ag instead of overflowing inside the integrator."""
 
     self_checked = True
+    #: the variable named in the messages: "ag", or "ag_v" for a vertical component
+    name = "ag"
 
     def __init__(self, motion: GroundMotion, name: str = "ag"):
         self.motion = motion

@@ -101,6 +101,11 @@ class Simulator:
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
 
+    Ground motion: `advance` and `sample` take the horizontal ground acceleration ``ag`` [m/s2] (positive along
+    +x) and optionally the vertical one ``ag_v`` [m/s2] (positive UPWARD: in the ground frame of the states and
+    outputs the inertial force -m_i ag_v along +y on every mass, an effective gravity g + ag_v; where
+    g + ag_v < 0 the body leaves the ground). The energy output keeps g: it changes by the work of -m_i ag_v.
+
     Every `advance` either completes with finite outputs or raises (ValueError for bad input or a motion
     that overflows, WorkLimitError for too much work) with the state exactly as before the call.
     `get_state` / `set_state` save and load the state as a flat dict of plain values.

@@ -65,7 +65,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..contact import mode_forces
+from ..contact import forces_of, mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, SLIDING, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
 from . import sliding
@@ -93,6 +93,19 @@ def vertical_of(ag):
         value = vert.value
         return lambda t: value
     return vert
+
+
+def _no_args(t: float) -> tuple:
+    return ()
+
+
+def vertical_args(ag):
+    """t -> the extra arguments (ag_v(t),) of the float functions of a model under the GroundMotion ``ag``, or ()
+    without a vertical component (so that a model written before ag_v existed keeps working without one)."""
+    if ag.vertical is None:
+        return _no_args
+    av_of = vertical_of(ag)
+    return lambda t: (av_of(t),)
 
 
 def body_outputs(body: str, point: str) -> tuple:
@@ -330,7 +343,7 @@ class RockingModel(ABC):
         q, v = self.embed(mode, r, r_dot)
         J, jd = self.mode_jacobian(mode, r, r_dot)
         M = self.mass_matrix(q)
-        rhs = J.T @ (self.forces(q, v, ag, ag_v) - M @ jd)
+        rhs = J.T @ (forces_of(self, q, v, ag, ag_v) - M @ jd)
         return np.linalg.solve(J.T @ M @ J, rhs)
 
     def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
@@ -464,17 +477,17 @@ class RockingModel(ABC):
         nc = self.n_contacts
         F, L, ip = self.force_scale, self.length_scale, self.phi_index
         a_of = (lambda t: ag.value) if ag.constant else ag
-        av_of = vertical_of(ag)
+        av_of = vertical_args(ag)
 
         def rhs(t, y):
             if k == 0:
                 return []
             r, rd = np.array(y[:k]), np.array(y[k:])
-            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), av_of(t)).tolist()
+            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), *av_of(t)).tolist()
 
         def monitors(t, y):
             q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            lam = self.contact_forces(mode, q, v, a_of(t), av_of(t)) if closed else None
+            lam = self.contact_forces(mode, q, v, a_of(t), *av_of(t)) if closed else None
             g = self.gaps(q)
             phi = float(q[ip])
             out = []
