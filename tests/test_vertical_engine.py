@@ -221,6 +221,16 @@ def test_state_round_trip_during_a_vertical_motion(scheme):
         assert abs(py.outputs()["phi"] - c.outputs()["phi"]) <= PHI_TOL
         assert py.integrator.impacts == c.integrator.impacts
     assert c.integrator.impacts >= 1
+    # and the other way: a Python run's state, taken during the motion, goes on alike in the C engine
+    p0 = Simulator(block, scheme, engine="python", on_report="ignore")
+    p0.advance(0.6, gm)
+    c3 = Simulator(block, scheme, engine="c")
+    c3.set_state(p0.get_state())
+    for t in np.arange(1, 11) * 0.05 + 0.6:
+        p0.advance(float(t), gm)
+        c3.advance(float(t), gm)
+        assert abs(p0.outputs()["phi"] - c3.outputs()["phi"]) <= PHI_TOL
+        assert p0.integrator.impacts == c3.integrator.impacts
 
 
 # ---------------------------------------------------------------------------------------------- extension
