@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from rocking_model import Simulator, SinePulse, TwoComponentMotion, _engine, simulate
+from rocking_model import SampledMotion, Simulator, SinePulse, TwoComponentMotion, _engine, simulate
 from rocking_model.ground_motion import ConstantMotion, LinearMotion, RectangularPulse
 from rocking_model.models import FlexibleOscillator, RigidBlock
 
@@ -312,3 +312,41 @@ def test_vspec_of_a_callback_vertical_motion():
         sim.advance(1.0, gm)
         runs.append((sim.outputs(), sim.integrator.n_steps))
     assert runs[0] == runs[1]
+
+
+def _pair_cases():
+    t, ag, ag_v = _record_pair(dt=0.05, T=2.0)
+    record = SampledMotion(t, ag)
+    vrecord = SampledMotion(t, ag_v)
+    shifted = SampledMotion(t[:20] + 0.025, ag_v[:20])         # samples between the horizontal record's
+    return {
+        "record pair (same samples)": TwoComponentMotion(record, vrecord),
+        "records on interleaved samples": TwoComponentMotion(record, shifted),
+        "record and a rectangular drop": TwoComponentMotion(record, RectangularPulse(-1.5 * G, 0.3, 0.4)),
+        "sine pulses": TwoComponentMotion(SinePulse(2.0, 5.0, 0.1), SinePulse(-3.0, 9.0, 0.35)),
+        "constant and a record": TwoComponentMotion(ConstantMotion(0.5), vrecord),
+        "record and a constant": TwoComponentMotion(record, ConstantMotion(-2.0)),
+        "a sine and its own start": TwoComponentMotion(SinePulse(2.0, 5.0, 0.5), RectangularPulse(1.0, 0.2, 0.5)),
+    }
+
+
+@pytest.mark.parametrize("case", sorted(_pair_cases()))
+def test_the_pair_of_motions_equals_two_component_motion(case):
+    """rk_motion_pair_*: the values of both components, the next breakpoint (the earlier of both) and the
+    continuity at a breakpoint (both continuous, a component without a breakpoint there continuous) equal
+    TwoComponentMotion's at the breakpoints of both, their neighbours and a grid."""
+    from rocking_model.engine import motion_spec, vertical_spec
+    gm = _pair_cases()[case]
+    times = list(np.linspace(-0.3, 2.5, 701))
+    bps, t = [], -1.0
+    while len(bps) < 200:
+        t = gm.next_breakpoint(t)
+        if not math.isfinite(t):
+            break
+        bps.append(t)
+    times += bps + [float(np.nextafter(b, 9.0)) for b in bps] + [float(np.nextafter(b, -9.0)) for b in bps]
+    values, nb, cont, vvalues = _engine.motion_eval(motion_spec(gm), times, vertical_spec(gm))
+    assert values == [float(gm(x)) for x in times]
+    assert vvalues == [float(gm.vertical(x)) for x in times]
+    assert nb == [float(gm.next_breakpoint(x)) for x in times]
+    assert cont == [bool(gm.continuous_at(x)) for x in times]
