@@ -350,3 +350,56 @@ def test_the_pair_of_motions_equals_two_component_motion(case):
     assert vvalues == [float(gm.vertical(x)) for x in times]
     assert nb == [float(gm.next_breakpoint(x)) for x in times]
     assert cont == [bool(gm.continuous_at(x)) for x in times]
+
+
+# ---------------------------------------------------------------------------------------------- hypothesis
+from hypothesis import HealthCheck, given, settings          # noqa: E402
+from hypothesis import strategies as st                      # noqa: E402
+
+#: [rad] hypothesis scenes: the same motion to the scheme's tolerance (an error of order tol per step that
+#: impacts amplify; 1e-6 rad is 1e-5 of the rocking amplitudes), as tests/test_engine_event_driven.py
+SCENE_PHI_TOL = 1e-6
+
+
+def _hypothesis_scene(model, scheme, phi0, gm, times):
+    import warnings
+    py = Simulator(model, scheme, engine="python", phi_0=phi0, on_report="ignore", max_steps=None)
+    c = Simulator(model, scheme, engine="c", phi_0=phi0, on_report="ignore", max_steps=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for t in times:
+            try:
+                py.advance(t, gm)
+            except ValueError as exc:
+                # a documented limit of the model (the classical rule at a sliding pivot): the same refusal
+                with pytest.raises(ValueError) as ec:
+                    c.advance(t, gm)
+                assert str(ec.value) == str(exc)
+                return
+            c.advance(t, gm)
+            q, _ = c.integrator.state()
+            assert np.all(np.isfinite(q))
+    if bool(py.integrator.overturned) != bool(c.integrator.overturned):
+        pytest.skip("an overturning boundary (round-off decides)")
+    assert abs(c.outputs()["phi"] - py.outputs()["phi"]) <= SCENE_PHI_TOL, (py.outputs()["phi"], c.outputs()["phi"])
+
+
+@settings(max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(b=st.floats(0.1, 0.5), h=st.floats(0.8, 2.0), e_N=st.floats(0.0, 1.0), mu=st.sampled_from([math.inf, 0.5]),
+       scheme=st.sampled_from(SCHEMES), phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0),
+       Av=st.floats(-1.5, 0.8), fv=st.floats(1.0, 10.0))
+def test_hypothesis_rigid_vertical_scenes(b, h, e_N, mu, scheme, phi0, A, f, Av, fv):
+    """Random blocks under random pulses in both directions (the vertical one down to -1.5 g: flight):
+    finite states, the same motion in both engines within the scheme's tolerance."""
+    block = RigidBlock(b=b, h=h, e_N=e_N, mu=mu)
+    gm = TwoComponentMotion(SinePulse(A * G, 2.0 * math.pi * f), SinePulse(Av * G, 2.0 * math.pi * fv, 0.05))
+    _hypothesis_scene(block, scheme, phi0 * block.alpha, gm, (0.5, 1.0))
+
+
+@settings(max_examples=8, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(EI=st.floats(4.5, 5.3), e_N=st.floats(0.0, 1.0), rule=st.sampled_from([0, 1]), phi0=st.floats(-0.1, 0.1),
+       A=st.floats(0.0, 0.5), f=st.floats(0.5, 3.0), Av=st.floats(-1.2, 0.8), fv=st.floats(1.0, 8.0))
+def test_hypothesis_flexible_vertical_scenes(EI, e_N, rule, phi0, A, f, Av, fv):
+    osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, impact_rule=rule)
+    gm = TwoComponentMotion(SinePulse(A * G, 2.0 * math.pi * f), SinePulse(Av * G, 2.0 * math.pi * fv, 0.05))
+    _hypothesis_scene(osc, "event_driven", phi0 * math.atan2(osc.b, osc.h), gm, (0.5, 1.0))

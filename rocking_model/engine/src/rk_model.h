@@ -118,7 +118,8 @@ typedef struct rk_model_ops {
      *  is not NULL and the mode has closed contacts, also (sum lambda_N, sum lambda_T) [N] into totals[0..1]
      *  computed from the same intermediates (mode_closures' totals). optional (NULL: rk_model_generic_monitors,
      *  RockingModel.mode_functions' generic monitors and sliding.force_totals). */
-    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals);
+    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g,
+                          double *totals);
     /** Outputs of the reduced state of a sticking mode (mode_outputs, out in the order of outputs).
      *  optional (NULL: outputs(embed(y))). */
     void (*mode_outputs)(const rk_model *m, int mode, const double *y, double *out);
@@ -207,7 +208,8 @@ double rk_model_slip(const rk_model *m, const double *q);
 /** sliding.shift_of: horizontal offset of a full state on the closed contacts of a sticking mode [m]. */
 double rk_shift_of(const rk_model *m, int mode, const double *q);
 /** sliding.force_totals at a full state (sum lambda_N, sum lambda_T) [N] of a sticking mode. */
-void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *totals);
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
+                     double *totals);
 
 /** Generic fallbacks (used when the kernel leaves the optional pointer NULL; pinned on both models by
  *  comparing with the Python generic code of RockingModel). */
@@ -222,10 +224,10 @@ void rk_slide_embed(const rk_model *m, int mode, const double *r, const double *
 int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *v, double *y);
 /** slide_motion: the full acceleration a and tau = mu lambda_N of each closed contact (in increasing contact
  *  order). RK_ERR_SOLVER only where numpy's lstsq fallback would also fail. */
-rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *a,
-                          double *tau);
-rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
-                                double *r_ddot);
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag,
+                          double ag_v, double *a, double *tau);
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+                                double ag_v, double *r_ddot);
 void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, double *J, double *jd);
 
 /* ------------------------------------------------------------------------------------------ helpers
