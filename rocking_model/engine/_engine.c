@@ -1494,19 +1494,24 @@ static PyObject *py_create_and_free(PyObject *self, PyObject *args, PyObject *kw
  *  as the Python object's): the pinning entry point of tests/test_engine_api.py. */
 static PyObject *py_motion_eval(PyObject *self, PyObject *args)
 {
-    PyObject *spec, *times_obj, *values = NULL, *bps = NULL, *cont = NULL, *fast;
+    PyObject *spec, *times_obj, *values = NULL, *bps = NULL, *cont = NULL, *fast, *vspec = Py_None, *vvals = NULL;
     motion_holder h;
     Py_ssize_t i, n;
-    int idx;
+    int idx, vidx = -1;
+    rk_motion *mv = NULL;
     (void)self;
-    if (!PyArg_ParseTuple(args, "OO", &spec, &times_obj))
+    if (!PyArg_ParseTuple(args, "OO|O", &spec, &times_obj, &vspec))
         return NULL;
     memset(&h, 0, sizeof(h));
     idx = parse_motion(&h, spec, 0);
-    if (idx < 0) {
+    if (idx >= 0 && vspec != Py_None)
+        vidx = parse_motion(&h, vspec, 0);
+    if (idx < 0 || (vspec != Py_None && vidx < 0)) {
         holder_release(&h);
         return NULL;
     }
+    if (vidx >= 0)
+        mv = &h.m[vidx];
     fast = PySequence_Fast(times_obj, "times must be a sequence");
     if (fast == NULL) {
         holder_release(&h);
@@ -1516,7 +1521,9 @@ static PyObject *py_motion_eval(PyObject *self, PyObject *args)
     values = PyList_New(n);
     bps = PyList_New(n);
     cont = PyList_New(n);
-    if (values == NULL || bps == NULL || cont == NULL)
+    if (mv != NULL)
+        vvals = PyList_New(n);
+    if (values == NULL || bps == NULL || cont == NULL || (mv != NULL && vvals == NULL))
         goto fail;
     for (i = 0; i < n; i++) {
         double t = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(fast, i)), x;
@@ -1530,6 +1537,20 @@ static PyObject *py_motion_eval(PyObject *self, PyObject *args)
             goto fail;
         }
         PyList_SET_ITEM(values, i, PyFloat_FromDouble(x));
+        if (mv != NULL) {
+            /* the pair (TwoComponentMotion): the vertical value, the pair's breakpoint and continuity */
+            double xv = rk_motion_eval(mv, t, &failed, msg);
+            if (failed) {
+                holder_reraise(&h);
+                goto fail;
+            }
+            PyList_SET_ITEM(vvals, i, PyFloat_FromDouble(xv));
+            PyList_SET_ITEM(bps, i, PyFloat_FromDouble(rk_motion_pair_next_breakpoint(&h.m[idx], mv, t)));
+            PyList_SET_ITEM(cont, i, PyBool_FromLong(rk_motion_pair_continuous_at(&h.m[idx], mv, t)));
+            if (holder_reraise(&h))
+                goto fail;
+            continue;
+        }
         PyList_SET_ITEM(bps, i, PyFloat_FromDouble(rk_motion_next_breakpoint(&h.m[idx], t)));
         PyList_SET_ITEM(cont, i, PyBool_FromLong(rk_motion_continuous_at(&h.m[idx], t)));
         if (holder_reraise(&h))
@@ -1537,9 +1558,12 @@ static PyObject *py_motion_eval(PyObject *self, PyObject *args)
     }
     Py_DECREF(fast);
     holder_release(&h);
+    if (mv != NULL)
+        return Py_BuildValue("(NNNN)", values, bps, cont, vvals);
     return Py_BuildValue("(NNN)", values, bps, cont);
 fail:
     Py_DECREF(fast);
+    Py_XDECREF(vvals);
     Py_XDECREF(values);
     Py_XDECREF(bps);
     Py_XDECREF(cont);
@@ -1551,7 +1575,8 @@ static PyMethodDef methods[] = {
     {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
     {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
     {"motion_eval", py_motion_eval, METH_VARARGS,
-     "motion_eval(spec, times) -> (ag, next_breakpoint, continuous_at) lists: the C ground motions (tests)."},
+     "motion_eval(spec, times, vspec=None) -> (ag, next_breakpoint, continuous_at) lists: the C ground motions "
+     "(tests); with vspec the pair's breakpoints and continuity and a fourth list, ag_v."},
     {"create_and_free", (PyCFunction)(void (*)(void))py_create_and_free, METH_VARARGS | METH_KEYWORDS,
      "create_and_free(kind, params, initial=None): create a C engine for model kind ('rigid', 'flexible') with "
      "the declared parameters in order and free it; raises ValueError on bad input, NotImplementedError for a "

@@ -407,8 +407,8 @@ rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, doub
     return RK_OK;
 }
 
-rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *lam,
-                         rk_error *err)
+rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
+                         double *lam, rk_error *err)
 {
     int n = m->ops->n_contacts, nd = m->ops->n_dof, i;
     double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];

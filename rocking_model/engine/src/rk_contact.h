@@ -149,8 +149,8 @@ rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, doub
 /** contact.solution_sigma: +1, -1 or 0. */
 int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts);
 /** contact.mode_forces: normal forces [N] of the closed contacts of a sticking mode held closed. */
-rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *lam,
-                         rk_error *err);
+rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
+                         double *lam, rk_error *err);
 
 /** Added by part B: integrators/moreau_jean.inexact_message, the text of an "inexact_contact" report (shared by
  *  the event-driven scheme and Moreau-Jean): "the <what> at t = <t> s has no exact solution (least violation

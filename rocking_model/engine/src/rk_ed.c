@@ -432,8 +432,8 @@ static rk_status ed_record_samples(rk_engine *e, ed_out *o, int mode, double t_l
 
 /* ------------------------------------------------------------------------------------------ contact events */
 
-static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
-                           int *mode, double *v_out, int *changed, rk_error *err);
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t,
+                           int prefer, int *mode, double *v_out, int *changed, rk_error *err);
 
 /** `_record_impact` */
 static rk_status ed_record_impact(rk_engine *e, double t, const double *v_minus, const double *v_plus,
@@ -564,8 +564,8 @@ static rk_status ed_select_mode(rk_engine *e, const double *q, const double *v, 
 }
 
 /** `_decide`: (mode, v) after the consistent state (q, v); *changed 1 when a Painleve impulse changed v */
-static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
-                           int *mode, double *v_out, int *changed, rk_error *err)
+static rk_status ed_decide(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t,
+                           int prefer, int *mode, double *v_out, int *changed, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
@@ -597,8 +597,8 @@ static rk_status ed_decide(rk_engine *e, const double *q, const double *v, doubl
 }
 
 /** `_enter` */
-static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t, int prefer,
-                          rk_error *err)
+static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t,
+                          int prefer, rk_error *err)
 {
     int mode, changed;
     double v2[RK_MAX_DOF];

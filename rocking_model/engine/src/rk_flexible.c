@@ -329,7 +329,8 @@ static void flexible_mode_rhs(const rk_model *m, int mode, const double *y, doub
     }
 }
 
-static void flexible_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
+static void flexible_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v,
+                                   double *g, double *totals)
 {
     double mt = MT, kt = KT, c = CD, C = CC, D = DD, grav = G, A_h = AH, Mt = MTOT, b = B;
     /* W the weight (the monitors' scale, always > 0), We = M_t (g + ag_v) the effective weight (== W at
@@ -431,8 +432,8 @@ static void flexible_mode_outputs(const rk_model *m, int mode, const double *y, 
 
 /* FlexibleOscillator.reduced_acceleration of the sticking modes with closed corners (FULL, rocking): its own
  * closed forms (operation order differs from mode_closures' accel: K = J0 + m_tilde u^2 + M_t b^2 - ...) */
-static void reduced_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
-                                 double *rdd)
+static void reduced_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+                                 double ag_v, double *rdd)
 {
     if (mode == RK_MODE_FULL) {
         rdd[0] = (-CD * r_dot[0] - KT * r[0] - DD * ag) / MT;
@@ -453,8 +454,8 @@ static void reduced_acceleration(const rk_model *m, int mode, const double *r, c
     }
 }
 
-static void flexible_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
-                                    double *lam)
+static void flexible_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag,
+                                    double ag_v, double *lam)
 {
     int idx[4], k, i, j;
     double r[4], rd[4], J[16], jd[4], rdd[4], a[4], M[16], f[4], resid[4];

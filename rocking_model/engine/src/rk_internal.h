@@ -154,7 +154,8 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
 /** EventDriven._run: advance (samples NULL) or sample, under the pair (ag, ag_v) (ag_v NULL: no vertical motion,
  *  GroundMotion.vertical is None). Errors leave the state partly advanced: the caller
  *  (rk_engine.c) restores its checkpoint. */
-rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, const double *samples, long long n_samples,
+rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, const double *samples,
+                    long long n_samples,
                     long long max_steps, int *modes, double *values, long long *impacts, int *overturned,
                     unsigned flags, rk_error *err);
 /* (part D) rk_ed_run with samples writes the rows of the samples only, n_samples rows (the Python's ``_run``);

@@ -554,7 +554,8 @@ rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, d
 }
 
 /* the monitors of a sticking mode without the friction cone (mode_closures' / mode_functions') */
-static void stick_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
+static void stick_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g,
+                           double *totals)
 {
     if (m->ops->mode_monitors != NULL)
         m->ops->mode_monitors(m, mode, y, ag, ag_v, g, totals);
@@ -668,7 +669,8 @@ double rk_shift_of(const rk_model *m, int mode, const double *q)
 }
 
 /* r_ddot of a sticking mode (RockingModel.reduced_acceleration: the kernel's closed form, else Lagrange) */
-static void reduced_acceleration(const rk_model *m, int mode, const double *y, int k, double ag, double ag_v, double *r_ddot)
+static void reduced_acceleration(const rk_model *m, int mode, const double *y, int k, double ag, double ag_v,
+                                 double *r_ddot)
 {
     double dy[RK_MAX_Y];
     int i;
@@ -680,7 +682,8 @@ static void reduced_acceleration(const rk_model *m, int mode, const double *y, i
         r_ddot[i] = dy[k + i];
 }
 
-void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *totals)
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
+                     double *totals)
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k, i, j;
     double y[RK_MAX_Y], J[RK_MAX_DOF * RK_MAX_DOF], jd[RK_MAX_DOF], a[RK_MAX_DOF], rdd[RK_MAX_DOF];

@@ -16,7 +16,9 @@
  *   W[i * n_contacts + c] (i the coordinate, c the contact), as the Python's (n, n_contacts) arrays;
  *   a mode Jacobian J is n_dof x k: J[i * k + j].
  * - y = [r_0..r_{k-1}, r_dot_0..r_dot_{k-1}] is the reduced state of a mode (k = its number of dofs).
- * - ag [m/s2] is always a VALUE (the caller evaluates the ground motion at t); no callbacks into Python.
+ * - ag [m/s2] is always a VALUE (the caller evaluates the ground motion at t); no callbacks into Python. Every
+ *   function taking ag takes the vertical ground acceleration ag_v [m/s2, positive upward] right after it: the
+ *   effective gravity g + ag_v on every mass (DESIGN.md section 3a); ag_v = 0 must round as without it.
  * - The kernel functions of the "sticking modes" section are called only with modes m where
  *   stick_of(m) == m; the generic rk_* functions of this header reach every mode (sliding ones through
  *   rk_sliding.c), as RockingModel.dofs_of / embed_any / reduce_any / functions_of do.
@@ -87,7 +89,7 @@ typedef struct rk_model_ops {
     void (*mass_matrix)(const rk_model *m, const double *q, double *M);
     /** optional (NULL: the generic inverse of rk_model_inverse_mass) */
     void (*inverse_mass_matrix)(const rk_model *m, const double *q, double *Minv);
-    /** f(q, v, ag) [N, N m]: non-contact generalized forces. */
+    /** f(q, v, ag, ag_v) [N, N m]: non-contact generalized forces (ag_v: gravity g + ag_v). */
     void (*forces)(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double *f);
     /** optional (NULL: no stiff part, returns 0): K = -df/dq, C = -df/dv of the stiff linear part; returns 1
      *  when filled (RockingModel.stiff_jacobians not None). */
@@ -107,16 +109,17 @@ typedef struct rk_model_ops {
     /** (J, J_dot r_dot) of a sticking mode: RockingModel.mode_jacobian (J is n_dof x k). */
     void (*mode_jacobian)(const rk_model *m, int mode, const double *r, const double *r_dot, double *J,
                           double *jd);
-    /** dy = [r_dot, r_ddot] of a sticking mode at y under ag: the rhs of mode_closures, SAME operation order
+    /** dy = [r_dot, r_ddot] of a sticking mode at y under (ag, ag_v): the rhs of mode_closures, SAME operation order
      *  as the Python closed form (DESIGN.md "Numerics"). optional (NULL: rk_model_generic_rhs, Lagrange on the
      *  constrained system as RockingModel.reduced_acceleration). */
     void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
-    /** The event functions of a sticking mode at (y, ag), in the order of mode_closures' monitors (one per
+    /** The event functions of a sticking mode at (y, ag, ag_v), in the order of mode_closures' monitors (one per
      *  contact, then the overturning margin HALF_PI - |phi|): writes n_contacts + 1 values into g; when totals
      *  is not NULL and the mode has closed contacts, also (sum lambda_N, sum lambda_T) [N] into totals[0..1]
      *  computed from the same intermediates (mode_closures' totals). optional (NULL: rk_model_generic_monitors,
      *  RockingModel.mode_functions' generic monitors and sliding.force_totals). */
-    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals);
+    void (*mode_monitors)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g,
+                          double *totals);
     /** Outputs of the reduced state of a sticking mode (mode_outputs, out in the order of outputs).
      *  optional (NULL: outputs(embed(y))). */
     void (*mode_outputs)(const rk_model *m, int mode, const double *y, double *out);
@@ -205,7 +208,8 @@ double rk_model_slip(const rk_model *m, const double *q);
 /** sliding.shift_of: horizontal offset of a full state on the closed contacts of a sticking mode [m]. */
 double rk_shift_of(const rk_model *m, int mode, const double *q);
 /** sliding.force_totals at a full state (sum lambda_N, sum lambda_T) [N] of a sticking mode. */
-void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *totals);
+void rk_force_totals(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
+                     double *totals);
 
 /** Generic fallbacks (used when the kernel leaves the optional pointer NULL; pinned on both models by
  *  comparing with the Python generic code of RockingModel). */
@@ -220,10 +224,10 @@ void rk_slide_embed(const rk_model *m, int mode, const double *r, const double *
 int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *v, double *y);
 /** slide_motion: the full acceleration a and tau = mu lambda_N of each closed contact (in increasing contact
  *  order). RK_ERR_SOLVER only where numpy's lstsq fallback would also fail. */
-rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *a,
-                          double *tau);
-rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
-                                double *r_ddot);
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag,
+                          double ag_v, double *a, double *tau);
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+                                double ag_v, double *r_ddot);
 void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, double *J, double *jd);
 
 /* ------------------------------------------------------------------------------------------ helpers

@@ -241,7 +241,8 @@ static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double 
 }
 
 /* mode_closures' monitors and totals (the rocking branch's totals reuse the monitors' acc, sp, cp, lam) */
-static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals)
+static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v,
+                                double *g, double *totals)
 {
     double b = B, h = H, grav = G, ge = G + ag_v;
     if (mode == RK_MODE_FULL) {

@@ -54,8 +54,8 @@ int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *
     return k0 + 1;
 }
 
-rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v, double *a,
-                          double *tau)
+rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const double *v, double ag,
+                          double ag_v, double *a, double *tau)
 {
     int n = m->ops->n_dof, nc = m->ops->n_contacts, sigma = 0, stick, closed[RK_MAX_CONTACTS], kc = 0, i, j, l;
     double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], a_N[RK_MAX_CONTACTS],
@@ -126,8 +126,8 @@ void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const doubl
     }
 }
 
-rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag, double ag_v,
-                                double *r_ddot)
+rk_status rk_slide_acceleration(const rk_model *m, int mode, const double *r, const double *r_dot, double ag,
+                                double ag_v, double *r_ddot)
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k = rk_slide_dofs(m, mode, idx), i;
     double q[RK_MAX_DOF], v[RK_MAX_DOF], a[RK_MAX_DOF], tau[RK_MAX_CONTACTS], J[RK_MAX_DOF * RK_MAX_DOF],
