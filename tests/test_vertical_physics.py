@@ -7,8 +7,8 @@ g + ag_v, the issue's rocking equation), ag_v = 0 bit-identical to no vertical c
 vertical inertial force between impacts and no energy gain at impacts, flight where g + ag_v < 0, friction
 scaling with g + ag_v, random scenes (hypothesis), and the bad-input messages.
 
-All runs use engine="python" (the reference engine). The C part of issue 23 extends these scenes to
-engine="c" (tests/test_vertical_engine.py) once the compiled engine reads the vertical component."""
+Every test runs on both engines (the `engine` fixture below): the Python reference and the compiled engine;
+tests/test_vertical_engine.py pins the two to each other on the same scenes."""
 from __future__ import annotations
 
 import math
@@ -27,7 +27,15 @@ from rocking_model.modes import Mode
 from rocking_model.validation import AG_MAX, check_ag_v
 
 G = 9.81
+#: the engine of the runs of the current test (set by the autouse fixture `engine`)
 PY = dict(engine="python")
+
+
+@pytest.fixture(autouse=True, params=["python", "c"])
+def engine(request):
+    PY["engine"] = request.param
+    yield request.param
+    PY["engine"] = "python"
 TOL = dict(gap_tol=1e-12, v_tol=1e-12)
 SCHEMES = ["event_driven", "moreau_jean"]
 #: documented penetration tolerance (tests/test_properties.py): max over the corners of -g_N <= PEN_TOL * L
