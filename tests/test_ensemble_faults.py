@@ -311,7 +311,8 @@ def test_truncated_header_is_named_as_such(tmp_path):
         s = run_ensemble(_grid(1), out, workers=0, progress=False)
     assert s["n_run"] == 3 and _rows_per_line(out)[0] == list(FIELDS)
     out.write_text(header[:30] + "\n" + "x," * (len(FIELDS) - 1) + "x\n")
-    with pytest.raises(ValueError, match=r"its header is truncated \(it stops in column 7 of 30.*move it "
+    with pytest.raises(ValueError, match=rf"its header is truncated \(it stops in column 7 of {len(FIELDS)}.*"
+                                         r"move it "
                                          r"aside \(or delete it\) and rerun, or give another --out"):
         run_ensemble(_grid(1), out, workers=0, progress=False)
     with pytest.raises(ValueError, match="not those of an ensemble output"):
