@@ -120,7 +120,7 @@ def test_ssd_follows_the_ssp_1_0_structure(example_ssp, built_fmus):
                 assert typed.tag == _q("ssv", v.type)
                 {"Real": float, "Integer": int}[v.type](typed.get("value"))
     connections = system.findall("ssd:Connections/ssd:Connection", NS)
-    assert len(connections) == 3
+    assert len(connections) == 5        # ag, a_floor x 2, ag_v x 2
     for c in connections:
         assert kinds[(c.get("startElement"), c.get("startConnector"))] == "output"
         assert kinds[(c.get("endElement"), c.get("endConnector"))] == "input"
