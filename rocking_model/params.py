@@ -91,17 +91,26 @@ def param(default, unit: str | None = "1", description: str = "", **kw):
                                                                       description=description, **kw)})
 
 
+#: class -> its declared parameters (a class's fields do not change once it is made; every model built reads
+#: them, and building them from the dataclass fields costs more than the checks themselves)
+_DECLARED: dict = {}
+
+
 def declared_parameters(cls) -> tuple:
     """The `Param` of every dataclass field of ``cls`` declared with `param`, in field order."""
-    out = []
-    for f in dataclasses.fields(cls):
-        spec = f.metadata.get("param")
-        if spec is not None:
-            out.append(Param(name=f.name, **spec))
-    return tuple(out)
+    out = _DECLARED.get(cls)
+    if out is None:
+        out = []
+        for f in dataclasses.fields(cls):
+            spec = f.metadata.get("param")
+            if spec is not None:
+                out.append(Param(name=f.name, **spec))
+        out = _DECLARED[cls] = tuple(out)
+    return out
 
 
 def check_parameters(obj) -> None:
     """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place."""
+    setattr_ = object.__setattr__
     for p in declared_parameters(type(obj)):
-        object.__setattr__(obj, p.name, p.check(getattr(obj, p.name)))
+        setattr_(obj, p.name, p.check(getattr(obj, p.name)))

@@ -251,7 +251,11 @@ class Simulator:
         if (bool(np.any(times[1:] < times[:-1])) if isinstance(times, np.ndarray)
                 else any(b < a for a, b in zip(times, times[1:]))):
             raise ValueError("times must be increasing")
-        gm = self._ground_motion(ag)
+        return self._sample(times, self._ground_motion(ag))
+
+    def _sample(self, times, gm) -> tuple:
+        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``."""
+        integ = self.integrator
         return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))
 
     def _guarded(self, t_end: float, gm, action):
@@ -428,11 +432,13 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     dt = check_real("output_interval", output_interval, lo=0.0, lo_open=True)
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
-    times = np.minimum(t0 + dt * np.arange(n + 1), t_end)
+    times = np.minimum(t0 + dt * np.arange(n + 1) if t0 else dt * np.arange(n + 1), t_end)   # (0 + x is x)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples
-        modes, values, impacts, overturned = sim.sample(times[1:], gm)
+        # (the grid is finite and increasing from t0 by construction: the compiled engine reads it unchecked)
+        modes, values, impacts, overturned = (sim._sample(times[1:], gm) if sim.engine == "c"
+                                              else sim.sample(times[1:], gm))
         values["contact"] = modes
         values["impacts"] = impacts
         values["overturned"] = overturned

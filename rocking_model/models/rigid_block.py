@@ -56,9 +56,9 @@ class RigidBlock(RockingModel):
         for name, value in (("_R", R), ("_alpha", math.atan2(self.b, self.h)),
                             ("_I_c", self.m * R ** 2 / 3.0), ("_p", math.sqrt(3.0 * self.g / (4.0 * R)))):
             object.__setattr__(self, name, value)
-        M = np.diag([self.m, self.m, self._I_c])
-        object.__setattr__(self, "_M", M)
-        object.__setattr__(self, "_Minv", np.diag(1.0 / np.diag(M)))
+        m, I_c = self.m, self._I_c         # (diagonal matrices written out: np.diag costs more than the rest)
+        object.__setattr__(self, "_M", np.array(((m, 0.0, 0.0), (0.0, m, 0.0), (0.0, 0.0, I_c))))
+        object.__setattr__(self, "_Minv", np.array(((1.0 / m, 0.0, 0.0), (0.0, 1.0 / m, 0.0), (0.0, 0.0, 1.0 / I_c))))
 
     # ------------------------------------------------------------------ derived parameters
     @property
