@@ -14,13 +14,22 @@ Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flex
 record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
 and Moreau-Jean (dt_max 1e-3: ten time steps per communication step; its cost is also given per time step).
 
-Cold start: in a fresh interpreter, from `import rocking_model` to the end of the first 0.01 s step of a
-`Simulator(engine="c")` (median of several interpreters); the import of numpy, which the package needs anyway,
-is listed apart.
+Cold start: in a fresh interpreter (median of several), to the end of the first 0.01 s step of the record
+scene's rigid block, through
+
+- the low-level API: `from rocking_model._engine import Engine` (the extension module alone: neither numpy nor
+  the Python engine is imported), `Engine("rigid", params)`, `advance`, `outputs`;
+- `Simulator(engine="c")`: from `import numpy` (listed apart: the Python API needs it) and
+  `from rocking_model import RigidBlock, Simulator`.
+
+The interpreters run with the package's bytecode cached, as after `pip install` (one unmeasured run first;
+PYTHONDONTWRITEBYTECODE, if set, is dropped for them: without the cache every import compiles the package's
+sources, about 40 ms of the Python API's import).
 """
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -42,19 +51,51 @@ sim.advance(0.01, 0.5)
 phi = sim.outputs()["phi"]
 t3 = time.perf_counter()
 print(json.dumps({"numpy_import": t1 - t0, "package_import": t2 - t1, "first_step": t3 - t2,
-                  "import_to_first_step": t3 - t0, "import_to_first_step_after_numpy": t3 - t1}))
+                  "import_to_first_step": t3 - t0, "import_to_first_step_after_numpy": t3 - t1, "phi": phi}))
 """
 
 
-def cold_start(repeats: int = 5) -> dict:
+COLD_LOW = r"""
+import json, sys, time
+t0 = time.perf_counter()
+from rocking_model._engine import Engine, model_kinds
+t1 = time.perf_counter()
+decl = next(k for k in model_kinds() if k["kind"] == "rigid")
+params = [{"b": 0.4, "h": 2.0}.get(p[0], p[2]) for p in decl["params"]]   # the declared defaults, b and h set
+eng = Engine("rigid", params, scheme=1)
+eng.advance(0.01, 0.5)
+phi = eng.outputs()[0]
+t2 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "first_step": t2 - t1, "import_to_first_step": t2 - t0, "phi": phi,
+                  "numpy_imported": "numpy" in sys.modules,
+                  "package_modules": sorted(m for m in sys.modules if m.startswith("rocking_model"))}))
+"""
+
+
+def _interpreters(script: str, repeats: int) -> dict:
+    """Median of ``repeats`` fresh interpreters running ``script`` (after one unmeasured run that caches the
+    bytecode); its last output line is a JSON dict."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     samples = []
-    for _ in range(repeats):
-        r = subprocess.run([sys.executable, "-c", COLD], capture_output=True, text=True, timeout=120,
-                           cwd=tempfile.gettempdir())
+    for i in range(repeats + 1):
+        r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                           cwd=tempfile.gettempdir(), env=env)
         if r.returncode != 0:
             return {"error": r.stderr.strip()[-1500:]}
-        samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    return {k: sorted(s[k] for s in samples)[len(samples) // 2] for k in samples[0]} | {"samples": samples}
+        if i:
+            samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    return {k: (sorted(s[k] for s in samples)[len(samples) // 2] if isinstance(samples[0][k], float)
+                else samples[0][k]) for k in samples[0]} | {"samples": samples}
+
+
+def cold_start(repeats: int = 5) -> dict:
+    """The Simulator path (fields at the top level) and the low-level path (``low_level``)."""
+    out = _interpreters(COLD, repeats)
+    low = _interpreters(COLD_LOW, repeats)
+    if "error" not in out and "error" not in low:
+        low["same_phi_as_simulator"] = low["phi"] == out["phi"]     # the same engine, the same first step
+    out["low_level"] = low
+    return out
 
 
 def _best(fn, repeats: int):
