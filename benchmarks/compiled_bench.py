@@ -6,6 +6,9 @@ outputs read after each step, through
 
 - the raw engine loop: `rocking_model._engine.Engine.advance(t, ag, 0, max_steps)` and `output_row()`
   (what an FMU's doStep costs in C plus one Python call each);
+- one `Engine.sample(times, spec, ...)` call over the record (the C loop over the communication steps, the
+  outputs written into arrays): the record integrated as given (linear between its samples), not held, so its
+  steps and impacts differ slightly from the held runs';
 - `Simulator(engine="c").advance(t, ag)` and `outputs()` (the Python API);
 - `simulate(..., hold="zoh", engine="c")` (whole run);
 - the Python engine's `Simulator.advance` loop (the reference, for the ratio and the agreement).
@@ -109,7 +112,8 @@ def _best(fn, repeats: int):
 
 
 def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
-    from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate
+    from rocking_model import FlexibleOscillator, RigidBlock, SampledMotion, Simulator, simulate
+    from rocking_model.engine import motion_spec
 
     t, a = S.synthetic_record()
     dt = 0.01
@@ -146,7 +150,21 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
                 return sim, phis
             return run
 
+        def sampled():
+            # one call into C for the whole record (Engine.sample: the C loop over the communication steps);
+            # the record is then integrated as given (linear between samples, simulate's hold="exact"), not held
+            sim = Simulator(make(), scheme, engine="c", **kw)
+            eng = sim.integrator._engine
+            spec = motion_spec(SampledMotion(t[:n + 1], a[:n + 1] * scale))
+            grid = np.asarray(times)
+            m = len(grid) + 1
+            rows = (np.empty(m, np.intc), np.empty((m, eng.n_outputs + 2)), np.empty(m, np.int64),
+                    np.empty(m, np.intc))
+            eng.sample(grid, spec, 100000, *rows, 0)
+            return sim, rows
+
         (sim_raw, phi_raw), t_raw = _best(raw, repeats)
+        (sim_smp, _), t_smp = _best(sampled, repeats)
         (sim_c, phi_c), t_api = _best(api("c"), repeats)
         (sim_py, phi_py), t_py = _best(api("python"), 1)
         res_sim, t_sim = _best(lambda: simulate(make(), (t[:n + 1], a[:n + 1] * scale), n * dt, scheme=scheme,
@@ -154,8 +172,9 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
         n_internal = int(sim_c.integrator.n_steps)
         row = {"kind": kind, "scheme": scheme, "settings": kw, "steps": n, "dt": dt, "pga_g": 0.4 * scale,
                "impacts": int(sim_c.outputs()["impacts"]), "internal_steps": n_internal,
-               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py,
+               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py, "sample": t_smp,
                "raw_us": t_raw / n * 1e6, "api_us": t_api / n * 1e6, "simulate_us": t_sim / n * 1e6,
+               "sample_us": t_smp / n * 1e6, "sample_impacts": int(sim_smp.outputs()["impacts"]),
                "python_us": t_py / n * 1e6, "python_over_raw": t_py / t_raw, "python_over_api": t_py / t_api,
                "raw_us_per_internal_step": t_raw / max(1, n_internal) * 1e6,
                "max_dphi_c_python": float(np.max(np.abs(np.array(phi_c) - np.array(phi_py)))),
@@ -163,7 +182,8 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
                "python_impacts": int(sim_py.outputs()["impacts"]),
                "max_abs_phi": float(np.max(np.abs(phi_c)))}
         out.append(row)
-        print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, API {row['api_us']:.2f}, simulate "
+        print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, Engine.sample {row['sample_us']:.2f}, "
+              f"API {row['api_us']:.2f}, simulate "
               f"{row['simulate_us']:.2f}, Python {row['python_us']:.1f} ({row['python_over_raw']:.0f}x raw); "
               f"{row['impacts']} impacts; |dphi| C-Python {row['max_dphi_c_python']:.1e}", flush=True)
     return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}
