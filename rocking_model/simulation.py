@@ -9,6 +9,7 @@ import numpy as np
 
 import warnings
 
+from .engine import ENGINES, CompiledIntegrator
 from .ground_motion import ConstantMotion, GroundMotion, as_ground_motion, checked_motion
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
@@ -142,12 +143,8 @@ class Simulator:
                                                                "ignore": "ignore"})
         options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
                                 impact_log_size=impact_log_size, tolerances=tolerances)
-        from .engine import ENGINES
-
         self.engine = check_choice("engine", engine, ENGINES)
         if self.engine == "c":
-            from .engine import CompiledIntegrator
-
             self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)
         else:
             self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
