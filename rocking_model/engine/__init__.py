@@ -90,6 +90,13 @@ _SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", 
              "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
 
 
+def _floats(x) -> list:
+    """``x`` as a list of floats (a float64 array's tolist(): the same values without a numpy scalar each)."""
+    if type(x) is np.ndarray and x.dtype == np.float64:
+        return x.tolist()
+    return [float(a) for a in x]
+
+
 def _checked_arguments(*args, **kwargs) -> tuple:
     """Stands in for a Python scheme class in its `from_options`: (args, kwargs) it would be built with."""
     return args, kwargs
@@ -161,7 +168,7 @@ class CompiledIntegrator(Integrator):
         self._scheme_cls = ref_cls
         self._options = options
         self._t0 = float(t0)
-        self._start = (int(mode), [float(a) for a in q], [float(a) for a in v])
+        self._start = (int(mode), _floats(q), _floats(v))
         self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
         self._names = self._engine.output_names
         self._t_fail = None
