@@ -6,6 +6,9 @@ outputs read after each step, through
 
 - the raw engine loop: `rocking_model._engine.Engine.advance(t, ag, 0, max_steps)` and `output_row()`
   (what an FMU's doStep costs in C plus one Python call each);
+- one `Engine.sample(times, spec, ...)` call over the record (the C loop over the communication steps, the
+  outputs written into arrays): the record integrated as given (linear between its samples), not held, so its
+  steps and impacts differ slightly from the held runs';
 - `Simulator(engine="c").advance(t, ag)` and `outputs()` (the Python API);
 - `simulate(..., hold="zoh", engine="c")` (whole run);
 - the Python engine's `Simulator.advance` loop (the reference, for the ratio and the agreement).
@@ -14,13 +17,22 @@ Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flex
 record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
 and Moreau-Jean (dt_max 1e-3: ten time steps per communication step; its cost is also given per time step).
 
-Cold start: in a fresh interpreter, from `import rocking_model` to the end of the first 0.01 s step of a
-`Simulator(engine="c")` (median of several interpreters); the import of numpy, which the package needs anyway,
-is listed apart.
+Cold start: in a fresh interpreter (median of several), to the end of the first 0.01 s step of the record
+scene's rigid block, through
+
+- the low-level API: `from rocking_model._engine import Engine` (the extension module alone: neither numpy nor
+  the Python engine is imported), `Engine("rigid", params)`, `advance`, `outputs`;
+- `Simulator(engine="c")`: from `import numpy` (listed apart: the Python API needs it) and
+  `from rocking_model import RigidBlock, Simulator`.
+
+The interpreters run with the package's bytecode cached, as after `pip install` (one unmeasured run first;
+PYTHONDONTWRITEBYTECODE, if set, is dropped for them: without the cache every import compiles the package's
+sources, about 40 ms of the Python API's import).
 """
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -42,19 +54,51 @@ sim.advance(0.01, 0.5)
 phi = sim.outputs()["phi"]
 t3 = time.perf_counter()
 print(json.dumps({"numpy_import": t1 - t0, "package_import": t2 - t1, "first_step": t3 - t2,
-                  "import_to_first_step": t3 - t0, "import_to_first_step_after_numpy": t3 - t1}))
+                  "import_to_first_step": t3 - t0, "import_to_first_step_after_numpy": t3 - t1, "phi": phi}))
 """
 
 
-def cold_start(repeats: int = 5) -> dict:
+COLD_LOW = r"""
+import json, sys, time
+t0 = time.perf_counter()
+from rocking_model._engine import Engine, model_kinds
+t1 = time.perf_counter()
+decl = next(k for k in model_kinds() if k["kind"] == "rigid")
+params = [{"b": 0.4, "h": 2.0}.get(p[0], p[2]) for p in decl["params"]]   # the declared defaults, b and h set
+eng = Engine("rigid", params, scheme=1)
+eng.advance(0.01, 0.5)
+phi = eng.outputs()[0]
+t2 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "first_step": t2 - t1, "import_to_first_step": t2 - t0, "phi": phi,
+                  "numpy_imported": "numpy" in sys.modules,
+                  "package_modules": sorted(m for m in sys.modules if m.startswith("rocking_model"))}))
+"""
+
+
+def _interpreters(script: str, repeats: int) -> dict:
+    """Median of ``repeats`` fresh interpreters running ``script`` (after one unmeasured run that caches the
+    bytecode); its last output line is a JSON dict."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     samples = []
-    for _ in range(repeats):
-        r = subprocess.run([sys.executable, "-c", COLD], capture_output=True, text=True, timeout=120,
-                           cwd=tempfile.gettempdir())
+    for i in range(repeats + 1):
+        r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                           cwd=tempfile.gettempdir(), env=env)
         if r.returncode != 0:
             return {"error": r.stderr.strip()[-1500:]}
-        samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    return {k: sorted(s[k] for s in samples)[len(samples) // 2] for k in samples[0]} | {"samples": samples}
+        if i:
+            samples.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    return {k: (sorted(s[k] for s in samples)[len(samples) // 2] if isinstance(samples[0][k], float)
+                else samples[0][k]) for k in samples[0]} | {"samples": samples}
+
+
+def cold_start(repeats: int = 5) -> dict:
+    """The Simulator path (fields at the top level) and the low-level path (``low_level``)."""
+    out = _interpreters(COLD, repeats)
+    low = _interpreters(COLD_LOW, repeats)
+    if "error" not in out and "error" not in low:
+        low["same_phi_as_simulator"] = low["phi"] == out["phi"]     # the same engine, the same first step
+    out["low_level"] = low
+    return out
 
 
 def _best(fn, repeats: int):
@@ -68,7 +112,8 @@ def _best(fn, repeats: int):
 
 
 def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
-    from rocking_model import FlexibleOscillator, RigidBlock, Simulator, simulate
+    from rocking_model import FlexibleOscillator, RigidBlock, SampledMotion, Simulator, simulate
+    from rocking_model.engine import motion_spec
 
     t, a = S.synthetic_record()
     dt = 0.01
@@ -105,7 +150,21 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
                 return sim, phis
             return run
 
+        def sampled():
+            # one call into C for the whole record (Engine.sample: the C loop over the communication steps);
+            # the record is then integrated as given (linear between samples, simulate's hold="exact"), not held
+            sim = Simulator(make(), scheme, engine="c", **kw)
+            eng = sim.integrator._engine
+            spec = motion_spec(SampledMotion(t[:n + 1], a[:n + 1] * scale))
+            grid = np.asarray(times)
+            m = len(grid) + 1
+            rows = (np.empty(m, np.intc), np.empty((m, eng.n_outputs + 2)), np.empty(m, np.int64),
+                    np.empty(m, np.intc))
+            eng.sample(grid, spec, 100000, *rows, 0)
+            return sim, rows
+
         (sim_raw, phi_raw), t_raw = _best(raw, repeats)
+        (sim_smp, _), t_smp = _best(sampled, repeats)
         (sim_c, phi_c), t_api = _best(api("c"), repeats)
         (sim_py, phi_py), t_py = _best(api("python"), 1)
         res_sim, t_sim = _best(lambda: simulate(make(), (t[:n + 1], a[:n + 1] * scale), n * dt, scheme=scheme,
@@ -113,8 +172,9 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
         n_internal = int(sim_c.integrator.n_steps)
         row = {"kind": kind, "scheme": scheme, "settings": kw, "steps": n, "dt": dt, "pga_g": 0.4 * scale,
                "impacts": int(sim_c.outputs()["impacts"]), "internal_steps": n_internal,
-               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py,
+               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py, "sample": t_smp,
                "raw_us": t_raw / n * 1e6, "api_us": t_api / n * 1e6, "simulate_us": t_sim / n * 1e6,
+               "sample_us": t_smp / n * 1e6, "sample_impacts": int(sim_smp.outputs()["impacts"]),
                "python_us": t_py / n * 1e6, "python_over_raw": t_py / t_raw, "python_over_api": t_py / t_api,
                "raw_us_per_internal_step": t_raw / max(1, n_internal) * 1e6,
                "max_dphi_c_python": float(np.max(np.abs(np.array(phi_c) - np.array(phi_py)))),
@@ -122,7 +182,8 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
                "python_impacts": int(sim_py.outputs()["impacts"]),
                "max_abs_phi": float(np.max(np.abs(phi_c)))}
         out.append(row)
-        print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, API {row['api_us']:.2f}, simulate "
+        print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, Engine.sample {row['sample_us']:.2f}, "
+              f"API {row['api_us']:.2f}, simulate "
               f"{row['simulate_us']:.2f}, Python {row['python_us']:.1f} ({row['python_over_raw']:.0f}x raw); "
               f"{row['impacts']} impacts; |dphi| C-Python {row['max_dphi_c_python']:.1e}", flush=True)
     return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}

@@ -421,12 +421,28 @@ def _compiled_targets(res):
             continue
         v = r["raw_us_per_internal_step"] if scheme == "moreau_jean" else r["raw_us"]
         api = r["api_us"] / (r["internal_steps"] / r["steps"]) if scheme == "moreau_jean" else r["api_us"]
+        smp = ""
+        if "sample_us" in r:
+            sv = r["sample_us"] / (r["internal_steps"] / r["steps"]) if scheme == "moreau_jean" else r["sample_us"]
+            smp = f"; {sv:.2f} µs through one `Engine.sample` call (the C loop; {r['sample_impacts']} impacts)"
         out.append((f"compiled {scheme.replace('_', '-')}, {kind}, ≤ {lim:g} µs {what} on the "
                     f"{r['steps'] * r['dt']:g} s record (impacts included)",
-                    f"{v:.2f} µs raw engine loop, {api:.2f} µs through `Simulator.advance` ({r['impacts']} impacts)",
+                    f"{v:.2f} µs raw engine loop, {api:.2f} µs through `Simulator.advance` ({r['impacts']} impacts)"
+                    f"{smp}",
                     "yes" if v <= lim else f"**no** ({v / lim:.1f}×)"))
     cold = comp.get("cold", {})
-    if "import_to_first_step" in cold:
+    low = cold.get("low_level", {})
+    if "import_to_first_step" in low:
+        # the compiled engine reached from Python: its low-level API (the extension module, no numpy)
+        v = low["import_to_first_step"]
+        sim = (f"; through `Simulator`: {ft(cold['import_to_first_step'])}, numpy's import "
+               f"{ft(cold['numpy_import'])} of it, the package's import {ft(cold['package_import'])}, Simulator + "
+               f"first step {ft(cold['first_step'])}" if "import_to_first_step" in cold else "")
+        out.append(("cold start of the compiled engine from Python (import → first step) < 50 ms",
+                    f"{ft(v)} through the low-level API `rocking_model._engine.Engine` (import "
+                    f"{ft(low['import'])}, numpy not imported: {not low['numpy_imported']}){sim}",
+                    "yes" if v < 0.05 else f"**no** ({v / 0.05:.1f}×)"))
+    elif "import_to_first_step" in cold:
         v = cold["import_to_first_step"]
         out.append(("cold start of the compiled engine from Python (import → first step) < 50 ms",
                     f"{ft(v)} (numpy's import {ft(cold['numpy_import'])} of it; the package's import "
@@ -465,17 +481,20 @@ def _compiled_section(res, w):
         w(f"The first {r0['steps'] * r0['dt']:g} s of the synthetic record (`benchmarks.scenes.synthetic_record`) in "
           f"{r0['dt']:g} s communication steps ({r0['steps']} steps), `ag` held over each step, the outputs read after "
           "each (`benchmarks/compiled_bench.py`; fastest of 5 runs, 3 in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
-          "`Engine.output_row()` on `rocking_model._engine.Engine`; *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
+          "`Engine.output_row()` on `rocking_model._engine.Engine`; *Engine.sample*: one call over the record, the C loop "
+          "over the communication steps (the record integrated as given, linear between samples, not held); *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
           "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
           "`Simulator.advance` loop on the Python engine. |Δφ|: max difference of φ after each step between the "
           "compiled and the Python engine (same algorithm, same steps).")
         w("")
-        w("| model | scheme, settings | record PGA | impacts | raw [µs/step] | API [µs/step] | simulate [µs/step] | "
-          "Python [µs/step] | Python / raw | internal steps | raw per internal step [µs] | max |Δφ| C vs Python [rad] |")
-        w("|" + " --- |" * 12)
+        w("| model | scheme, settings | record PGA | impacts | raw [µs/step] | Engine.sample [µs/step] | API [µs/step] | "
+          "simulate [µs/step] | Python [µs/step] | Python / raw | internal steps | raw per internal step [µs] | "
+          "max |Δφ| C vs Python [rad] |")
+        w("|" + " --- |" * 13)
         for r in ps["rows"]:
+            smp = f"{r['sample_us']:.2f}" if "sample_us" in r else "–"
             w(f"| {r['kind']} | {r['scheme']}, {fsetting(r['settings'])} | {r['pga_g']:.2g} g | {r['impacts']} | "
-              f"{r['raw_us']:.2f} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {r['python_us']:.1f} | "
+              f"{r['raw_us']:.2f} | {smp} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {r['python_us']:.1f} | "
               f"{fr(r['python_over_raw'])} | {r['internal_steps']} | {r['raw_us_per_internal_step']:.2f} | "
               f"{fe(r['max_dphi_c_python'])} |")
         w("")
@@ -485,6 +504,13 @@ def _compiled_section(res, w):
           f"rocking_model` to the end of the first 0.01 s step of `Simulator(RigidBlock(b=0.4, h=2.0), engine=\"c\")`: "
           f"**{ft(cold['import_to_first_step'])}** = numpy's import {ft(cold['numpy_import'])} + the package's "
           f"import {ft(cold['package_import'])} + Simulator and first step {ft(cold['first_step'])}.")
+        low = cold.get("low_level", {})
+        if "import_to_first_step" in low:
+            w(f"Through the low-level API (`from rocking_model._engine import Engine`; `Engine(\"rigid\", params)`, "
+              f"`advance`, `outputs`; imports {', '.join(low['package_modules'])} and not numpy: "
+              f"{not low['numpy_imported']}): **{ft(low['import_to_first_step'])}** = the import {ft(low['import'])} "
+              f"+ engine and first step {ft(low['first_step'])} (the same φ as the Simulator's: "
+              f"{low.get('same_phi_as_simulator')}). Both with the package's bytecode cached, as after `pip install`.")
         w("")
     elif "error" in cold:
         w(f"Cold start failed: {failure_line(cold['error'])}")

@@ -8,6 +8,7 @@ so that a default or a range lives in one place.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -42,9 +43,7 @@ class Param:
         """``value`` checked against the declaration (ValueError naming it and the allowed range/values);
         a choice is returned as its code."""
         if self.items:
-            allowed = {code: code for _, code, _ in self.items}
-            allowed.update({name: code for name, code, _ in self.items})
-            return check_choice(self.name, value, allowed)
+            return check_choice(self.name, value, self._allowed)
         if self.inf_ok and isinstance(value, (int, float, str)) and not isinstance(value, bool):
             try:
                 if float(value) == math.inf:
@@ -58,6 +57,13 @@ class Param:
             if self.inf_ok and self.hi is None:          # the range includes +inf
                 raise ValueError(str(exc).replace(", inf)", ", inf]")) from None
             raise
+
+    @functools.cached_property
+    def _allowed(self) -> dict:
+        """A choice's accepted spellings: its codes, then its names (made once: every model built checks them)."""
+        allowed = {code: code for _, code, _ in self.items}
+        allowed.update({name: code for name, code, _ in self.items})
+        return allowed
 
     def fmu_min(self):
         """Closed lower bound for the FMU's ``min`` attribute (None: none; an open bound is written as is,
@@ -91,17 +97,26 @@ def param(default, unit: str | None = "1", description: str = "", **kw):
                                                                       description=description, **kw)})
 
 
+#: class -> its declared parameters (a class's fields do not change once it is made; every model built reads
+#: them, and building them from the dataclass fields costs more than the checks themselves)
+_DECLARED: dict = {}
+
+
 def declared_parameters(cls) -> tuple:
     """The `Param` of every dataclass field of ``cls`` declared with `param`, in field order."""
-    out = []
-    for f in dataclasses.fields(cls):
-        spec = f.metadata.get("param")
-        if spec is not None:
-            out.append(Param(name=f.name, **spec))
-    return tuple(out)
+    out = _DECLARED.get(cls)
+    if out is None:
+        out = []
+        for f in dataclasses.fields(cls):
+            spec = f.metadata.get("param")
+            if spec is not None:
+                out.append(Param(name=f.name, **spec))
+        out = _DECLARED[cls] = tuple(out)
+    return out
 
 
 def check_parameters(obj) -> None:
     """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place."""
+    setattr_ = object.__setattr__
     for p in declared_parameters(type(obj)):
-        object.__setattr__(obj, p.name, p.check(getattr(obj, p.name)))
+        setattr_(obj, p.name, p.check(getattr(obj, p.name)))

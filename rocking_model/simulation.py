@@ -9,6 +9,7 @@ import numpy as np
 
 import warnings
 
+from .engine import ENGINES, CompiledIntegrator
 from .ground_motion import ConstantMotion, GroundMotion, TwoComponentMotion, as_ground_motion, checked_motion
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
@@ -147,12 +148,8 @@ class Simulator:
                                                                "ignore": "ignore"})
         options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
                                 impact_log_size=impact_log_size, tolerances=tolerances)
-        from .engine import ENGINES
-
         self.engine = check_choice("engine", engine, ENGINES)
         if self.engine == "c":
-            from .engine import CompiledIntegrator
-
             self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)
         else:
             self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
@@ -285,7 +282,11 @@ class Simulator:
         if (bool(np.any(times[1:] < times[:-1])) if isinstance(times, np.ndarray)
                 else any(b < a for a, b in zip(times, times[1:]))):
             raise ValueError("times must be increasing")
-        gm = self._ground_motion(ag, ag_v)
+        return self._sample(times, self._ground_motion(ag, ag_v))
+
+    def _sample(self, times, gm) -> tuple:
+        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``."""
+        integ = self.integrator
         return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))
 
     def _guarded(self, t_end: float, gm, action):
@@ -480,11 +481,13 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     dt = check_real("output_interval", output_interval, lo=0.0, lo_open=True)
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
-    times = np.minimum(t0 + dt * np.arange(n + 1), t_end)
+    times = np.minimum(t0 + dt * np.arange(n + 1) if t0 else dt * np.arange(n + 1), t_end)   # (0 + x is x)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples
-        modes, values, impacts, overturned = sim.sample(times[1:], gm)
+        # (the grid is finite and increasing from t0 by construction: the compiled engine reads it unchecked)
+        modes, values, impacts, overturned = (sim._sample(times[1:], gm) if sim.engine == "c"
+                                              else sim.sample(times[1:], gm))
         values["contact"] = modes
         values["impacts"] = impacts
         values["overturned"] = overturned

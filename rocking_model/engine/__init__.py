@@ -26,10 +26,24 @@ ENGINES = {"c": "c", "python": "python"}
 def available() -> bool:
     """Whether the extension module was built (``pip install .`` builds it)."""
     try:
-        from .. import _engine  # noqa: F401
+        _extension()
     except ImportError:
         return False
     return True
+
+
+_EXTENSION = None
+
+
+def _extension():
+    """The extension module `rocking_model._engine` (ImportError if not built), imported once: a relative import
+    statement per call goes through importlib's Python code each time."""
+    global _EXTENSION
+    if _EXTENSION is None:
+        from .. import _engine
+
+        _EXTENSION = _engine
+    return _EXTENSION
 
 
 def motion_spec(gm: GroundMotion) -> tuple:
@@ -70,9 +84,32 @@ def vertical_spec(gm: GroundMotion):
     return None if vertical is None else motion_spec(vertical)
 
 
+def _sampled(names, modes, values, impacts, overturned) -> tuple:
+    """`Integrator.sample`'s (modes, outputs, impacts, overturned) from the rows the engine wrote (``values``: the
+    outputs, friction_demand, painleve per row): one contiguous array per output, as the Python scheme returns
+    (the rows of one transposed copy: a copy per column costs more than the run of a short scene)."""
+    cols = values.T.copy()
+    out = dict(zip(names, cols))
+    out["friction_demand"] = cols[-2]
+    out["painleve"] = cols[-1].astype(np.int64)
+    return modes.astype(np.int64), out, impacts, overturned.astype(bool)
+
+
 #: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
 _SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", "v_tol", "v_zeno", "event_tol",
              "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
+
+
+def _floats(x) -> list:
+    """``x`` as a list of floats (a float64 array's tolist(): the same values without a numpy scalar each)."""
+    if type(x) is np.ndarray and x.dtype == np.float64:
+        return x.tolist()
+    return [float(a) for a in x]
+
+
+def _checked_arguments(*args, **kwargs) -> tuple:
+    """Stands in for a Python scheme class in its `from_options`: (args, kwargs) it would be built with."""
+    return args, kwargs
 
 
 #: model class -> the names of its declared parameters in order (declared_parameters is slow to call per run)
@@ -128,7 +165,7 @@ class CompiledIntegrator(Integrator):
 
     def __init__(self, model, scheme: str, mode, q, v, t0: float, options):
         try:
-            from .. import _engine
+            _engine = _extension()
         except ImportError as exc:
             raise ImportError("engine='c' needs the compiled extension rocking_model._engine, which is not built "
                               f"({exc}); `pip install .` builds it (a C compiler is required), or use "
@@ -141,7 +178,7 @@ class CompiledIntegrator(Integrator):
         self._scheme_cls = ref_cls
         self._options = options
         self._t0 = float(t0)
-        self._start = (int(mode), [float(a) for a in q], [float(a) for a in v])
+        self._start = (int(mode), _floats(q), _floats(v))
         self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
         self._names = self._engine.output_names
         self._t_fail = None
@@ -161,18 +198,27 @@ class CompiledIntegrator(Integrator):
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
-        # the Python scheme's own checks of its options first (the same messages), then the engine's
-        ref = SCHEMES[scheme].from_options(model, mode, q, v, t0, options)
+        # the Python scheme's own checks of its options first (the same messages), then the engine's. The
+        # scheme's `from_options` runs with `_checked_arguments` in place of the class: its checks run, and the
+        # arguments it would build the scheme with are kept; the Python scheme itself (its settings: dt_max,
+        # the scaled tolerances ...) is built only if someone reads them (`__getattr__`), not on every run
+        ref_args = SCHEMES[scheme].from_options.__func__(_checked_arguments, model, mode, q, v, t0, options)
         integ = cls(model, scheme, mode, q, v, t0, options)
-        integ._settings = {name: getattr(ref, name) for name in _SETTINGS if name in ref.__dict__}
+        integ._ref_args = ref_args
         return integ
 
     def __getattr__(self, name):
         # the scheme's settings (dt_max, theta, tolerance, method, the scaled tolerances ...), as the Python
         # scheme computed them from the same options; never its state (that is the engine's)
-        settings = self.__dict__.get("_settings")
-        if settings is not None and name in settings:
-            return settings[name]
+        d = self.__dict__
+        if name in _SETTINGS:
+            settings = d.get("_settings")
+            if settings is None and "_ref_args" in d:
+                args, kwargs = d["_ref_args"]
+                ref = d["_scheme_cls"](*args, **kwargs)
+                settings = d["_settings"] = {key: getattr(ref, key) for key in _SETTINGS if key in ref.__dict__}
+            if settings is not None and name in settings:
+                return settings[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _engine_args(self):
@@ -283,18 +329,15 @@ class CompiledIntegrator(Integrator):
 
     # ------------------------------------------------------------------ stepping
     def _run(self, call):
-        from .. import _engine
-
         self._t_fail = None
         try:
             call()
-        except _engine.NonFiniteError as exc:
-            self._t_fail = self._engine.fail_time
-            raise FloatingPointError(str(exc)) from None
-        except BaseException:
+        except BaseException as exc:
             # the engine is restored; ``t`` says where the scheme had got to (Simulator._diverged's "at t = ...",
             # as the Python integrator's t before its rollback) until the Simulator rolls back
             self._t_fail = self._engine.fail_time
+            if isinstance(exc, _extension().NonFiniteError):
+                raise FloatingPointError(str(exc)) from None
             raise
         finally:
             if self._engine.report_count:
@@ -336,10 +379,7 @@ class CompiledIntegrator(Integrator):
         ident = self._identity(ag)
         self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident,
                                               vspec))
-        out = {name: values[:, j].copy() for j, name in enumerate(names)}
-        out["friction_demand"] = values[:, len(names)].copy()
-        out["painleve"] = values[:, len(names) + 1].astype(np.int64)
-        return modes.astype(np.int64), out, impacts, overturned.astype(bool)
+        return _sampled(names, modes, values, impacts, overturned)
 
     # ------------------------------------------------------------------ state
     def state(self):

@@ -8,6 +8,7 @@ corner. Corner i sits at body coordinates (s_i b, -h), s = (-1, +1).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -57,9 +58,16 @@ class RigidBlock(RockingModel):
         for name, value in (("_R", R), ("_alpha", math.atan2(self.b, self.h)),
                             ("_I_c", self.m * R ** 2 / 3.0), ("_p", math.sqrt(3.0 * self.g / (4.0 * R)))):
             object.__setattr__(self, name, value)
-        M = np.diag([self.m, self.m, self._I_c])
-        object.__setattr__(self, "_M", M)
-        object.__setattr__(self, "_Minv", np.diag(1.0 / np.diag(M)))
+
+    # the mass matrix and its inverse, made on first use (the compiled engine never reads them)
+    @functools.cached_property
+    def _M(self) -> np.ndarray:
+        m = self.m
+        return np.array(((m, 0.0, 0.0), (0.0, m, 0.0), (0.0, 0.0, self._I_c)))
+
+    @functools.cached_property
+    def _Minv(self) -> np.ndarray:
+        return np.array(((1.0 / self.m, 0.0, 0.0), (0.0, 1.0 / self.m, 0.0), (0.0, 0.0, 1.0 / self._I_c)))
 
     # ------------------------------------------------------------------ derived parameters
     @property

@@ -944,8 +944,9 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     /* the friction demand: at the segment's start, at step ends, at its peak inside a step, at the event
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
     peaks = has_totals && !ed_sliding(m, mode);
+    /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
+    ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, g_prev, has_totals ? lam : NULL));
     if (has_totals) {
-        ED_TRYF(&f, ed_totals(&f, s->t, s->y, lam));
         d_prev = ed_ratio(s, lam);
         ed_note_ratio(e, d_prev);
     }
@@ -957,7 +958,6 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     c.G = ed_G;
     c.G_ctx = &f;
     c.n_events = ev.n;
-    ED_TRYF(&f, ed_G(&f, s->t, s->y, g_prev));
     for (i = 0; i < ev.n; i++) {
         ev.armed[i] = g_prev[i] > 0.0;
         ev.watch[i] = !ev.armed[i] && g_prev[i] > -s->event_tol;

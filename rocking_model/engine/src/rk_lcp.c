@@ -6,10 +6,11 @@
  * Numerics (DESIGN.md section 7): the pure-Python float code of lcp.py (_solve_small, _Problem.trial,
  * violators, the violation measures) is ported expression by expression, with Python's max() (the first
  * maximal argument wins) as py_max. The numpy products (G^T M^-1 G, G^T v_free, v_free + MG P, w0 + D P) are
- * plain loops in index order; np.linalg.solve is Gaussian elimination with partial pivoting (LAPACK's gesv
- * fails only on an exactly zero pivot), np.linalg.lstsq(rcond=1e-12) the minimum-norm least-squares solution
- * from a one-sided Jacobi SVD with LAPACK's cut-off (singular values <= rcond * largest are dropped). These
- * agree with numpy to round-off (pinned at 1e-13 relative by tests/test_engine_contact.py).
+ * plain loops in index order; np.linalg.solve and np.linalg.lstsq(rcond=1e-12) are the engine's dense solves
+ * rk_la_solve / rk_la_lstsq (rk_model.c: Gaussian elimination with partial pivoting, failing only on an exactly
+ * zero pivot as LAPACK's gesv; the minimum-norm least-squares solution from a one-sided Jacobi SVD with LAPACK's
+ * cut-off), shared with the kernels. These agree with numpy to round-off (pinned at 1e-13 relative by
+ * tests/test_engine_contact.py).
  *
  * No allocation: every work array is on the stack. The Python's _SETS_CACHE becomes an enumeration of the
  * sets in the same order into a local array. */
@@ -20,12 +21,10 @@
 
 #define NMAX RK_LCP_MAX_CONTACTS
 #define UMAX (2 * RK_LCP_MAX_CONTACTS)
+/* the dense solves of rk_model.h take up to RK_MAX_Y unknowns */
+typedef char rk_lcp_umax_fits[(UMAX <= RK_MAX_Y) ? 1 : -1];
 /** [1] rcond of the np.linalg.lstsq fallbacks of lcp.py */
 #define LSTSQ_RCOND 1e-12
-/** sweeps of the one-sided Jacobi SVD before it stops (it converges in far fewer on 16 x 16 matrices) */
-#define JACOBI_SWEEPS 80
-/** [1] two columns count as orthogonal when their cosine is below this (a few ulps: the Jacobi sweeps stop) */
-#define JACOBI_TOL 1e-15
 /** most state combinations of the frictional enumeration (4^FRICTION_ENUMERATE_MAX) */
 #define MAX_COMBOS 256
 
@@ -87,114 +86,29 @@ static int solve_small(int n, double A[][UMAX], const double *b, double *x)
     return 1;
 }
 
-/** np.linalg.solve: Gaussian elimination with partial pivoting; returns 0 (LinAlgError "Singular matrix")
- *  only on an exactly zero pivot, as LAPACK's getrf. */
-static int solve_lu(int n, double A[][UMAX], const double *b, double *x)
+/** np.linalg.solve of A (n x n, row stride UMAX), and np.linalg.lstsq(A, b, rcond=1e-12)[0] where it fails (an
+ *  exactly zero pivot): the engine's dense solves (rk_la_solve, rk_la_lstsq of rk_model.h), shared with the
+ *  kernels. */
+static void solve_or_lstsq(int n, double A[][UMAX], const double *b, double *x)
 {
-    double M[UMAX][UMAX + 1];
-    int r, c, j;
-    for (r = 0; r < n; r++) {
-        for (j = 0; j < n; j++)
-            M[r][j] = A[r][j];
-        M[r][n] = b[r];
-    }
-    for (c = 0; c < n; c++) {
-        int p = c;
-        double best = fabs(M[c][c]);
-        for (r = c + 1; r < n; r++)
-            if (fabs(M[r][c]) > best) {
-                p = r;
-                best = fabs(M[r][c]);
-            }
-        if (M[p][c] == 0.0)
-            return 0;
-        if (p != c)
-            for (j = 0; j <= n; j++) {
-                double t = M[c][j];
-                M[c][j] = M[p][j];
-                M[p][j] = t;
-            }
-        for (r = c + 1; r < n; r++) {
-            double f = M[r][c] / M[c][c];
-            for (j = c; j <= n; j++)
-                M[r][j] -= f * M[c][j];
-        }
-    }
-    for (c = n - 1; c >= 0; c--) {
-        double acc = 0.0;
-        for (j = c + 1; j < n; j++)
-            acc += M[c][j] * x[j];
-        x[c] = (M[c][n] - acc) / M[c][c];
-    }
-    return 1;
+    double F[UMAX * UMAX];
+    int r, c;
+    for (r = 0; r < n; r++)
+        for (c = 0; c < n; c++)
+            F[r * n + c] = A[r][c];
+    if (rk_la_solve(n, F, b, x) != RK_OK)
+        rk_la_lstsq(n, n, F, b, LSTSQ_RCOND, x);
 }
 
-/** np.linalg.lstsq(A, b, rcond=1e-12)[0] for a square A (n x n): the minimum-norm least-squares solution,
- *  singular values <= rcond * the largest dropped. One-sided Jacobi SVD (Hestenes): A V = U Sigma. */
+/** np.linalg.lstsq(A, b, rcond=1e-12)[0] of A (n x n, row stride UMAX) (rk_la_lstsq) */
 static void lstsq(int n, double A[][UMAX], const double *b, double *x)
 {
-    double U[UMAX][UMAX], V[UMAX][UMAX], sig[UMAX], smax = 0.0, total = 0.0, floor;
-    int i, j, k, sweep;
-    for (i = 0; i < n; i++)
-        for (j = 0; j < n; j++) {
-            U[i][j] = A[i][j];
-            V[i][j] = (i == j) ? 1.0 : 0.0;
-            total += A[i][j] * A[i][j];
-        }
-    /* a column whose squared norm is below this is zero to round-off: rotating it against the others only
-     * turns round-off (and would not converge) */
-    floor = JACOBI_TOL * JACOBI_TOL * total;
-    for (sweep = 0; sweep < JACOBI_SWEEPS; sweep++) {
-        int rotated = 0;
-        for (j = 0; j < n - 1; j++)
-            for (k = j + 1; k < n; k++) {
-                double alpha = 0.0, beta = 0.0, gamma = 0.0, zeta, t, c, s;
-                for (i = 0; i < n; i++) {
-                    alpha += U[i][j] * U[i][j];
-                    beta += U[i][k] * U[i][k];
-                    gamma += U[i][j] * U[i][k];
-                }
-                if (gamma == 0.0 || !(alpha > floor && beta > floor)
-                    || !(fabs(gamma) > JACOBI_TOL * sqrt(alpha * beta)))
-                    continue;
-                rotated = 1;
-                zeta = (beta - alpha) / (2.0 * gamma);
-                t = (zeta >= 0.0 ? 1.0 : -1.0) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                c = 1.0 / sqrt(1.0 + t * t);
-                s = c * t;
-                for (i = 0; i < n; i++) {
-                    double u = U[i][j], w = U[i][k];
-                    U[i][j] = c * u - s * w;
-                    U[i][k] = s * u + c * w;
-                    u = V[i][j];
-                    w = V[i][k];
-                    V[i][j] = c * u - s * w;
-                    V[i][k] = s * u + c * w;
-                }
-            }
-        if (!rotated)
-            break;
-    }
-    for (j = 0; j < n; j++) {
-        double ss = 0.0;
-        for (i = 0; i < n; i++)
-            ss += U[i][j] * U[i][j];
-        sig[j] = sqrt(ss);
-        if (sig[j] > smax)
-            smax = sig[j];
-    }
-    for (i = 0; i < n; i++)
-        x[i] = 0.0;
-    for (j = 0; j < n; j++) {
-        double ub = 0.0, coef;
-        if (!(sig[j] > LSTSQ_RCOND * smax))
-            continue;
-        for (i = 0; i < n; i++)
-            ub += U[i][j] * b[i];
-        coef = ub / (sig[j] * sig[j]);
-        for (i = 0; i < n; i++)
-            x[i] += V[i][j] * coef;
-    }
+    double F[UMAX * UMAX];
+    int r, c;
+    for (r = 0; r < n; r++)
+        for (c = 0; c < n; c++)
+            F[r * n + c] = A[r][c];
+    rk_la_lstsq(n, n, F, b, LSTSQ_RCOND, x);
 }
 
 /* ------------------------------------------------------------------------------------------ the problem */
@@ -563,8 +477,7 @@ static void friction_trial(const lcp_ctx *x, const int *states, trial_res *res)
                 A[r][c] = cols[c][rows[r]];
             rhs[r] = -x->w0[rows[r]];
         }
-        if (!solve_lu(nr, A, rhs, sol))
-            lstsq(nr, A, rhs, sol);
+        solve_or_lstsq(nr, A, rhs, sol);
         for (k = 0; k < x->n_cand; k++) {
             int i = x->cand_idx[k], s = states[k];
             if (s == RK_STICK) {
@@ -849,10 +762,5 @@ int rk_lcp_painleve(const rk_lcp_solution *sol)
 
 void rk_lstsq_square(int n, const double *A, const double *b, double *x)
 {
-    double M[UMAX][UMAX];
-    int i, j;
-    for (i = 0; i < n; i++)
-        for (j = 0; j < n; j++)
-            M[i][j] = A[i * n + j];
-    lstsq(n, M, b, x);
+    rk_la_lstsq(n, n, A, b, LSTSQ_RCOND, x);
 }

@@ -341,8 +341,10 @@ int rk_mode_of_initial_state(double phi_0, double phi_dot_0)
 /* ------------------------------------------------------------------------------------------ linear algebra */
 rk_status rk_la_solve(int n, const double *A, const double *b, double *x)
 {
-    double LU[RK_MAX_DOF * RK_MAX_DOF], y[RK_MAX_DOF];
+    double LU[RK_MAX_Y * RK_MAX_Y], y[RK_MAX_Y];      /* (the contact problems solve up to 2 x 8 unknowns) */
     int i, j, k;
+    if (n > RK_MAX_Y)
+        return RK_ERR_INTERNAL;
     memcpy(LU, A, (size_t)(n * n) * sizeof(double));
     memcpy(y, b, (size_t)n * sizeof(double));
     for (k = 0; k < n; k++) {

@@ -249,7 +249,7 @@ int rk_two_corner_stick_of(const rk_model *m, int mode, int *sigma);
 int rk_pivot_sign(int mode);
 /** RockingModel.mode_of_initial_state. */
 int rk_mode_of_initial_state(double phi_0, double phi_dot_0);
-/** Small dense solves (n <= RK_MAX_DOF): Gaussian elimination with partial pivoting (np.linalg.solve;
+/** Small dense solves (n <= RK_MAX_Y; the kernels' and the contact problems'): Gaussian elimination with partial pivoting (np.linalg.solve;
  *  RK_ERR_SOLVER on an exactly zero pivot, where LAPACK reports a singular matrix), and minimum-norm least
  *  squares through an SVD (np.linalg.lstsq; rcond < 0: numpy's default eps * max(rows, cols)). Row-major. */
 rk_status rk_la_solve(int n, const double *A, const double *b, double *x);

@@ -1,0 +1,85 @@
+"""The fixed costs of a compiled run (issue 21: a short scene's `simulate` is dominated by what surrounds the C
+call): what `Simulator(engine="c")` and `simulate` no longer build, and that the results, settings and messages
+are the same as when they did. Not timed (benchmarks/ measures the times)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rocking_model import FlexibleOscillator, RigidBlock, Simulator, SinePulse, simulate
+from rocking_model.integrators.event_driven import EventDriven
+from rocking_model.integrators.moreau_jean import MoreauJean
+
+SCHEMES = (("event_driven", EventDriven), ("moreau_jean", MoreauJean))
+
+
+@pytest.fixture
+def no_python_scheme(monkeypatch):
+    """Building a Python scheme object fails the test (its option checks still run: from_options is kept)."""
+    def refuse(self, *args, **kwargs):
+        raise AssertionError(f"{type(self).__name__} built for a compiled run")
+
+    for _, cls in SCHEMES:
+        monkeypatch.setattr(cls, "__init__", refuse)
+
+
+@pytest.mark.parametrize("scheme", ["event_driven", "moreau_jean"])
+def test_compiled_runs_build_no_python_scheme(no_python_scheme, scheme):
+    sim = Simulator(RigidBlock(), scheme, engine="c", phi_0=0.05)
+    sim.advance(0.1, 0.5)
+    res = simulate(FlexibleOscillator(), SinePulse(3.0, 2 * math.pi), 0.3, scheme=scheme, engine="c")
+    assert len(res.t) == 31 and np.all(np.isfinite(res.phi))
+
+
+@pytest.mark.parametrize("scheme, cls", SCHEMES)
+def test_settings_read_as_the_python_scheme_computes_them(scheme, cls):
+    model = FlexibleOscillator()
+    kw = dict(dt_max=2e-3, tolerance=1e-6, theta=0.6, zeno_tol=1e-5)
+    c = Simulator(model, scheme, engine="c", **kw).integrator
+    py = Simulator(model, scheme, engine="python", **kw).integrator
+    names = [n for n in ("dt_max", "theta", "tolerance", "method", "gap_tol", "v_tol", "v_zeno", "event_tol",
+                         "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events") if n in vars(py)]
+    assert names
+    for name in names:
+        assert getattr(c, name) == getattr(py, name), name
+    with pytest.raises(AttributeError, match="no attribute 'no_such_setting'"):
+        c.no_such_setting  # noqa: B018
+
+
+@pytest.mark.parametrize("scheme, kw, message", [
+    ("event_driven", dict(tolerance=1.0), "tolerance = 1 is out of range"),
+    ("event_driven", dict(tolerance="a"), "tolerance must be a real number"),
+    ("event_driven", dict(zeno_tol=0.0), "zeno_tol = 0 is out of range"),
+    ("event_driven", dict(method="RK4"), "method = 'RK4' is not supported"),
+    ("moreau_jean", dict(theta=0.2), "theta = 0.2 is out of range"),
+])
+def test_option_errors_keep_the_python_messages(no_python_scheme, scheme, kw, message):
+    with pytest.raises(ValueError, match=message):
+        Simulator(RigidBlock(), scheme, engine="c", **kw)
+
+
+def test_rigid_block_mass_matrices_made_on_first_use():
+    block = RigidBlock(b=0.3, h=1.2, m=2.5)
+    assert "_M" not in vars(block) and "_Minv" not in vars(block)
+    M = np.diag([block.m, block.m, block.I_c])
+    assert np.array_equal(block.mass_matrix(None), M)
+    assert np.array_equal(block.inverse_mass_matrix(None), np.diag(1.0 / np.diag(M)))
+    assert block.mass_matrix(None) is block.mass_matrix(None)
+
+
+@pytest.mark.parametrize("t_end, dt", [(0.7, 0.01), (0.705, 0.01), (0.3, 0.3), (0.0, 0.01)])
+def test_simulate_grid_run_as_simulator_sample(t_end, dt):
+    """simulate on the compiled engine samples its own grid without re-checking it: the same outputs as the
+    checked Simulator.sample over the same times."""
+    model, gm = RigidBlock(), SinePulse(4.0, 2 * math.pi)
+    res = simulate(model, gm, t_end, output_interval=dt, engine="c", phi_0=0.02)
+    sim = Simulator(model, engine="c", impact_log_size=None, phi_0=0.02)
+    modes, values, impacts, overturned = sim.sample(res.t[1:], gm)
+    assert np.array_equal(res.contact, modes) and np.array_equal(res.impacts, impacts)
+    assert np.array_equal(res.overturned, overturned)
+    for name, v in values.items():
+        assert np.array_equal(res[name], v), name
+        assert res[name].flags.c_contiguous and res[name].dtype == v.dtype
+    assert np.array_equal(res.impact_times, np.array(sim.impact_times))
