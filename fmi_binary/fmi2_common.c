@@ -176,12 +176,12 @@ void fmi2c_reset(fmi2c_instance *F) {
     F->last_step_status = fmi2OK;
 }
 
-fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F) {
+static fmi2c_fields fields_of(const fmi2c_instance *F) {
     fmi2c_fields fields = {F->state, F->time, F->terminated_flag, F->last_step_status};
     return fields;
 }
 
-void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields) {
+static void restore_fields(fmi2c_instance *F, const fmi2c_fields *fields) {
     F->state = fields->instance_state;
     F->time = fields->time;
     F->terminated_flag = fields->terminated_flag;
@@ -299,7 +299,7 @@ static uint32_t serial_crc(const unsigned char *header, const unsigned char *pay
     return fmi2c_crc32_update(fmi2c_crc32_update(0, header, SERIAL_CRC_OFFSET), payload, n);
 }
 
-void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n) {
+static void write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n) {
     int32_t ints[3] = {fields->instance_state, fields->terminated_flag, (int32_t)fields->last_step_status};
     memcpy(p, SERIAL_MAGIC, SERIAL_MAGIC_SIZE);
     memcpy(p + SERIAL_MAGIC_SIZE, &fields->time, 8);
@@ -308,7 +308,7 @@ void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsi
     memcpy(p + SERIAL_CRC_OFFSET, &crc, 4);
 }
 
-fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields) {
+static fmi2Status read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields) {
     int32_t header[3];
     double time;
     if (size < SERIAL_HEADER_SIZE || memcmp(serialized, SERIAL_MAGIC, SERIAL_MAGIC_SIZE) != 0) {
@@ -337,4 +337,138 @@ fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], siz
     fields->terminated_flag = header[1];
     fields->last_step_status = (fmi2Status)header[2];
     return fmi2OK;
+}
+
+
+/* ------------------------------------------------------------------------------------------ FMU state */
+/* a saved FMU state: the FMI part and the backend's part */
+typedef struct {
+    unsigned magic; /* FMI2C_STATE_MAGIC while the state lives */
+    fmi2c_fields fields;
+    void *data;
+} saved_state;
+
+static saved_state *saved(fmi2c_instance *F, const char *function, fmi2FMUstate p) {
+    saved_state *st = (saved_state *)p;
+    if (!st || st->magic != FMI2C_STATE_MAGIC || !st->data) {
+        log_error(F, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
+        return NULL;
+    }
+    return st;
+}
+
+/* Put the backend's `data` with the FMI fields into `st` (a new state when NULL) and hand it out through
+ * `out`; fmi2Error logged (`data` freed) when out of memory. */
+static fmi2Status keep_state(fmi2c_instance *F, const char *function, saved_state *st, void *data,
+                             const fmi2c_fields *fields, fmi2FMUstate *out) {
+    if (!st) st = (saved_state *)calloc(1, sizeof(saved_state));
+    if (!st) {
+        log_error(F, "%s: out of memory", function);
+        FMI2C_BACKEND.free_state(F, data);
+        return fmi2Error;
+    }
+    if (st->data) FMI2C_BACKEND.free_state(F, st->data);
+    st->fields = *fields;
+    st->magic = FMI2C_STATE_MAGIC;
+    st->data = data;
+    *out = st;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    FMI2C_BEGIN(fmi2c_instance, GetFMUstate);
+    FMI2C_NOT_NULL(GetFMUstate, FMUstate);
+    saved_state *st = NULL;
+    if (*FMUstate) { /* FMI 2.0: a non-NULL state is overwritten */
+        st = saved(S, "fmi2GetFMUstate", *FMUstate);
+        if (!st) return fmi2c_fail(S, fmi2Error);
+    }
+    void *data = NULL;
+    fmi2Status status = FMI2C_BACKEND.save_state(S, "fmi2GetFMUstate", &data);
+    const fmi2c_fields fields = fields_of(S);
+    if (status != fmi2Error && keep_state(S, "fmi2GetFMUstate", st, data, &fields, FMUstate) != fmi2OK)
+        status = fmi2Error;
+    return status == fmi2Error ? fmi2c_fail(S, status) : status;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    FMI2C_BEGIN(fmi2c_instance, SetFMUstate);
+    saved_state *st = saved(S, "fmi2SetFMUstate", FMUstate);
+    if (!st) return fmi2c_fail(S, fmi2Error);
+    fmi2Status status = FMI2C_BACKEND.restore_state(S, "fmi2SetFMUstate", st->data);
+    if (status == fmi2Error) return fmi2c_fail(S, status); /* rejected: the instance kept its state */
+    restore_fields(S, &st->fields);
+    return status;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    FMI2C_BEGIN(fmi2c_instance, FreeFMUstate);
+    if (!FMUstate || !*FMUstate) return fmi2OK;
+    saved_state *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
+    if (!st) return fmi2c_fail(S, fmi2Error);
+    FMI2C_BACKEND.free_state(S, st->data);
+    st->data = NULL;
+    st->magic = 0;
+    free(st);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    FMI2C_BEGIN(fmi2c_instance, SetFMUstate);
+    FMI2C_NOT_NULL(SerializedFMUstateSize, size);
+    saved_state *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
+    if (!st) return fmi2c_fail(S, fmi2Error);
+    const unsigned char *bytes = NULL;
+    size_t n = 0;
+    void *hold = NULL;
+    fmi2Status status = FMI2C_BACKEND.state_bytes(S, "fmi2SerializedFMUstateSize", st->data, &bytes, &n, &hold);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    *size = SERIAL_HEADER_SIZE + n;
+    FMI2C_BACKEND.release_bytes(S, hold);
+    return status;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    FMI2C_BEGIN(fmi2c_instance, SetFMUstate);
+    FMI2C_NOT_NULL(SerializeFMUstate, serializedState);
+    saved_state *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
+    if (!st) return fmi2c_fail(S, fmi2Error);
+    const unsigned char *bytes = NULL;
+    size_t n = 0;
+    void *hold = NULL;
+    fmi2Status status = FMI2C_BACKEND.state_bytes(S, "fmi2SerializeFMUstate", st->data, &bytes, &n, &hold);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    if (size != SERIAL_HEADER_SIZE + n) {
+        log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zu (from "
+                  "fmi2SerializedFMUstateSize)", size, SERIAL_HEADER_SIZE + n);
+        status = fmi2Error;
+    } else {
+        unsigned char *p = (unsigned char *)serializedState;
+        memcpy(p + SERIAL_HEADER_SIZE, bytes, n);
+        write_header(p, &st->fields, bytes, n);
+    }
+    FMI2C_BACKEND.release_bytes(S, hold);
+    return status == fmi2Error ? fmi2c_fail(S, status) : status;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    FMI2C_BEGIN(fmi2c_instance, SetFMUstate);
+    FMI2C_NOT_NULL(DeSerializeFMUstate, serializedState);
+    FMI2C_NOT_NULL(DeSerializeFMUstate, FMUstate);
+    fmi2c_fields fields;
+    if (read_header(S, serializedState, size, &fields) != fmi2OK) return fmi2Error;
+    saved_state *st = NULL;
+    if (*FMUstate) {
+        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
+        if (!st) return fmi2c_fail(S, fmi2Error);
+    }
+    void *data = NULL;
+    fmi2Status status = FMI2C_BACKEND.state_from_bytes(S, "fmi2DeSerializeFMUstate",
+                                                       (const unsigned char *)serializedState + SERIAL_HEADER_SIZE,
+                                                       size - SERIAL_HEADER_SIZE, &data);
+    if (status != fmi2Error && keep_state(S, "fmi2DeSerializeFMUstate", st, data, &fields, FMUstate) != fmi2OK)
+        status = fmi2Error;
+    return status == fmi2Error ? fmi2c_fail(S, status) : status;
 }

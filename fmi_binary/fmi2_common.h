@@ -95,6 +95,31 @@ void fmi2c_enter_simulation(fmi2c_instance *F);
 /* the bookkeeping of a successful fmi2Reset (instantiated, time 0, fmi2Terminated false) */
 void fmi2c_reset(fmi2c_instance *F);
 
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* What the FMI calls defined in fmi2_common.c leave to the backend (the Python slave, or the C engine). Each
+ * hook gets the instance's FMI part F (the first member of the backend's Instance) and `function`, the FMI
+ * call to name in messages; it returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the
+ * message logged. The common code does the rest: the call checks, the instance state, fmi2c_fail. */
+typedef struct {
+    /* FMU states: the backend's part of a saved state is `data`, opaque to the common code */
+    /* the backend's part of the instance's current state (fmi2GetFMUstate) */
+    fmi2Status (*save_state)(fmi2c_instance *F, const char *function, void **data);
+    /* set it (fmi2SetFMUstate); on fmi2Error the instance kept its state */
+    fmi2Status (*restore_state)(fmi2c_instance *F, const char *function, void *data);
+    void (*free_state)(fmi2c_instance *F, void *data);
+    /* the n bytes of `data` in a serialized state (after the header), valid until release_bytes(F, *hold) */
+    fmi2Status (*state_bytes)(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+                              size_t *n, void **hold);
+    void (*release_bytes)(fmi2c_instance *F, void *hold);
+    /* `data` from those n bytes (fmi2DeSerializeFMUstate; the header is checked already) */
+    fmi2Status (*state_from_bytes)(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+                                   void **data);
+} fmi2c_backend;
+
+/* each backend defines its hooks and the tag of its saved states (one binary never takes the other's) */
+extern const fmi2c_backend FMI2C_BACKEND;
+extern const unsigned FMI2C_STATE_MAGIC;
+
 /* what an FMU state keeps of the FMI part (the header of its serialized form) */
 typedef struct {
     int instance_state;
@@ -102,8 +127,6 @@ typedef struct {
     int terminated_flag;
     fmi2Status last_step_status;
 } fmi2c_fields;
-fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F);
-void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
 
 #ifndef FMI2C_IMPLEMENTATION
 /* the backends' shorthands on their `Instance *S`, whose first member is the fmi2c_instance f */
@@ -146,10 +169,5 @@ void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
 
 /* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
 uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n);
-/* Write the header into p[0, SERIAL_HEADER_SIZE) for the backend's `payload` of n bytes */
-void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n);
-/* Check and read the header of a serialized state (fmi2DeSerializeFMUstate): fmi2OK with the fields, or
- * fmi2Error logged (the instance in the error state) */
-fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields);
 
 #endif

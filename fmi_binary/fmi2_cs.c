@@ -44,7 +44,7 @@ static const char *method_names[N_METHODS] = {
     "set_real_input_derivatives"};
 
 const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7bu;
-#define STATE_MAGIC 0x5d7e0c19u
+const unsigned FMI2C_STATE_MAGIC = 0x5d7e0c19u;
 
 typedef struct {
     fmi2c_instance f;  /* the FMI part (fmi2_common.h): state, logger, time of the slave, statuses */
@@ -55,14 +55,9 @@ typedef struct {
     PyObject *strings; /* the last fmi2GetString result: keeps the returned UTF-8 buffers alive */
 } Instance;
 
-typedef struct {
-    unsigned magic;
-    PyObject *state;   /* the slave's state object */
-    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
-} SavedState;
-
-/* serialized FMU state: the header of fmi2_common.h (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the
- * slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256) */
+/* an FMU state (fmi2_common.c) keeps the slave's state object; serialized: the header of fmi2_common.h
+ * (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the slave's bytes (rocking_model/fmi_state.py: its own
+ * header and SHA-256) */
 
 /* ------------------------------------------------------------------------------------------ messages */
 
@@ -612,171 +607,68 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 }
 
 /* ------------------------------------------------------------------------------------------ FMU state */
-static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
-    SavedState *st = (SavedState *)p;
-    if (!st || st->magic != STATE_MAGIC || !st->state) {
-        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
-        return NULL;
-    }
-    return st;
-}
-
-/* Put the slave's `state` (a new reference, or NULL after a logged failure) with the FMI fields into `st`
- * (a new SavedState when NULL) and hand it out through `out`; fmi2Error when there is nothing to keep. */
-static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, PyObject *state,
-                             const fmi2c_fields *fields, fmi2FMUstate *out) {
-    if (!state) return fmi2Error;
-    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-    if (!st) {
-        log_error(S, "%s: out of memory", function);
-        py.DecRef(state);
-        return fmi2Error;
-    }
-    if (st->state) py.DecRef(st->state);
-    st->fields = *fields;
-    st->magic = STATE_MAGIC;
-    st->state = state;
-    *out = st;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(GetFMUstate);
-    NOT_NULL(GetFMUstate, FMUstate);
-    SavedState *st = NULL;
-    if (*FMUstate) { /* FMI 2.0: a non-NULL state is overwritten */
-        st = saved(S, "fmi2GetFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
+/* the backend's part of the FMU state calls of fmi2_common.c: `data` is the slave's state object */
+static fmi2Status save_state(fmi2c_instance *F, const char *function, void **data) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
+    PyObject *state = CALL_SLAVE(S, function, M_GET_STATE, NULL);
     fmi2Status status = drain_log(S);
-    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
-    if (keep_state(S, "fmi2GetFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    *data = state;
+    return state ? status : fmi2Error;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    BEGIN(SetFMUstate);
-    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
+static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *data) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetFMUstate", M_SET_STATE, st->state));
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, function, M_SET_STATE, (PyObject *)data));
     GIL_END;
-    if (status == fmi2Error) return status; /* rejected: the slave kept its state; the instance is in error */
-    fmi2c_restore_fields(&S->f, &st->fields);
+    return status; /* fmi2Error: the slave kept its state */
+}
+
+static void free_state(fmi2c_instance *F, void *data) {
+    (void)F;
+    GIL_BEGIN;
+    py.DecRef((PyObject *)data);
+    GIL_END;
+}
+
+/* the slave's bytes of a state: `hold` the bytes object */
+static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+                              size_t *n, void **hold) {
+    Instance *S = (Instance *)F;
+    GIL_BEGIN;
+    PyObject *out = CALL_SLAVE(S, function, M_STATE_TO_BYTES, (PyObject *)data);
+    char *p = NULL;
+    Py_ssize_t m = 0;
+    if (out && py.Bytes_AsStringAndSize(out, &p, &m) != 0) {
+        log_exception(S, function);
+        py.DecRef(out);
+        out = NULL;
+    }
+    fmi2Status status = drain_log(S);
+    GIL_END;
+    if (!out) return fmi2Error;
+    *bytes = (const unsigned char *)p;
+    *n = (size_t)m;
+    *hold = out;
     return status;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(FreeFMUstate);
-    if (!FMUstate || !*FMUstate) return fmi2OK;
-    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    GIL_BEGIN;
-    py.DecRef(st->state);
-    GIL_END;
-    st->state = NULL;
-    st->magic = 0;
-    free(st);
-    *FMUstate = NULL;
-    return fmi2OK;
-}
+static void release_bytes(fmi2c_instance *F, void *hold) { free_state(F, hold); }
 
-/* the serialized form of a state: a new bytes object, or NULL with the error logged */
-static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
-    PyObject *data = CALL_SLAVE(S, function, M_STATE_TO_BYTES, st->state);
-    if (!data) return NULL;
-    char *bytes = NULL;
-    Py_ssize_t n = 0;
-    if (py.Bytes_AsStringAndSize(data, &bytes, &n) != 0) {
-        log_exception(S, function);
-        py.DecRef(data);
-        return NULL;
-    }
-    PyObject *out = py.Bytes_FromStringAndSize(NULL, (Py_ssize_t)SERIAL_HEADER_SIZE + n);
-    char *p = NULL;
-    Py_ssize_t m = 0;
-    if (!out || py.Bytes_AsStringAndSize(out, &p, &m) != 0) {
-        if (py.Err_Occurred()) log_exception(S, function);
-        py.DecRef(data);
-        if (out) py.DecRef(out);
-        return NULL;
-    }
-    memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
-    fmi2c_write_header((unsigned char *)p, &st->fields, (const unsigned char *)bytes, (size_t)n);
-    py.DecRef(data);
-    return out;
-}
-
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializedFMUstateSize, size);
-    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
-    if (!st) return fail(S, fmi2Error);
+static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+                                   void **data) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    PyObject *out = serialize(S, "fmi2SerializedFMUstateSize", st);
+    PyObject *b = py.Bytes_FromStringAndSize((const char *)bytes, (Py_ssize_t)n);
+    PyObject *state = b ? CALL_SLAVE(S, function, M_STATE_FROM_BYTES, b) : NULL;
+    if (b) py.DecRef(b);
     fmi2Status status = drain_log(S);
-    if (out) {
-        char *p;
-        Py_ssize_t n = 0;
-        py.Bytes_AsStringAndSize(out, &p, &n);
-        *size = (size_t)n;
-        py.DecRef(out);
-    } else {
-        status = fmi2Error;
-    }
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    *data = state;
+    return state ? status : fmi2Error;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializeFMUstate, serializedState);
-    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    GIL_BEGIN;
-    PyObject *out = serialize(S, "fmi2SerializeFMUstate", st);
-    fmi2Status status = drain_log(S);
-    if (out) {
-        char *p;
-        Py_ssize_t n = 0;
-        py.Bytes_AsStringAndSize(out, &p, &n);
-        if ((size_t)n != size) {
-            log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zd (from "
-                      "fmi2SerializedFMUstateSize)", size, n);
-            status = fmi2Error;
-        } else {
-            memcpy(serializedState, p, size);
-        }
-        py.DecRef(out);
-    } else {
-        status = fmi2Error;
-    }
-    GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
-}
-
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(DeSerializeFMUstate, serializedState);
-    NOT_NULL(DeSerializeFMUstate, FMUstate);
-    fmi2c_fields fields;
-    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    GIL_BEGIN;
-    PyObject *data = py.Bytes_FromStringAndSize(serializedState + SERIAL_HEADER_SIZE,
-                                                (Py_ssize_t)(size - SERIAL_HEADER_SIZE));
-    PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
-    if (data) py.DecRef(data);
-    fmi2Status status = drain_log(S);
-    if (keep_state(S, "fmi2DeSerializeFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
-    GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
-}
+const fmi2c_backend FMI2C_BACKEND = {save_state, restore_state, free_state, state_bytes, release_bytes,
+                                     state_from_bytes};

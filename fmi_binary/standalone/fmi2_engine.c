@@ -54,7 +54,7 @@ typedef struct {
 static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
 
 const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7cu;
-#define STATE_MAGIC 0x5d7e0c1au
+const unsigned FMI2C_STATE_MAGIC = 0x5d7e0c1au;
 #define ERROR_LEN 1024
 
 /* the slave's part of the instance (RockingSlave._clear_state): what an FMU state holds */
@@ -75,12 +75,11 @@ typedef struct {
     rk_engine *engine;            /* NULL until initialized (or after an error without simulator) */
 } Instance;
 
+/* the backend's part of an FMU state (fmi2_common.c): the slave's bytes (see encode_slave) */
 typedef struct {
-    unsigned magic;
-    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
     size_t n;
-    unsigned char *payload;       /* the slave's bytes (see encode_slave) */
-} SavedState;
+    unsigned char bytes[];
+} Payload;
 
 /* serialized FMU state: the header of fmi2_common.h (magic, time, instance state, fmi2Terminated, last
  * DoStep status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
@@ -863,17 +862,18 @@ static void get_plain(const unsigned char *p, rk_plain_state *ps) {
     ps->impacts = impacts, ps->n_steps = n_steps, ps->painleve = painleve;
 }
 
-static unsigned char *encode_slave(Instance *S, size_t *n) {
+static Payload *encode_slave(Instance *S) {
     const Slave *sl = &S->s;
     int32_t has_engine = S->engine != NULL;
     int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
     int32_t flags[4] = {sl->initialized, sl->terminated, sl->frozen, sl->has_error};
     double times[2] = {sl->t, sl->t0};
     int32_t n_inputs = RK_FMU_N_INPUTS;
-    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
-    unsigned char *p = (unsigned char *)calloc(1, *n);
-    if (!p) return NULL;
-    unsigned char *q = p;
+    const size_t n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
+    Payload *pl = (Payload *)calloc(1, sizeof(Payload) + n);
+    if (!pl) return NULL;
+    pl->n = n;
+    unsigned char *p = pl->bytes, *q = p;
     memcpy(q, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE);
     q += PAYLOAD_MAGIC_SIZE;
     memcpy(q, RK_FMU_GUID, GUID_SIZE);
@@ -901,9 +901,9 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
         put_plain(q, &ps);
         q += PLAIN_SIZE;
     }
-    uint32_t crc = fmi2c_crc32_update(0, p, *n - 4);
+    uint32_t crc = fmi2c_crc32_update(0, p, n - 4);
     memcpy(q, &crc, 4);
-    return p;
+    return pl;
 }
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
@@ -1009,118 +1009,58 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     return 0;
 }
 
-static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
-    SavedState *st = (SavedState *)p;
-    if (!st || st->magic != STATE_MAGIC || !st->payload) {
-        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
-        return NULL;
-    }
-    return st;
-}
-
-static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, unsigned char *payload, size_t n,
-                             const fmi2c_fields *fields, fmi2FMUstate *out) {
-    if (!payload) {
+/* the backend's part of the FMU state calls of fmi2_common.c: `data` is a Payload */
+static fmi2Status save_state(fmi2c_instance *F, const char *function, void **data) {
+    Instance *S = (Instance *)F;
+    Payload *pl = encode_slave(S);
+    if (!pl) {
         log_error(S, "%s: out of memory", function);
         return fmi2Error;
     }
-    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-    if (!st) {
-        log_error(S, "%s: out of memory", function);
-        free(payload);
-        return fmi2Error;
-    }
-    free(st->payload);
-    st->fields = *fields;
-    st->magic = STATE_MAGIC;
-    st->payload = payload;
-    st->n = n;
-    *out = st;
+    *data = pl;
     return fmi2OK;
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(GetFMUstate);
-    NOT_NULL(GetFMUstate, FMUstate);
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2GetFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    size_t n = 0;
-    unsigned char *payload = encode_slave(S, &n);
-    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
-    if (keep_state(S, "fmi2GetFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error) return fail(S, fmi2Error);
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    BEGIN(SetFMUstate);
-    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
+static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *data) {
+    Instance *S = (Instance *)F;
+    const Payload *pl = (const Payload *)data;
     char why[2048];
-    if (decode_slave(S, st->payload, st->n, why, sizeof why) != 0) {
-        log_error(S, "fmi2SetFMUstate: state rejected, the instance keeps its current state: %s", why);
-        return fail(S, fmi2Error);
+    if (decode_slave(S, pl->bytes, pl->n, why, sizeof why) != 0) {
+        log_error(S, "%s: state rejected, the instance keeps its current state: %s", function, why);
+        return fmi2Error;
     }
-    fmi2c_restore_fields(&S->f, &st->fields);
     return fmi2OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(FreeFMUstate);
-    if (!FMUstate || !*FMUstate) return fmi2OK;
-    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    free(st->payload);
-    st->payload = NULL;
-    st->magic = 0;
-    free(st);
-    *FMUstate = NULL;
+static void free_state(fmi2c_instance *F, void *data) {
+    (void)F;
+    free(data);
+}
+
+static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+                              size_t *n, void **hold) {
+    (void)F; (void)function;
+    const Payload *pl = (const Payload *)data;
+    *bytes = pl->bytes;
+    *n = pl->n;
+    *hold = NULL;
     return fmi2OK;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializedFMUstateSize, size);
-    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    *size = SERIAL_HEADER_SIZE + st->n;
-    return fmi2OK;
-}
+static void release_bytes(fmi2c_instance *F, void *hold) { (void)F; (void)hold; }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializeFMUstate, serializedState);
-    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    if (size != SERIAL_HEADER_SIZE + st->n) {
-        log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zu (from "
-                  "fmi2SerializedFMUstateSize)", size, SERIAL_HEADER_SIZE + st->n);
-        return fail(S, fmi2Error);
+static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+                                   void **data) {
+    Payload *pl = (Payload *)malloc(sizeof(Payload) + n);
+    if (!pl) {
+        log_error((Instance *)F, "%s: out of memory", function);
+        return fmi2Error;
     }
-    char *p = serializedState;
-    memcpy(p + SERIAL_HEADER_SIZE, st->payload, st->n);
-    fmi2c_write_header((unsigned char *)p, &st->fields, st->payload, st->n);
+    pl->n = n;
+    memcpy(pl->bytes, bytes, n);
+    *data = pl;
     return fmi2OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(DeSerializeFMUstate, serializedState);
-    NOT_NULL(DeSerializeFMUstate, FMUstate);
-    fmi2c_fields fields;
-    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    size_t n = size - SERIAL_HEADER_SIZE;
-    unsigned char *payload = (unsigned char *)malloc(n ? n : 1);
-    if (payload) memcpy(payload, serializedState + SERIAL_HEADER_SIZE, n);
-    if (keep_state(S, "fmi2DeSerializeFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error)
-        return fail(S, fmi2Error);
-    return fmi2OK;
-}
+const fmi2c_backend FMI2C_BACKEND = {save_state, restore_state, free_state, state_bytes, release_bytes,
+                                     state_from_bytes};
