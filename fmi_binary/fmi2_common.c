@@ -2,6 +2,7 @@
  * checks, status bookkeeping, the serialized state's header, and the FMI calls that need no backend. */
 #define FMI2C_IMPLEMENTATION /* none of the backends' shorthands */
 #include "fmi2_common.h"
+#include "uri.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -61,7 +62,7 @@ fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status) {
     return status;
 }
 
-void fmi2c_free_categories(fmi2c_instance *F) {
+static void free_categories(fmi2c_instance *F) {
     for (size_t i = 0; i < F->n_categories; i++) free(F->categories[i]);
     free(F->categories);
     F->categories = NULL;
@@ -70,7 +71,7 @@ void fmi2c_free_categories(fmi2c_instance *F) {
 
 #define log_error(F, ...) fmi2c_logf(F, fmi2Error, "logStatusError", __VA_ARGS__)
 
-fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h) {
+static fmi2Status check_step(fmi2c_instance *F, double t, double h) {
     if (!(h > 0.0) || !isfinite(h)) {
         log_error(F, "fmi2DoStep: communicationStepSize = %g is invalid; allowed range (0, inf)", h);
         return fmi2c_fail(F, fmi2Error);
@@ -88,24 +89,13 @@ fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h) {
     return fmi2OK;
 }
 
-fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end) {
-    fmi2Status status;
-    if (refused) {
-        status = fmi2Discard;
-        F->state = STEP_FAILED;
-        F->terminated_flag = 1;
-    } else {
-        status = logged;
-        F->state = STEP_COMPLETE;
-        F->terminated_flag = 0;
-        F->time = t_end;
-    }
-    F->last_step_status = status;
-    return status;
+fmi2Status fmi2c_step_failed(fmi2c_instance *F) {
+    F->last_step_status = fmi2Error;
+    return fmi2Error;
 }
 
-fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
-                             fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+static fmi2Status check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                              fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     if (!isfinite(startTime)) {
         log_error(F, "fmi2SetupExperiment: startTime = %g is invalid; allowed range: finite values", startTime);
         return fmi2c_fail(F, fmi2Error);
@@ -152,8 +142,42 @@ int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String i
     return 0;
 }
 
-void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
-                size_t message_size) {
+int fmi2c_resource_folder(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2String location,
+                          char *resources, size_t size, int (*is_directory)(const char *),
+                          int (*is_file)(const char *), const char *required) {
+    char why[2048];
+    if (uri_to_path(location, resources, size, why, sizeof why) != 0) {
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+        return -1;
+    }
+    int has_required = 1;
+    if (required) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s", resources, required);
+        has_required = is_file(path);
+    }
+    if (!is_directory(resources) || !has_required) {
+        char problem[256];
+        if (is_directory(resources))
+            snprintf(problem, sizeof problem, "has no %s (not an FMU of this binary?)", required);
+        else
+            snprintf(problem, sizeof problem, "does not exist or is not a folder");
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
+                                "fmuResourceLocation \"%.500s\") %s", resources, location, problem);
+        return -1;
+    }
+    return 0;
+}
+
+void *fmi2c_new_instance(size_t size, const fmi2CallbackFunctions *functions, fmi2String instanceName,
+                         fmi2Boolean loggingOn, size_t message_size) {
+    fmi2c_instance *F = (fmi2c_instance *)calloc(1, size);
+    if (!F || !(F->name = (char *)malloc(strlen(instanceName) + 1))) {
+        free(F);
+        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    strcpy(F->name, instanceName);
     F->magic = FMI2C_INSTANCE_MAGIC;
     F->message_size = message_size;
     F->state = INSTANTIATED;
@@ -161,19 +185,14 @@ void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2B
     F->env = functions ? functions->componentEnvironment : NULL;
     F->logging_on = loggingOn ? 1 : 0;
     F->last_step_status = fmi2OK;
+    return F;
 }
 
-void fmi2c_enter_simulation(fmi2c_instance *F) {
-    F->state = STEP_COMPLETE;
-    F->terminated_flag = 0;
-    F->last_step_status = fmi2OK;
-}
-
-void fmi2c_reset(fmi2c_instance *F) {
-    F->state = INSTANTIATED;
-    F->time = 0.0;
-    F->terminated_flag = 0;
-    F->last_step_status = fmi2OK;
+void fmi2c_destroy(fmi2c_instance *F) {
+    free_categories(F);
+    F->magic = 0;
+    free(F->name);
+    free(F);
 }
 
 static fmi2c_fields fields_of(const fmi2c_instance *F) {
@@ -192,12 +211,89 @@ static void restore_fields(fmi2c_instance *F, const fmi2c_fields *fields) {
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
+void fmi2FreeInstance(fmi2Component c) {
+    fmi2c_instance *F = (fmi2c_instance *)c;
+    if (!fmi2c_valid(F)) return;
+    FMI2C_BACKEND.free_instance(F);
+    fmi2c_destroy(F);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    FMI2C_BEGIN(fmi2c_instance, SetupExperiment);
+    if (check_setup(S, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
+        return fmi2Error;
+    fmi2Status status = FMI2C_BACKEND.setup_experiment(S, toleranceDefined, tolerance, startTime, stopTimeDefined,
+                                                       stopTime);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    S->time = startTime;
+    return status;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    FMI2C_BEGIN(fmi2c_instance, EnterInitializationMode);
+    fmi2Status status = FMI2C_BACKEND.enter_initialization_mode(S);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    S->state = INITIALIZATION_MODE;
+    return status;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    FMI2C_BEGIN(fmi2c_instance, ExitInitializationMode);
+    fmi2Status status = FMI2C_BACKEND.exit_initialization_mode(S);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    S->state = STEP_COMPLETE;
+    S->terminated_flag = 0;
+    S->last_step_status = fmi2OK;
+    return status;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    FMI2C_BEGIN(fmi2c_instance, Terminate);
+    if (S->state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
+    fmi2Status status = FMI2C_BACKEND.terminate(S);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    S->state = TERMINATED;
+    return status;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    FMI2C_BEGIN(fmi2c_instance, Reset);
+    fmi2Status status = FMI2C_BACKEND.reset(S);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    S->state = INSTANTIATED;
+    S->time = 0.0;
+    S->terminated_flag = 0;
+    S->last_step_status = fmi2OK;
+    return status;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    FMI2C_BEGIN(fmi2c_instance, DoStep);
+    const double t = currentCommunicationPoint, h = communicationStepSize;
+    if (check_step(S, t, h) != fmi2OK) return fmi2Error;
+    fmi2Status status = FMI2C_BACKEND.do_step(S, t, h);
+    if (status == fmi2Error) return fmi2c_fail(S, status);
+    if (status == fmi2Discard) { /* refused: fmi2Terminated true until a later step succeeds, the time kept */
+        S->state = STEP_FAILED;
+        S->terminated_flag = 1;
+    } else {
+        S->state = STEP_COMPLETE;
+        S->terminated_flag = 0;
+        S->time = t + h;
+    }
+    S->last_step_status = status;
+    return status;
+}
+
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
     FMI2C_BEGIN(fmi2c_instance, SetDebugLogging);
     if (nCategories > 0) FMI2C_NOT_NULL(SetDebugLogging, categories);
     for (size_t i = 0; i < nCategories; i++) FMI2C_NOT_NULL(SetDebugLogging, categories[i]);
-    fmi2c_free_categories(S);
+    free_categories(S);
     if (nCategories > 0) {
         S->categories = (char **)calloc(nCategories, sizeof(char *));
         if (!S->categories) return fmi2c_fail(S, fmi2Error);

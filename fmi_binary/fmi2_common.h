@@ -72,28 +72,27 @@ void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, cons
 void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...);
 fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function);
 fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
-void fmi2c_free_categories(fmi2c_instance *F);
-/* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
-fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
-/* the bookkeeping at the end of an fmi2DoStep that got that far: refused (fmi2Discard, fmi2Terminated true,
- * the time unchanged) or done (`logged`, the worst status logged, and the time t_end); the status returned */
-fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end);
-/* fmi2SetupExperiment's checks of its arguments: fmi2OK, or fmi2Error logged */
-fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
-                             fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+/* a step that failed (fmi2DoStep's hook): fmi2DoStepStatus becomes fmi2Error; fmi2Error returned */
+fmi2Status fmi2c_step_failed(fmi2c_instance *F);
 
 /* fmi2Instantiate: an error message to the caller's logger (no instance yet) */
 void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...);
 /* fmi2Instantiate's checks of instanceName, fmuType and fmuGUID (not NULL): 0, or -1 with the error logged */
 int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
                             fmi2String fmuGUID);
-/* a new instance's FMI part (its name apart): instantiated, messages of at most message_size - 1 bytes */
-void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
-                size_t message_size);
-/* the bookkeeping of a successful fmi2ExitInitializationMode (simulating, fmi2Terminated false) */
-void fmi2c_enter_simulation(fmi2c_instance *F);
-/* the bookkeeping of a successful fmi2Reset (instantiated, time 0, fmi2Terminated false) */
-void fmi2c_reset(fmi2c_instance *F);
+/* fmi2Instantiate's resource folder: fmuResourceLocation `location` (a file URI, uri.h) as a local path in
+ * `resources` (capacity `size`), a folder that exists and, when `required` is not NULL, holds the file
+ * `required`; `is_directory` and `is_file` are the backend's checks of the file system (is_file may be NULL
+ * when `required` is). 0, or -1 with the error logged. */
+int fmi2c_resource_folder(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2String location,
+                          char *resources, size_t size, int (*is_directory)(const char *),
+                          int (*is_file)(const char *), const char *required);
+/* a new instance of `size` bytes (the backend's Instance, zeroed), its FMI part instantiated with a copy of
+ * the name and messages of at most message_size - 1 bytes; NULL with the error logged */
+void *fmi2c_new_instance(size_t size, const fmi2CallbackFunctions *functions, fmi2String instanceName,
+                         fmi2Boolean loggingOn, size_t message_size);
+/* free the instance (its FMI part; the backend's part released before) */
+void fmi2c_destroy(fmi2c_instance *F);
 
 /* ------------------------------------------------------------------------------------------ backend hooks */
 /* What the FMI calls defined in fmi2_common.c leave to the backend (the Python slave, or the C engine). Each
@@ -101,6 +100,17 @@ void fmi2c_reset(fmi2c_instance *F);
  * call to name in messages; it returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the
  * message logged. The common code does the rest: the call checks, the instance state, fmi2c_fail. */
 typedef struct {
+    void (*free_instance)(fmi2c_instance *F); /* release the backend's part (fmi2FreeInstance) */
+    fmi2Status (*setup_experiment)(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+    fmi2Status (*enter_initialization_mode)(fmi2c_instance *F);
+    fmi2Status (*exit_initialization_mode)(fmi2c_instance *F);
+    fmi2Status (*terminate)(fmi2c_instance *F);
+    fmi2Status (*reset)(fmi2c_instance *F); /* back to the start values, not initialized */
+    /* the step [t, t + h], its arguments checked: done (fmi2OK / fmi2Warning), refused (fmi2Discard: the
+     * slave stayed at F->time; the master may retry, or end at the last successful time) or fmi2Error (the
+     * result of fmi2c_step_failed when the step itself failed) */
+    fmi2Status (*do_step)(fmi2c_instance *F, double t, double h);
     /* FMU states: the backend's part of a saved state is `data`, opaque to the common code */
     /* the backend's part of the instance's current state (fmi2GetFMUstate) */
     fmi2Status (*save_state)(fmi2c_instance *F, const char *function, void **data);

@@ -234,37 +234,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     char resources[4096], why[2048];
-    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+    if (fmi2c_resource_folder(functions, instanceName, fmuResourceLocation, resources, sizeof resources,
+                              is_directory, is_file, PYHOST_FILE) != 0)
         return NULL;
-    }
-    char pyhost[4200];
-    snprintf(pyhost, sizeof pyhost, "%s/%s", resources, PYHOST_FILE);
-    if (!is_directory(resources) || !is_file(pyhost)) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                                "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
-                                is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
-                                                        : "does not exist or is not a folder");
-        return NULL;
-    }
     int started = 0;
     if (python_load(why, sizeof why, &started) != 0) {
         fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
-    Instance *S = (Instance *)calloc(1, sizeof(Instance));
-    if (!S) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
-    fmi2c_init(&S->f, functions, loggingOn, 2048); /* messages of at most 2047 bytes (longer texts are cut) */
-    S->f.name = (char *)malloc(strlen(instanceName) + 1);
-    if (S->f.name) strcpy(S->f.name, instanceName);
-    if (!S->f.name) {
-        free(S);
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
+    /* messages of at most 2047 bytes (longer texts are cut) */
+    Instance *S = (Instance *)fmi2c_new_instance(sizeof(Instance), functions, instanceName, loggingOn, 2048);
+    if (!S) return NULL;
 
     GIL_BEGIN;
     int ok = 0;
@@ -318,17 +298,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     GIL_END;
     if (!ok) {
-        S->f.magic = 0;
-        free(S->f.name);
-        free(S);
+        fmi2c_destroy(&S->f);
         return NULL;
     }
     return S;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return;
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave's methods */
+static void free_instance(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     release_slave(S);
     if (S->host) {
@@ -341,10 +320,6 @@ void fmi2FreeInstance(fmi2Component c) {
         S->host = NULL;
     }
     GIL_END;
-    fmi2c_free_categories(&S->f);
-    S->f.magic = 0;
-    free(S->f.name);
-    free(S);
 }
 
 /* a call of one slave method without results: status from the call and the messages it logged */
@@ -355,11 +330,9 @@ static fmi2Status simple_call(Instance *S, PyObject *result) {
     return logged;
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    BEGIN(SetupExperiment);
-    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
-        return fmi2Error;
+static fmi2Status setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(startTime);
     PyObject *b = stopTimeDefined ? py.Float_FromDouble(stopTime) : (py.IncRef(py.None), py.None);
@@ -369,42 +342,30 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     py.DecRef(b);
     py.DecRef(t);
     GIL_END;
-    if (status <= fmi2Warning) {
-        S->f.time = startTime;
-    }
     return status;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    BEGIN(EnterInitializationMode);
+/* a slave method without arguments: its status */
+static fmi2Status call_method(fmi2c_instance *F, const char *function, int m) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2EnterInitializationMode", M_ENTER, NULL));
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, function, m, NULL));
     GIL_END;
-    if (status <= fmi2Warning) S->f.state = INITIALIZATION_MODE;
     return status;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    BEGIN(ExitInitializationMode);
-    GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2ExitInitializationMode", M_EXIT, NULL));
-    GIL_END;
-    if (status <= fmi2Warning) fmi2c_enter_simulation(&S->f);
-    return status;
+static fmi2Status enter_initialization_mode(fmi2c_instance *F) {
+    return call_method(F, "fmi2EnterInitializationMode", M_ENTER);
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    BEGIN(Terminate);
-    if (S->f.state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
-    GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2Terminate", M_TERMINATE, NULL));
-    GIL_END;
-    if (status <= fmi2Warning) S->f.state = TERMINATED;
-    return status;
+static fmi2Status exit_initialization_mode(fmi2c_instance *F) {
+    return call_method(F, "fmi2ExitInitializationMode", M_EXIT);
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    BEGIN(Reset);
+static fmi2Status terminate(fmi2c_instance *F) { return call_method(F, "fmi2Terminate", M_TERMINATE); }
+
+static fmi2Status reset(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     /* a new slave from the class: start values, not initialized (as fmi2Instantiate left it) */
     PyObject *renew = py.Object_GetAttrString(S->host, "new_slave");
@@ -419,9 +380,23 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if (r) py.DecRef(r);
     if (renew) py.DecRef(renew);
     GIL_END;
-    if (status == fmi2Error) return fail(S, fmi2Error);
-    fmi2c_reset(&S->f);
     return status;
+}
+
+static fmi2Status do_step(fmi2c_instance *F, double t, double h) {
+    Instance *S = (Instance *)F;
+    GIL_BEGIN;
+    PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
+    PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
+    int accepted = result ? py.Object_IsTrue(result) : -1;
+    if (accepted < 0 && result) log_exception(S, "fmi2DoStep");
+    fmi2Status logged = drain_log(S);
+    if (a) py.DecRef(a);
+    if (b) py.DecRef(b);
+    if (result) py.DecRef(result);
+    GIL_END;
+    if (accepted < 0) return fmi2c_step_failed(F);
+    return accepted ? logged : fmi2Discard; /* do_step returned False: refused, the slave stayed where it was */
 }
 
 /* ------------------------------------------------------------------------------------------ values */
@@ -547,30 +522,6 @@ SETTER(SetString, M_SET_STRING, fmi2String,
        value[i] ? py.Unicode_DecodeUTF8(value[i], (Py_ssize_t)strlen(value[i]), "strict") : NULL)
 
 /* ------------------------------------------------------------------------------------------ stepping */
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
-                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    (void)noSetFMUStatePriorToCurrentPoint;
-    BEGIN(DoStep);
-    const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
-    GIL_BEGIN;
-    PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
-    PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
-    int accepted = result ? py.Object_IsTrue(result) : -1;
-    if (accepted < 0 && result) log_exception(S, "fmi2DoStep");
-    fmi2Status logged = drain_log(S);
-    if (a) py.DecRef(a);
-    if (b) py.DecRef(b);
-    if (result) py.DecRef(result);
-    GIL_END;
-    if (accepted < 0) {
-        S->f.last_step_status = fmi2Error;
-        return fail(S, fmi2Error);
-    }
-    /* refused: the slave stayed at S->f.time; the master may retry, or end at the last successful time */
-    return fmi2c_step_done(&S->f, accepted == 0, logged, t + h);
-}
-
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
     BEGIN(SetRealInputDerivatives);
@@ -670,5 +621,18 @@ static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, cons
     return state ? status : fmi2Error;
 }
 
-const fmi2c_backend FMI2C_BACKEND = {save_state, restore_state, free_state, state_bytes, release_bytes,
-                                     state_from_bytes};
+const fmi2c_backend FMI2C_BACKEND = {
+    .free_instance = free_instance,
+    .setup_experiment = setup_experiment,
+    .enter_initialization_mode = enter_initialization_mode,
+    .exit_initialization_mode = exit_initialization_mode,
+    .terminate = terminate,
+    .reset = reset,
+    .do_step = do_step,
+    .save_state = save_state,
+    .restore_state = restore_state,
+    .free_state = free_state,
+    .state_bytes = state_bytes,
+    .release_bytes = release_bytes,
+    .state_from_bytes = state_from_bytes,
+};

@@ -292,62 +292,41 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
      * binary refuses it (fmi_binary/uri.c, the same messages) */
-    char resources[4096], why[2048];
-    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+    char resources[4096];
+    if (fmi2c_resource_folder(functions, instanceName, fmuResourceLocation, resources, sizeof resources,
+                              is_directory, NULL, NULL) != 0)
         return NULL;
-    }
-    if (!is_directory(resources)) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                                "fmuResourceLocation \"%.500s\") does not exist or is not a folder", resources,
-                                fmuResourceLocation);
-        return NULL;
-    }
-    Instance *S = (Instance *)calloc(1, sizeof(Instance));
-    if (!S || !(S->f.name = (char *)malloc(strlen(instanceName) + 1))) {
-        free(S);
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
-    strcpy(S->f.name, instanceName);
-    fmi2c_init(&S->f, functions, loggingOn, FMI2C_MESSAGE_MAX); /* messages of at most 4095 bytes */
+    /* messages of at most 4095 bytes */
+    Instance *S = (Instance *)fmi2c_new_instance(sizeof(Instance), functions, instanceName, loggingOn,
+                                                 FMI2C_MESSAGE_MAX);
+    if (!S) return NULL;
     slave_clear(&S->s);
     return S;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return;
-    rk_engine_free(S->engine);
-    fmi2c_free_categories(&S->f);
-    S->f.magic = 0;
-    free(S->f.name);
-    free(S);
-}
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave, the engine */
+static void free_instance(fmi2c_instance *F) { rk_engine_free(((Instance *)F)->engine); }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    BEGIN(SetupExperiment);
-    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
-        return fmi2Error;
-    S->s.t0 = startTime;
-    S->f.time = startTime;
+static fmi2Status setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
+    ((Instance *)F)->s.t0 = startTime;
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    BEGIN(EnterInitializationMode);
-    S->f.state = INITIALIZATION_MODE;
+static fmi2Status enter_initialization_mode(fmi2c_instance *F) {
+    (void)F;
     return fmi2OK;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    BEGIN(ExitInitializationMode);
+static fmi2Status exit_initialization_mode(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     char why[RK_MSG_LEN + 128];
     rk_engine *e = create_engine(S->s.values, S->s.t0, why, sizeof why);
     if (!e) {
         log_error(S, "fmi2ExitInitializationMode: invalid parameters: %s", why);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     rk_engine_free(S->engine);
     S->engine = e;
@@ -357,24 +336,19 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     for (int k = 0; k < RK_FMU_N_INPUTS; k++)
         if (S->s.has_rate[k]) S->s.rate_t[k] = S->s.t0;
     update_outputs(S);
-    fmi2c_enter_simulation(&S->f);
     return S->f.worst_logged;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    BEGIN(Terminate);
-    if (S->f.state == ERROR_STATE) return fmi2OK;
-    S->s.terminated = 1;
-    S->f.state = TERMINATED;
+static fmi2Status terminate(fmi2c_instance *F) {
+    ((Instance *)F)->s.terminated = 1;
     return fmi2OK;
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    BEGIN(Reset);
+static fmi2Status reset(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     rk_engine_free(S->engine);
     S->engine = NULL;
     slave_clear(&S->s);
-    fmi2c_reset(&S->f);
     return fmi2OK;
 }
 
@@ -631,18 +605,15 @@ static int has_failed_step(const rk_engine *e, const char **first) {
     return n;
 }
 
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
-                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    (void)noSetFMUStatePriorToCurrentPoint;
-    BEGIN(DoStep);
-    const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
+/* the step [t, t + h] (fmi2c_backend.do_step) */
+static fmi2Status do_step(fmi2c_instance *F, double t, double h) {
+    Instance *S = (Instance *)F;
     const double t_end = t + h;
     Slave *s = &S->s;
-    if (s->has_error || !S->engine) {
+    if (s->has_error || !S->engine) { /* refused before it began: fmi2DoStepStatus stays */
         log_error(S, "fmi2DoStep: RuntimeError: step refused after an earlier failure (call fmi2Reset): %s",
                   s->has_error ? s->error : "no simulator");
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     char rt[40], rte[40];
     py_repr(t, rt, sizeof rt);
@@ -734,13 +705,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                          rk_status_name(st), rk_engine_message(e));
                 s->has_error = 1;
                 log_error(S, "fmi2DoStep: RuntimeError: %s", s->error);
-                S->f.last_step_status = fmi2Error;
-                return fail(S, fmi2Error);
+                return fmi2c_step_failed(F);
             }
         }
     }
     if (!refused) s->t = t_end;
-    return fmi2c_step_done(&S->f, refused, S->f.worst_logged, t_end);
+    return refused ? fmi2Discard : S->f.worst_logged;
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -1062,5 +1032,18 @@ static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, cons
     return fmi2OK;
 }
 
-const fmi2c_backend FMI2C_BACKEND = {save_state, restore_state, free_state, state_bytes, release_bytes,
-                                     state_from_bytes};
+const fmi2c_backend FMI2C_BACKEND = {
+    .free_instance = free_instance,
+    .setup_experiment = setup_experiment,
+    .enter_initialization_mode = enter_initialization_mode,
+    .exit_initialization_mode = exit_initialization_mode,
+    .terminate = terminate,
+    .reset = reset,
+    .do_step = do_step,
+    .save_state = save_state,
+    .restore_state = restore_state,
+    .free_state = free_state,
+    .state_bytes = state_bytes,
+    .release_bytes = release_bytes,
+    .state_from_bytes = state_from_bytes,
+};
