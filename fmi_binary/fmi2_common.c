@@ -214,7 +214,7 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 void fmi2FreeInstance(fmi2Component c) {
     fmi2c_instance *F = (fmi2c_instance *)c;
     if (!fmi2c_valid(F)) return;
-    FMI2C_BACKEND.free_instance(F);
+    fmi2c_backend_free_instance(F);
     fmi2c_destroy(F);
 }
 
@@ -223,7 +223,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     FMI2C_BEGIN(fmi2c_instance, SetupExperiment);
     if (check_setup(S, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
         return fmi2Error;
-    fmi2Status status = FMI2C_BACKEND.setup_experiment(S, toleranceDefined, tolerance, startTime, stopTimeDefined,
+    fmi2Status status = fmi2c_backend_setup_experiment(S, toleranceDefined, tolerance, startTime, stopTimeDefined,
                                                        stopTime);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     S->time = startTime;
@@ -232,7 +232,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     FMI2C_BEGIN(fmi2c_instance, EnterInitializationMode);
-    fmi2Status status = FMI2C_BACKEND.enter_initialization_mode(S);
+    fmi2Status status = fmi2c_backend_enter_initialization_mode(S);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     S->state = INITIALIZATION_MODE;
     return status;
@@ -240,7 +240,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     FMI2C_BEGIN(fmi2c_instance, ExitInitializationMode);
-    fmi2Status status = FMI2C_BACKEND.exit_initialization_mode(S);
+    fmi2Status status = fmi2c_backend_exit_initialization_mode(S);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     S->state = STEP_COMPLETE;
     S->terminated_flag = 0;
@@ -251,7 +251,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
 fmi2Status fmi2Terminate(fmi2Component c) {
     FMI2C_BEGIN(fmi2c_instance, Terminate);
     if (S->state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
-    fmi2Status status = FMI2C_BACKEND.terminate(S);
+    fmi2Status status = fmi2c_backend_terminate(S);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     S->state = TERMINATED;
     return status;
@@ -259,7 +259,7 @@ fmi2Status fmi2Terminate(fmi2Component c) {
 
 fmi2Status fmi2Reset(fmi2Component c) {
     FMI2C_BEGIN(fmi2c_instance, Reset);
-    fmi2Status status = FMI2C_BACKEND.reset(S);
+    fmi2Status status = fmi2c_backend_reset(S);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     S->state = INSTANTIATED;
     S->time = 0.0;
@@ -274,7 +274,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     FMI2C_BEGIN(fmi2c_instance, DoStep);
     const double t = currentCommunicationPoint, h = communicationStepSize;
     if (check_step(S, t, h) != fmi2OK) return fmi2Error;
-    fmi2Status status = FMI2C_BACKEND.do_step(S, t, h);
+    fmi2Status status = fmi2c_backend_do_step(S, t, h);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     if (status == fmi2Discard) { /* refused: fmi2Terminated true until a later step succeeds, the time kept */
         S->state = STEP_FAILED;
@@ -336,6 +336,39 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     if (!fmi2c_valid(S)) return fmi2Error;
     log_error(S, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false)");
     return fmi2c_fail(S, fmi2Error);
+}
+
+/* ------------------------------------------------------------------------------------------ values */
+/* fmi2Get<Type> and fmi2Set<Type>, one per type as FMI 2.0 declares them: nothing to do for nvr = 0, else
+ * neither array may be NULL; the backend's hook does the rest */
+#define VALUE_CALL(F, MASK, HOOK, TYPE)                                                                     \
+    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
+        FMI2C_BEGIN(fmi2c_instance, MASK);                                                                  \
+        if (nvr == 0) return fmi2OK;                                                                        \
+        FMI2C_NOT_NULL(F, vr);                                                                              \
+        FMI2C_NOT_NULL(F, value);                                                                           \
+        fmi2Status status = fmi2c_backend_##HOOK(S, vr, nvr, value);                                        \
+        return status == fmi2Error ? fmi2c_fail(S, status) : status;                                        \
+    }
+
+VALUE_CALL(GetReal, Get, get_real, fmi2Real)
+VALUE_CALL(GetInteger, Get, get_integer, fmi2Integer)
+VALUE_CALL(GetBoolean, Get, get_boolean, fmi2Boolean)
+VALUE_CALL(GetString, Get, get_string, fmi2String)
+VALUE_CALL(SetReal, Set, set_real, const fmi2Real)
+VALUE_CALL(SetInteger, Set, set_integer, const fmi2Integer)
+VALUE_CALL(SetBoolean, Set, set_boolean, const fmi2Boolean)
+VALUE_CALL(SetString, Set, set_string, const fmi2String)
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    FMI2C_BEGIN(fmi2c_instance, SetRealInputDerivatives);
+    if (nvr == 0) return fmi2OK;
+    FMI2C_NOT_NULL(SetRealInputDerivatives, vr);
+    FMI2C_NOT_NULL(SetRealInputDerivatives, order);
+    FMI2C_NOT_NULL(SetRealInputDerivatives, value);
+    fmi2Status status = fmi2c_backend_set_real_input_derivatives(S, vr, nvr, order, value);
+    return status == fmi2Error ? fmi2c_fail(S, status) : status;
 }
 
 /* ------------------------------------------------------------------------------------------ status */
@@ -460,10 +493,10 @@ static fmi2Status keep_state(fmi2c_instance *F, const char *function, saved_stat
     if (!st) st = (saved_state *)calloc(1, sizeof(saved_state));
     if (!st) {
         log_error(F, "%s: out of memory", function);
-        FMI2C_BACKEND.free_state(F, data);
+        fmi2c_backend_free_state(F, data);
         return fmi2Error;
     }
-    if (st->data) FMI2C_BACKEND.free_state(F, st->data);
+    if (st->data) fmi2c_backend_free_state(F, st->data);
     st->fields = *fields;
     st->magic = FMI2C_STATE_MAGIC;
     st->data = data;
@@ -480,7 +513,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         if (!st) return fmi2c_fail(S, fmi2Error);
     }
     void *data = NULL;
-    fmi2Status status = FMI2C_BACKEND.save_state(S, "fmi2GetFMUstate", &data);
+    fmi2Status status = fmi2c_backend_save_state(S, "fmi2GetFMUstate", &data);
     const fmi2c_fields fields = fields_of(S);
     if (status != fmi2Error && keep_state(S, "fmi2GetFMUstate", st, data, &fields, FMUstate) != fmi2OK)
         status = fmi2Error;
@@ -491,7 +524,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     FMI2C_BEGIN(fmi2c_instance, SetFMUstate);
     saved_state *st = saved(S, "fmi2SetFMUstate", FMUstate);
     if (!st) return fmi2c_fail(S, fmi2Error);
-    fmi2Status status = FMI2C_BACKEND.restore_state(S, "fmi2SetFMUstate", st->data);
+    fmi2Status status = fmi2c_backend_restore_state(S, "fmi2SetFMUstate", st->data);
     if (status == fmi2Error) return fmi2c_fail(S, status); /* rejected: the instance kept its state */
     restore_fields(S, &st->fields);
     return status;
@@ -502,7 +535,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     if (!FMUstate || !*FMUstate) return fmi2OK;
     saved_state *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
     if (!st) return fmi2c_fail(S, fmi2Error);
-    FMI2C_BACKEND.free_state(S, st->data);
+    fmi2c_backend_free_state(S, st->data);
     st->data = NULL;
     st->magic = 0;
     free(st);
@@ -518,10 +551,10 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
     const unsigned char *bytes = NULL;
     size_t n = 0;
     void *hold = NULL;
-    fmi2Status status = FMI2C_BACKEND.state_bytes(S, "fmi2SerializedFMUstateSize", st->data, &bytes, &n, &hold);
+    fmi2Status status = fmi2c_backend_state_bytes(S, "fmi2SerializedFMUstateSize", st->data, &bytes, &n, &hold);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     *size = SERIAL_HEADER_SIZE + n;
-    FMI2C_BACKEND.release_bytes(S, hold);
+    fmi2c_backend_release_bytes(S, hold);
     return status;
 }
 
@@ -533,7 +566,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     const unsigned char *bytes = NULL;
     size_t n = 0;
     void *hold = NULL;
-    fmi2Status status = FMI2C_BACKEND.state_bytes(S, "fmi2SerializeFMUstate", st->data, &bytes, &n, &hold);
+    fmi2Status status = fmi2c_backend_state_bytes(S, "fmi2SerializeFMUstate", st->data, &bytes, &n, &hold);
     if (status == fmi2Error) return fmi2c_fail(S, status);
     if (size != SERIAL_HEADER_SIZE + n) {
         log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zu (from "
@@ -544,7 +577,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
         memcpy(p + SERIAL_HEADER_SIZE, bytes, n);
         write_header(p, &st->fields, bytes, n);
     }
-    FMI2C_BACKEND.release_bytes(S, hold);
+    fmi2c_backend_release_bytes(S, hold);
     return status == fmi2Error ? fmi2c_fail(S, status) : status;
 }
 
@@ -561,7 +594,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         if (!st) return fmi2c_fail(S, fmi2Error);
     }
     void *data = NULL;
-    fmi2Status status = FMI2C_BACKEND.state_from_bytes(S, "fmi2DeSerializeFMUstate",
+    fmi2Status status = fmi2c_backend_state_from_bytes(S, "fmi2DeSerializeFMUstate",
                                                        (const unsigned char *)serializedState + SERIAL_HEADER_SIZE,
                                                        size - SERIAL_HEADER_SIZE, &data);
     if (status != fmi2Error && keep_state(S, "fmi2DeSerializeFMUstate", st, data, &fields, FMUstate) != fmi2OK)

@@ -95,39 +95,57 @@ void *fmi2c_new_instance(size_t size, const fmi2CallbackFunctions *functions, fm
 void fmi2c_destroy(fmi2c_instance *F);
 
 /* ------------------------------------------------------------------------------------------ backend hooks */
-/* What the FMI calls defined in fmi2_common.c leave to the backend (the Python slave, or the C engine). Each
- * hook gets the instance's FMI part F (the first member of the backend's Instance) and `function`, the FMI
- * call to name in messages; it returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the
- * message logged. The common code does the rest: the call checks, the instance state, fmi2c_fail. */
-typedef struct {
-    void (*free_instance)(fmi2c_instance *F); /* release the backend's part (fmi2FreeInstance) */
-    fmi2Status (*setup_experiment)(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime);
-    fmi2Status (*enter_initialization_mode)(fmi2c_instance *F);
-    fmi2Status (*exit_initialization_mode)(fmi2c_instance *F);
-    fmi2Status (*terminate)(fmi2c_instance *F);
-    fmi2Status (*reset)(fmi2c_instance *F); /* back to the start values, not initialized */
-    /* the step [t, t + h], its arguments checked: done (fmi2OK / fmi2Warning), refused (fmi2Discard: the
-     * slave stayed at F->time; the master may retry, or end at the last successful time) or fmi2Error (the
-     * result of fmi2c_step_failed when the step itself failed) */
-    fmi2Status (*do_step)(fmi2c_instance *F, double t, double h);
-    /* FMU states: the backend's part of a saved state is `data`, opaque to the common code */
-    /* the backend's part of the instance's current state (fmi2GetFMUstate) */
-    fmi2Status (*save_state)(fmi2c_instance *F, const char *function, void **data);
-    /* set it (fmi2SetFMUstate); on fmi2Error the instance kept its state */
-    fmi2Status (*restore_state)(fmi2c_instance *F, const char *function, void *data);
-    void (*free_state)(fmi2c_instance *F, void *data);
-    /* the n bytes of `data` in a serialized state (after the header), valid until release_bytes(F, *hold) */
-    fmi2Status (*state_bytes)(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
-                              size_t *n, void **hold);
-    void (*release_bytes)(fmi2c_instance *F, void *hold);
-    /* `data` from those n bytes (fmi2DeSerializeFMUstate; the header is checked already) */
-    fmi2Status (*state_from_bytes)(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
-                                   void **data);
-} fmi2c_backend;
+/* What the FMI calls defined in fmi2_common.c leave to the backend (the Python slave, or the C engine); each
+ * backend defines every hook. A hook gets the instance's FMI part (the first member of the backend's
+ * Instance) and returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the message logged
+ * (`function`: the FMI call to name). The common code does the rest: the call-allowed and argument checks,
+ * the instance state, the time and the statuses, fmi2c_fail. */
+void fmi2c_backend_free_instance(fmi2c_instance *F); /* release the backend's part (fmi2FreeInstance) */
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                          fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F);
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F);
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F);
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F); /* back to the start values, not initialized */
+/* the step [t, t + h], its arguments checked: done (fmi2OK / fmi2Warning), refused (fmi2Discard: the slave
+ * stayed at F->time; the master may retry, or end at the last successful time), or fmi2Error (through
+ * fmi2c_step_failed when the step itself failed) */
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h);
 
-/* each backend defines its hooks and the tag of its saved states (one binary never takes the other's) */
-extern const fmi2c_backend FMI2C_BACKEND;
+/* fmi2Get<Type> / fmi2Set<Type> / fmi2SetRealInputDerivatives with nvr > 0 and no array NULL */
+fmi2Status fmi2c_backend_get_real(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]);
+fmi2Status fmi2c_backend_get_integer(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     fmi2Integer value[]);
+fmi2Status fmi2c_backend_get_boolean(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     fmi2Boolean value[]);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]);
+fmi2Status fmi2c_backend_set_real(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                  const fmi2Real value[]);
+fmi2Status fmi2c_backend_set_integer(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     const fmi2Integer value[]);
+fmi2Status fmi2c_backend_set_boolean(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     const fmi2Boolean value[]);
+fmi2Status fmi2c_backend_set_string(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                    const fmi2String value[]);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]);
+
+/* FMU states: the backend's part of a saved state is `data`, opaque to the common code */
+/* the backend's part of the instance's current state (fmi2GetFMUstate) */
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data);
+/* set it (fmi2SetFMUstate); on fmi2Error the instance kept its state */
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data);
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data);
+/* the n bytes of `data` in a serialized state (after the header), valid until
+ * fmi2c_backend_release_bytes(F, *hold) */
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data,
+                                     const unsigned char **bytes, size_t *n, void **hold);
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold);
+/* `data` from those n bytes (fmi2DeSerializeFMUstate; the header is checked already) */
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes,
+                                          size_t n, void **data);
+/* the tag of the backend's saved states (one binary never takes the other's) */
 extern const unsigned FMI2C_STATE_MAGIC;
 
 /* what an FMU state keeps of the FMI part (the header of its serialized form) */

@@ -306,7 +306,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 /* ------------------------------------------------------------------------------------------ backend hooks */
 /* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave's methods */
-static void free_instance(fmi2c_instance *F) {
+void fmi2c_backend_free_instance(fmi2c_instance *F) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
     release_slave(S);
@@ -325,12 +325,12 @@ static void free_instance(fmi2c_instance *F) {
 /* a call of one slave method without results: status from the call and the messages it logged */
 static fmi2Status simple_call(Instance *S, PyObject *result) {
     fmi2Status logged = drain_log(S);
-    if (!result) return fail(S, fmi2Error);
+    if (!result) return fmi2Error;
     py.DecRef(result);
     return logged;
 }
 
-static fmi2Status setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                    fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
@@ -354,17 +354,17 @@ static fmi2Status call_method(fmi2c_instance *F, const char *function, int m) {
     return status;
 }
 
-static fmi2Status enter_initialization_mode(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F) {
     return call_method(F, "fmi2EnterInitializationMode", M_ENTER);
 }
 
-static fmi2Status exit_initialization_mode(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F) {
     return call_method(F, "fmi2ExitInitializationMode", M_EXIT);
 }
 
-static fmi2Status terminate(fmi2c_instance *F) { return call_method(F, "fmi2Terminate", M_TERMINATE); }
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F) { return call_method(F, "fmi2Terminate", M_TERMINATE); }
 
-static fmi2Status reset(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
     /* a new slave from the class: start values, not initialized (as fmi2Instantiate left it) */
@@ -383,7 +383,7 @@ static fmi2Status reset(fmi2c_instance *F) {
     return status;
 }
 
-static fmi2Status do_step(fmi2c_instance *F, double t, double h) {
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
@@ -416,12 +416,11 @@ static fmi2Status get_values(Instance *S, const char *function, int m, const fmi
     return logged;
 }
 
-#define GETTER(F, M, TYPE, CONVERT)                                                                         \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
-        BEGIN(Get);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+/* the backend's part of fmi2Get<Type> (fmi2_common.c checked the arguments): the slave's get_<type> */
+#define GETTER(HOOK, F, M, TYPE, CONVERT)                                                                   \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    TYPE value[]) {                                                         \
+        Instance *S = (Instance *)c;                                                                        \
         GIL_BEGIN;                                                                                          \
         PyObject *list = NULL;                                                                              \
         fmi2Status status = get_values(S, "fmi2" #F, M, vr, nvr, &list);                                    \
@@ -437,11 +436,11 @@ static fmi2Status get_values(Instance *S, const char *function, int m, const fmi
             py.DecRef(list);                                                                                \
         }                                                                                                   \
         GIL_END;                                                                                            \
-        return status == fmi2Error ? fail(S, status) : status;                                             \
+        return status;                                                                                      \
     }
 
-GETTER(GetReal, M_GET_REAL, fmi2Real, value[i] = py.Float_AsDouble(item))
-GETTER(GetInteger, M_GET_INTEGER, fmi2Integer, {
+GETTER(get_real, GetReal, M_GET_REAL, fmi2Real, value[i] = py.Float_AsDouble(item))
+GETTER(get_integer, GetInteger, M_GET_INTEGER, fmi2Integer, {
     long v = py.Long_AsLong(item);
     if (v < -2147483647L - 1 || v > 2147483647L) {
         if (!py.Err_Occurred()) log_error(S, "fmi2GetInteger: value %ld of reference %u is not a 32-bit integer", v, vr[i]);
@@ -449,16 +448,14 @@ GETTER(GetInteger, M_GET_INTEGER, fmi2Integer, {
     }
     value[i] = (fmi2Integer)v;
 })
-GETTER(GetBoolean, M_GET_BOOLEAN, fmi2Boolean, {
+GETTER(get_boolean, GetBoolean, M_GET_BOOLEAN, fmi2Boolean, {
     int v = py.Object_IsTrue(item);
     value[i] = v > 0 ? fmi2True : fmi2False;
 })
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetString, vr);
-    NOT_NULL(GetString, value);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]) {
+    Instance *S = (Instance *)c;
     GIL_BEGIN;
     PyObject *list = NULL;
     fmi2Status status = get_values(S, "fmi2GetString", M_GET_STRING, vr, nvr, &list);
@@ -476,7 +473,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         S->strings = list;
     }
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    return status;
 }
 
 static fmi2Status set_values(Instance *S, const char *function, int m, const fmi2ValueReference vr[], size_t nvr,
@@ -492,12 +489,11 @@ static fmi2Status set_values(Instance *S, const char *function, int m, const fmi
     return simple_call(S, result);
 }
 
-#define SETTER(F, M, TYPE, MAKE)                                                                            \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
-        BEGIN(Set);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+/* the backend's part of fmi2Set<Type> (fmi2_common.c checked the arguments): the slave's set_<type> */
+#define SETTER(HOOK, F, M, TYPE, MAKE)                                                                      \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    const TYPE value[]) {                                                   \
+        Instance *S = (Instance *)c;                                                                        \
         GIL_BEGIN;                                                                                          \
         PyObject *list = py.List_New((Py_ssize_t)nvr);                                                      \
         for (size_t i = 0; list && i < nvr; i++) {                                                          \
@@ -514,21 +510,17 @@ static fmi2Status set_values(Instance *S, const char *function, int m, const fmi
         return status;                                                                                      \
     }
 
-SETTER(SetReal, M_SET_REAL, fmi2Real, py.Float_FromDouble(value[i]))
-SETTER(SetInteger, M_SET_INTEGER, fmi2Integer, py.Long_FromLong(value[i]))
-SETTER(SetBoolean, M_SET_BOOLEAN, fmi2Boolean, py.Bool_FromLong(value[i] != fmi2False))
+SETTER(set_real, SetReal, M_SET_REAL, fmi2Real, py.Float_FromDouble(value[i]))
+SETTER(set_integer, SetInteger, M_SET_INTEGER, fmi2Integer, py.Long_FromLong(value[i]))
+SETTER(set_boolean, SetBoolean, M_SET_BOOLEAN, fmi2Boolean, py.Bool_FromLong(value[i] != fmi2False))
 /* strict UTF-8: a string that is not UTF-8 is an invalid value (fmi2Error), never a crash */
-SETTER(SetString, M_SET_STRING, fmi2String,
+SETTER(set_string, SetString, M_SET_STRING, fmi2String,
        value[i] ? py.Unicode_DecodeUTF8(value[i], (Py_ssize_t)strlen(value[i]), "strict") : NULL)
 
 /* ------------------------------------------------------------------------------------------ stepping */
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    BEGIN(SetRealInputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetRealInputDerivatives, vr);
-    NOT_NULL(SetRealInputDerivatives, order);
-    NOT_NULL(SetRealInputDerivatives, value);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]) {
+    Instance *S = (Instance *)c;
     GIL_BEGIN;
     fmi2Status status;
     if (!S->methods[M_SET_INPUT_DERIVATIVES]) {
@@ -554,12 +546,12 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
         status = simple_call(S, result);
     }
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    return status;
 }
 
 /* ------------------------------------------------------------------------------------------ FMU state */
 /* the backend's part of the FMU state calls of fmi2_common.c: `data` is the slave's state object */
-static fmi2Status save_state(fmi2c_instance *F, const char *function, void **data) {
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
     PyObject *state = CALL_SLAVE(S, function, M_GET_STATE, NULL);
@@ -569,7 +561,7 @@ static fmi2Status save_state(fmi2c_instance *F, const char *function, void **dat
     return state ? status : fmi2Error;
 }
 
-static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *data) {
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
     fmi2Status status = simple_call(S, CALL_SLAVE(S, function, M_SET_STATE, (PyObject *)data));
@@ -577,7 +569,7 @@ static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *d
     return status; /* fmi2Error: the slave kept its state */
 }
 
-static void free_state(fmi2c_instance *F, void *data) {
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data) {
     (void)F;
     GIL_BEGIN;
     py.DecRef((PyObject *)data);
@@ -585,7 +577,7 @@ static void free_state(fmi2c_instance *F, void *data) {
 }
 
 /* the slave's bytes of a state: `hold` the bytes object */
-static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
                               size_t *n, void **hold) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
@@ -606,9 +598,9 @@ static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *dat
     return status;
 }
 
-static void release_bytes(fmi2c_instance *F, void *hold) { free_state(F, hold); }
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold) { fmi2c_backend_free_state(F, hold); }
 
-static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
                                    void **data) {
     Instance *S = (Instance *)F;
     GIL_BEGIN;
@@ -620,19 +612,3 @@ static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, cons
     *data = state;
     return state ? status : fmi2Error;
 }
-
-const fmi2c_backend FMI2C_BACKEND = {
-    .free_instance = free_instance,
-    .setup_experiment = setup_experiment,
-    .enter_initialization_mode = enter_initialization_mode,
-    .exit_initialization_mode = exit_initialization_mode,
-    .terminate = terminate,
-    .reset = reset,
-    .do_step = do_step,
-    .save_state = save_state,
-    .restore_state = restore_state,
-    .free_state = free_state,
-    .state_bytes = state_bytes,
-    .release_bytes = release_bytes,
-    .state_from_bytes = state_from_bytes,
-};

@@ -306,21 +306,21 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 /* ------------------------------------------------------------------------------------------ backend hooks */
 /* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave, the engine */
-static void free_instance(fmi2c_instance *F) { rk_engine_free(((Instance *)F)->engine); }
+void fmi2c_backend_free_instance(fmi2c_instance *F) { rk_engine_free(((Instance *)F)->engine); }
 
-static fmi2Status setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                    fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
     ((Instance *)F)->s.t0 = startTime;
     return fmi2OK;
 }
 
-static fmi2Status enter_initialization_mode(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F) {
     (void)F;
     return fmi2OK;
 }
 
-static fmi2Status exit_initialization_mode(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F) {
     Instance *S = (Instance *)F;
     char why[RK_MSG_LEN + 128];
     rk_engine *e = create_engine(S->s.values, S->s.t0, why, sizeof why);
@@ -339,12 +339,12 @@ static fmi2Status exit_initialization_mode(fmi2c_instance *F) {
     return S->f.worst_logged;
 }
 
-static fmi2Status terminate(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F) {
     ((Instance *)F)->s.terminated = 1;
     return fmi2OK;
 }
 
-static fmi2Status reset(fmi2c_instance *F) {
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F) {
     Instance *S = (Instance *)F;
     rk_engine_free(S->engine);
     S->engine = NULL;
@@ -386,25 +386,20 @@ static fmi2Status get_values(Instance *S, const char *function, int type, const 
     }
     if (problems[0]) {
         log_error(S, "%s: %s", function, problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     return fmi2OK;
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetReal, vr);
-    NOT_NULL(GetReal, value);
-    return get_values(S, "fmi2GetReal", RK_REAL, vr, nvr, value);
+/* the backend's part of the value calls of fmi2_common.c (fmi2c_backend hooks; the arguments are checked) */
+fmi2Status fmi2c_backend_get_real(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    return get_values((Instance *)c, "fmi2GetReal", RK_REAL, vr, nvr, value);
 }
 
-#define INT_GETTER(F, TYPE, KIND, CONVERT)                                                                  \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
-        BEGIN(Get);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+#define INT_GETTER(HOOK, F, TYPE, KIND, CONVERT)                                                            \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    TYPE value[]) {                                                         \
+        Instance *S = (Instance *)c;                                                                        \
         char problems[PROBLEMS_LEN] = "";                                                                   \
         for (size_t i = 0; i < nvr; i++) {                                                                  \
             const rk_fmu_var *v = lookup(vr[i], KIND, problems, sizeof problems);                           \
@@ -413,19 +408,17 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         }                                                                                                   \
         if (problems[0]) {                                                                                  \
             log_error(S, "fmi2" #F ": %s", problems);                                                       \
-            return fail(S, fmi2Error);                                                                      \
+            return fmi2Error;                                                                               \
         }                                                                                                   \
         return fmi2OK;                                                                                      \
     }
 
-INT_GETTER(GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
-INT_GETTER(GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
+INT_GETTER(get_integer, GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
+INT_GETTER(get_boolean, GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetString, vr);
-    NOT_NULL(GetString, value);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]) {
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) {
         lookup(vr[i], RK_STRING, problems, sizeof problems);
@@ -433,7 +426,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     }
     if (problems[0]) {
         log_error(S, "fmi2GetString: %s", problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     return fmi2OK;
 }
@@ -477,7 +470,7 @@ static fmi2Status set_values(Instance *S, const char *function, int type, const 
     }
     if (problems[0]) {
         log_error(S, "%s: %s (nothing was set)", function, problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     for (size_t i = 0; i < nvr; i++) {
         S->s.values[vr[i]] = x[i];
@@ -487,24 +480,19 @@ static fmi2Status set_values(Instance *S, const char *function, int type, const 
     return fmi2OK;
 }
 
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    BEGIN(Set);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetReal, vr);
-    NOT_NULL(SetReal, value);
-    return set_values(S, "fmi2SetReal", RK_REAL, vr, nvr, value);
+fmi2Status fmi2c_backend_set_real(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                  const fmi2Real value[]) {
+    return set_values((Instance *)c, "fmi2SetReal", RK_REAL, vr, nvr, value);
 }
 
-#define INT_SETTER(F, TYPE, KIND, CONVERT)                                                                  \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
-        BEGIN(Set);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+#define INT_SETTER(HOOK, F, TYPE, KIND, CONVERT)                                                            \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    const TYPE value[]) {                                                   \
+        Instance *S = (Instance *)c;                                                                        \
         double *x = (double *)malloc(nvr * sizeof(double));                                                 \
         if (!x) {                                                                                           \
             log_error(S, "fmi2" #F ": out of memory");                                                      \
-            return fail(S, fmi2Error);                                                                      \
+            return fmi2Error;                                                                               \
         }                                                                                                   \
         for (size_t i = 0; i < nvr; i++) x[i] = CONVERT;                                                    \
         fmi2Status status = set_values(S, "fmi2" #F, KIND, vr, nvr, x);                                     \
@@ -512,18 +500,17 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         return status;                                                                                      \
     }
 
-INT_SETTER(SetInteger, fmi2Integer, RK_INTEGER, (double)value[i])
-INT_SETTER(SetBoolean, fmi2Boolean, RK_BOOLEAN, value[i] != fmi2False ? 1.0 : 0.0)
+INT_SETTER(set_integer, SetInteger, fmi2Integer, RK_INTEGER, (double)value[i])
+INT_SETTER(set_boolean, SetBoolean, fmi2Boolean, RK_BOOLEAN, value[i] != fmi2False ? 1.0 : 0.0)
 
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    BEGIN(Set);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetString, vr);
-    NOT_NULL(SetString, value);
+fmi2Status fmi2c_backend_set_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    const fmi2String value[]) {
+    (void)value;
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) lookup(vr[i], RK_STRING, problems, sizeof problems);
     log_error(S, "fmi2SetString: %s (nothing was set)", problems[0] ? problems : "no String variables");
-    return fail(S, fmi2Error);
+    return fmi2Error;
 }
 
 /* the value of the variable called `name` (a model parameter of every rocking model: g, e_N), or `fallback` */
@@ -606,7 +593,7 @@ static int has_failed_step(const rk_engine *e, const char **first) {
 }
 
 /* the step [t, t + h] (fmi2c_backend.do_step) */
-static fmi2Status do_step(fmi2c_instance *F, double t, double h) {
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h) {
     Instance *S = (Instance *)F;
     const double t_end = t + h;
     Slave *s = &S->s;
@@ -713,13 +700,9 @@ static fmi2Status do_step(fmi2c_instance *F, double t, double h) {
     return refused ? fmi2Discard : S->f.worst_logged;
 }
 
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    BEGIN(SetRealInputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetRealInputDerivatives, vr);
-    NOT_NULL(SetRealInputDerivatives, order);
-    NOT_NULL(SetRealInputDerivatives, value);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]) {
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) {
         char text[600];
@@ -744,7 +727,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     }
     if (problems[0]) {
         log_error(S, "fmi2SetRealInputDerivatives: %s (nothing was set)", problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     /* all checked: set them in order (a reference given twice: the last rate, from the line of the first) */
     Slave *s = &S->s;
@@ -980,7 +963,7 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
 }
 
 /* the backend's part of the FMU state calls of fmi2_common.c: `data` is a Payload */
-static fmi2Status save_state(fmi2c_instance *F, const char *function, void **data) {
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data) {
     Instance *S = (Instance *)F;
     Payload *pl = encode_slave(S);
     if (!pl) {
@@ -991,7 +974,7 @@ static fmi2Status save_state(fmi2c_instance *F, const char *function, void **dat
     return fmi2OK;
 }
 
-static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *data) {
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data) {
     Instance *S = (Instance *)F;
     const Payload *pl = (const Payload *)data;
     char why[2048];
@@ -1002,12 +985,12 @@ static fmi2Status restore_state(fmi2c_instance *F, const char *function, void *d
     return fmi2OK;
 }
 
-static void free_state(fmi2c_instance *F, void *data) {
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data) {
     (void)F;
     free(data);
 }
 
-static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
                               size_t *n, void **hold) {
     (void)F; (void)function;
     const Payload *pl = (const Payload *)data;
@@ -1017,9 +1000,9 @@ static fmi2Status state_bytes(fmi2c_instance *F, const char *function, void *dat
     return fmi2OK;
 }
 
-static void release_bytes(fmi2c_instance *F, void *hold) { (void)F; (void)hold; }
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold) { (void)F; (void)hold; }
 
-static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
                                    void **data) {
     Payload *pl = (Payload *)malloc(sizeof(Payload) + n);
     if (!pl) {
@@ -1031,19 +1014,3 @@ static fmi2Status state_from_bytes(fmi2c_instance *F, const char *function, cons
     *data = pl;
     return fmi2OK;
 }
-
-const fmi2c_backend FMI2C_BACKEND = {
-    .free_instance = free_instance,
-    .setup_experiment = setup_experiment,
-    .enter_initialization_mode = enter_initialization_mode,
-    .exit_initialization_mode = exit_initialization_mode,
-    .terminate = terminate,
-    .reset = reset,
-    .do_step = do_step,
-    .save_state = save_state,
-    .restore_state = restore_state,
-    .free_state = free_state,
-    .state_bytes = state_bytes,
-    .release_bytes = release_bytes,
-    .state_from_bytes = state_from_bytes,
-};
