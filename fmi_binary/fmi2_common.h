@@ -1,9 +1,11 @@
 /* The FMI 2.0 co-simulation plumbing shared by the two binaries: fmi2_cs.c (the pythonfmu FMUs, a Python
- * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). Here: the instance states and
- * the per-call state masks (after modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and
- * argument checks, the messages (always passed to the logger as data, "%s"), the status bookkeeping
- * (fmi2Terminated, fmi2LastSuccessfulTime, fmi2DoStepStatus) and the serialized FMU state's header with its
- * CRC-32. Each backend's Instance starts with an `fmi2c_instance` named `f`. C99. */
+ * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). fmi2_common.c defines every
+ * FMI function but fmi2Instantiate: the instance states and the per-call state masks (after
+ * modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and argument checks, the messages (always
+ * passed to the logger as data, "%s"), the status bookkeeping (fmi2Terminated, fmi2LastSuccessfulTime,
+ * fmi2DoStepStatus) and the FMU states with the serialized form's header and its CRC-32; what differs, each
+ * backend does in its hooks (fmi2c_backend_*, below). Each backend's Instance starts with an `fmi2c_instance`
+ * named `f`. C99. */
 #ifndef FMI2_COMMON_H
 #define FMI2_COMMON_H
 
@@ -12,43 +14,10 @@
 
 #include "fmi2Functions.h"
 
-/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
- * master's time is a sum of step sizes and may differ from ours by round-off */
-#define TIME_TOLERANCE 1e-9
-
-enum {
-    INSTANTIATED = 1 << 0,
-    INITIALIZATION_MODE = 1 << 1,
-    STEP_COMPLETE = 1 << 2,
-    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
-    TERMINATED = 1 << 4,
-    ERROR_STATE = 1 << 5,
-    FATAL_STATE = 1 << 6,
-};
-#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
-#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
-
-/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
-#define MASK_SetupExperiment INSTANTIATED
-#define MASK_EnterInitializationMode INSTANTIATED
-#define MASK_ExitInitializationMode INITIALIZATION_MODE
-#define MASK_Terminate (SIMULATING | ERROR_STATE)
-#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
-#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
-#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
-#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
-#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
-#define MASK_FreeFMUstate ANY_STATE
-#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
-#define MASK_DoStep SIMULATING
-#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
-
 /* the FMI part of an instance: the first member (`f`) of each backend's Instance */
 typedef struct {
     unsigned magic;            /* FMI2C_INSTANCE_MAGIC while the instance lives */
-    int state;                 /* one of the states above */
+    int state;                 /* one of the instance states (fmi2_common.c) */
     char *name;
     fmi2CallbackLogger logger;
     fmi2ComponentEnvironment env;
@@ -66,12 +35,8 @@ typedef struct {
 extern const unsigned FMI2C_INSTANCE_MAGIC;
 #define FMI2C_MESSAGE_MAX 4096
 
-const char *fmi2c_state_name(int state);
-int fmi2c_valid(const void *c);
 void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, const char *text);
 void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...);
-fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function);
-fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
 /* a step that failed (fmi2DoStep's hook): fmi2DoStepStatus becomes fmi2Error; fmi2Error returned */
 fmi2Status fmi2c_step_failed(fmi2c_instance *F);
 
@@ -99,7 +64,7 @@ void fmi2c_destroy(fmi2c_instance *F);
  * backend defines every hook. A hook gets the instance's FMI part (the first member of the backend's
  * Instance) and returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the message logged
  * (`function`: the FMI call to name). The common code does the rest: the call-allowed and argument checks,
- * the instance state, the time and the statuses, fmi2c_fail. */
+ * the instance state (the error state after fmi2Error), the time and the statuses. */
 void fmi2c_backend_free_instance(fmi2c_instance *F); /* release the backend's part (fmi2FreeInstance) */
 fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                           fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime);
@@ -161,24 +126,7 @@ typedef struct {
 #define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
 #define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
 #define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
-#define fail(S, status) fmi2c_fail(&(S)->f, status)
-#define valid(S) fmi2c_valid(S)
-#define BEGIN(F) FMI2C_BEGIN(Instance, F)
-#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
 #endif
-
-/* Entering call F (MASK_F): S is the backend's Instance */
-#define FMI2C_BEGIN(TYPE, F)                                                      \
-    TYPE *S = (TYPE *)c;                                                          \
-    if (!fmi2c_valid(S)) return fmi2Error;                                        \
-    ((fmi2c_instance *)S)->worst_logged = fmi2OK;                                 \
-    if (!(((fmi2c_instance *)S)->state & MASK_##F)) return fmi2c_illegal((fmi2c_instance *)S, "fmi2" #F)
-
-#define FMI2C_NOT_NULL(F, p)                                                      \
-    if (!(p)) {                                                                   \
-        fmi2c_logf((fmi2c_instance *)S, fmi2Error, "logStatusError", "fmi2" #F ": argument " #p " is NULL"); \
-        return fmi2c_fail((fmi2c_instance *)S, fmi2Error);                        \
-    }
 
 /* serialized FMU state: this header, then the backend's bytes.
  *   offset  size  field

@@ -1,8 +1,9 @@
 /* FMI 2.0 co-simulation binary that hosts a Python slave (a pythonfmu `Fmi2Slave` subclass).
  *
- * This file is the Python backend of the FMI plumbing; the state machine, the argument checks, the status
- * bookkeeping, the messages and the FMU state's header are in fmi2_common.c, shared with the self-contained
- * FMUs' binary (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
+ * This file is the Python backend of the FMI plumbing: fmi2Instantiate and the hooks (fmi2c_backend_*) of the
+ * FMI calls that fmi2_common.c defines once for both binaries (the state machine, the argument checks, the
+ * status bookkeeping, the messages and the FMU states), shared with the self-contained FMUs' binary
+ * (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
  * in the FMU's resources) loads the slave class and creates the slave; every FMI call then goes straight to the
  * slave's pythonfmu methods (get_real, set_real, do_step, ...).
  *
