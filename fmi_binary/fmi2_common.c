@@ -416,6 +416,9 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 }
 
 /* ------------------------------------------------------------------------------------------ status */
+/* fmi2Get<Type>Status, one per type as FMI 2.0 declares them (alike in shape only): each answers the one
+ * status kind this FMU has of its type -- fmi2DoStepStatus, fmi2LastSuccessfulTime, fmi2Terminated -- and
+ * fmi2Discard for any other kind */
 static fmi2Status unavailable(fmi2c_instance *S, const char *function, int kind) {
     fmi2c_logf(S, fmi2Discard, "logStatusDiscard", "%s: status kind %d is not available from this FMU", function,
                kind);

@@ -4,8 +4,8 @@
  * The FMI calls (the state machine, the argument checks, the statuses, the messages, the FMU states) are
  * fmi_binary/fmi2_common.c's, written once for this binary and fmi2_cs.c (the binary of the pythonfmu FMUs;
  * per-call state masks after modelica/Reference-FMUs); this file has fmi2Instantiate and their hooks
- * (fmi2c_backend_*): the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave) is written here in C with the same
- * checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
+ * (fmi2c_backend_*): the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave), written here
+ * in C with the same checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
  * rocking_model/fmi/standalone.py from the declarations the pythonfmu FMUs use.
  *
  * Status of a call (FMI 2.0, section 2.1.3):
