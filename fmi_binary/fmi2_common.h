@@ -1,9 +1,11 @@
 /* The FMI 2.0 co-simulation plumbing shared by the two binaries: fmi2_cs.c (the pythonfmu FMUs, a Python
- * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). Here: the instance states and
- * the per-call state masks (after modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and
- * argument checks, the messages (always passed to the logger as data, "%s"), the status bookkeeping
- * (fmi2Terminated, fmi2LastSuccessfulTime, fmi2DoStepStatus) and the serialized FMU state's header with its
- * CRC-32. Each backend's Instance starts with an `fmi2c_instance` named `f`. C99. */
+ * slave) and standalone/fmi2_engine.c (the self-contained FMUs, the C engine). fmi2_common.c defines every
+ * FMI function but fmi2Instantiate: the instance states and the per-call state masks (after
+ * modelica/Reference-FMUs, src/fmi2Functions.c), the call-allowed and argument checks, the messages (always
+ * passed to the logger as data, "%s"), the status bookkeeping (fmi2Terminated, fmi2LastSuccessfulTime,
+ * fmi2DoStepStatus) and the FMU states with the serialized form's header and its CRC-32; what differs, each
+ * backend does in its hooks (fmi2c_backend_*, below). Each backend's Instance starts with an `fmi2c_instance`
+ * named `f`. C99. */
 #ifndef FMI2_COMMON_H
 #define FMI2_COMMON_H
 
@@ -12,43 +14,10 @@
 
 #include "fmi2Functions.h"
 
-/* [s] tolerance on currentCommunicationPoint against the instance's time, relative to max(1, |time|): the
- * master's time is a sum of step sizes and may differ from ours by round-off */
-#define TIME_TOLERANCE 1e-9
-
-enum {
-    INSTANTIATED = 1 << 0,
-    INITIALIZATION_MODE = 1 << 1,
-    STEP_COMPLETE = 1 << 2,
-    STEP_FAILED = 1 << 3, /* the last doStep was discarded */
-    TERMINATED = 1 << 4,
-    ERROR_STATE = 1 << 5,
-    FATAL_STATE = 1 << 6,
-};
-#define ANY_STATE (INSTANTIATED | INITIALIZATION_MODE | STEP_COMPLETE | STEP_FAILED | TERMINATED | ERROR_STATE | FATAL_STATE)
-#define SIMULATING (STEP_COMPLETE | STEP_FAILED)
-
-/* states in which each call is allowed (after modelica/Reference-FMUs, src/fmi2Functions.c) */
-#define MASK_SetupExperiment INSTANTIATED
-#define MASK_EnterInitializationMode INSTANTIATED
-#define MASK_ExitInitializationMode INITIALIZATION_MODE
-#define MASK_Terminate (SIMULATING | ERROR_STATE)
-#define MASK_Reset (ANY_STATE & ~FATAL_STATE)
-#define MASK_SetDebugLogging (ANY_STATE & ~FATAL_STATE)
-#define MASK_Get (INITIALIZATION_MODE | SIMULATING | TERMINATED | ERROR_STATE)
-#define MASK_Set (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetFMUstate (INSTANTIATED | INITIALIZATION_MODE | SIMULATING | TERMINATED)
-#define MASK_SetFMUstate (MASK_GetFMUstate | ERROR_STATE)
-#define MASK_FreeFMUstate ANY_STATE
-#define MASK_SetRealInputDerivatives (INSTANTIATED | INITIALIZATION_MODE | SIMULATING)
-#define MASK_GetRealOutputDerivatives (SIMULATING | TERMINATED)
-#define MASK_DoStep SIMULATING
-#define MASK_Status (SIMULATING | TERMINATED | ERROR_STATE)
-
 /* the FMI part of an instance: the first member (`f`) of each backend's Instance */
 typedef struct {
     unsigned magic;            /* FMI2C_INSTANCE_MAGIC while the instance lives */
-    int state;                 /* one of the states above */
+    int state;                 /* one of the instance states (fmi2_common.c) */
     char *name;
     fmi2CallbackLogger logger;
     fmi2ComponentEnvironment env;
@@ -66,34 +35,83 @@ typedef struct {
 extern const unsigned FMI2C_INSTANCE_MAGIC;
 #define FMI2C_MESSAGE_MAX 4096
 
-const char *fmi2c_state_name(int state);
-int fmi2c_valid(const void *c);
 void fmi2c_emit(fmi2c_instance *F, fmi2Status status, const char *category, const char *text);
 void fmi2c_logf(fmi2c_instance *F, fmi2Status status, const char *category, const char *format, ...);
-fmi2Status fmi2c_illegal(fmi2c_instance *F, const char *function);
-fmi2Status fmi2c_fail(fmi2c_instance *F, fmi2Status status);
-void fmi2c_free_categories(fmi2c_instance *F);
-/* fmi2DoStep's checks of its arguments against the instance's time: fmi2OK, or fmi2Error logged */
-fmi2Status fmi2c_check_step(fmi2c_instance *F, double t, double h);
-/* the bookkeeping at the end of an fmi2DoStep that got that far: refused (fmi2Discard, fmi2Terminated true,
- * the time unchanged) or done (`logged`, the worst status logged, and the time t_end); the status returned */
-fmi2Status fmi2c_step_done(fmi2c_instance *F, int refused, fmi2Status logged, double t_end);
-/* fmi2SetupExperiment's checks of its arguments: fmi2OK, or fmi2Error logged */
-fmi2Status fmi2c_check_setup(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
-                             fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+/* a step that failed (fmi2DoStep's hook): fmi2DoStepStatus becomes fmi2Error; fmi2Error returned */
+fmi2Status fmi2c_step_failed(fmi2c_instance *F);
 
 /* fmi2Instantiate: an error message to the caller's logger (no instance yet) */
 void fmi2c_instantiate_error(const fmi2CallbackFunctions *functions, fmi2String name, const char *format, ...);
 /* fmi2Instantiate's checks of instanceName, fmuType and fmuGUID (not NULL): 0, or -1 with the error logged */
 int fmi2c_check_instantiate(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2Type fmuType,
                             fmi2String fmuGUID);
-/* a new instance's FMI part (its name apart): instantiated, messages of at most message_size - 1 bytes */
-void fmi2c_init(fmi2c_instance *F, const fmi2CallbackFunctions *functions, fmi2Boolean loggingOn,
-                size_t message_size);
-/* the bookkeeping of a successful fmi2ExitInitializationMode (simulating, fmi2Terminated false) */
-void fmi2c_enter_simulation(fmi2c_instance *F);
-/* the bookkeeping of a successful fmi2Reset (instantiated, time 0, fmi2Terminated false) */
-void fmi2c_reset(fmi2c_instance *F);
+/* fmi2Instantiate's resource folder: fmuResourceLocation `location` (a file URI, uri.h) as a local path in
+ * `resources` (capacity `size`), a folder that exists and, when `required` is not NULL, holds the file
+ * `required`; `is_directory` and `is_file` are the backend's checks of the file system (is_file may be NULL
+ * when `required` is). 0, or -1 with the error logged. */
+int fmi2c_resource_folder(const fmi2CallbackFunctions *functions, fmi2String instanceName, fmi2String location,
+                          char *resources, size_t size, int (*is_directory)(const char *),
+                          int (*is_file)(const char *), const char *required);
+/* a new instance of `size` bytes (the backend's Instance, zeroed), its FMI part instantiated with a copy of
+ * the name and messages of at most message_size - 1 bytes; NULL with the error logged */
+void *fmi2c_new_instance(size_t size, const fmi2CallbackFunctions *functions, fmi2String instanceName,
+                         fmi2Boolean loggingOn, size_t message_size);
+/* free the instance (its FMI part; the backend's part released before) */
+void fmi2c_destroy(fmi2c_instance *F);
+
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* What the FMI calls defined in fmi2_common.c leave to the backend (the Python slave, or the C engine); each
+ * backend defines every hook. A hook gets the instance's FMI part (the first member of the backend's
+ * Instance) and returns fmi2OK or fmi2Warning when it did its work, or fmi2Error with the message logged
+ * (`function`: the FMI call to name). The common code does the rest: the call-allowed and argument checks,
+ * the instance state (the error state after fmi2Error), the time and the statuses. */
+void fmi2c_backend_free_instance(fmi2c_instance *F); /* release the backend's part (fmi2FreeInstance) */
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                          fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F);
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F);
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F);
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F); /* back to the start values, not initialized */
+/* the step [t, t + h], its arguments checked: done (fmi2OK / fmi2Warning), refused (fmi2Discard: the slave
+ * stayed at F->time; the master may retry, or end at the last successful time), or fmi2Error (through
+ * fmi2c_step_failed when the step itself failed) */
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h);
+
+/* fmi2Get<Type> / fmi2Set<Type> / fmi2SetRealInputDerivatives with nvr > 0 and no array NULL */
+fmi2Status fmi2c_backend_get_real(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]);
+fmi2Status fmi2c_backend_get_integer(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     fmi2Integer value[]);
+fmi2Status fmi2c_backend_get_boolean(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     fmi2Boolean value[]);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]);
+fmi2Status fmi2c_backend_set_real(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                  const fmi2Real value[]);
+fmi2Status fmi2c_backend_set_integer(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     const fmi2Integer value[]);
+fmi2Status fmi2c_backend_set_boolean(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                     const fmi2Boolean value[]);
+fmi2Status fmi2c_backend_set_string(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                    const fmi2String value[]);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *F, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]);
+
+/* FMU states: the backend's part of a saved state is `data`, opaque to the common code */
+/* the backend's part of the instance's current state (fmi2GetFMUstate) */
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data);
+/* set it (fmi2SetFMUstate); on fmi2Error the instance kept its state */
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data);
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data);
+/* the n bytes of `data` in a serialized state (after the header), valid until
+ * fmi2c_backend_release_bytes(F, *hold) */
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data,
+                                     const unsigned char **bytes, size_t *n, void **hold);
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold);
+/* `data` from those n bytes (fmi2DeSerializeFMUstate; the header is checked already) */
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes,
+                                          size_t n, void **data);
+/* the tag of the backend's saved states (one binary never takes the other's) */
+extern const unsigned FMI2C_STATE_MAGIC;
 
 /* what an FMU state keeps of the FMI part (the header of its serialized form) */
 typedef struct {
@@ -102,32 +120,13 @@ typedef struct {
     int terminated_flag;
     fmi2Status last_step_status;
 } fmi2c_fields;
-fmi2c_fields fmi2c_fields_of(const fmi2c_instance *F);
-void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
 
 #ifndef FMI2C_IMPLEMENTATION
 /* the backends' shorthands on their `Instance *S`, whose first member is the fmi2c_instance f */
 #define emit(S, ...) fmi2c_emit(&(S)->f, __VA_ARGS__)
 #define logf_(S, ...) fmi2c_logf(&(S)->f, __VA_ARGS__)
 #define log_error(S, ...) fmi2c_logf(&(S)->f, fmi2Error, "logStatusError", __VA_ARGS__)
-#define fail(S, status) fmi2c_fail(&(S)->f, status)
-#define valid(S) fmi2c_valid(S)
-#define BEGIN(F) FMI2C_BEGIN(Instance, F)
-#define NOT_NULL(F, p) FMI2C_NOT_NULL(F, p)
 #endif
-
-/* Entering call F (MASK_F): S is the backend's Instance */
-#define FMI2C_BEGIN(TYPE, F)                                                      \
-    TYPE *S = (TYPE *)c;                                                          \
-    if (!fmi2c_valid(S)) return fmi2Error;                                        \
-    ((fmi2c_instance *)S)->worst_logged = fmi2OK;                                 \
-    if (!(((fmi2c_instance *)S)->state & MASK_##F)) return fmi2c_illegal((fmi2c_instance *)S, "fmi2" #F)
-
-#define FMI2C_NOT_NULL(F, p)                                                      \
-    if (!(p)) {                                                                   \
-        fmi2c_logf((fmi2c_instance *)S, fmi2Error, "logStatusError", "fmi2" #F ": argument " #p " is NULL"); \
-        return fmi2c_fail((fmi2c_instance *)S, fmi2Error);                        \
-    }
 
 /* serialized FMU state: this header, then the backend's bytes.
  *   offset  size  field
@@ -146,10 +145,5 @@ void fmi2c_restore_fields(fmi2c_instance *F, const fmi2c_fields *fields);
 
 /* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), continued from `crc` (0 to start) */
 uint32_t fmi2c_crc32_update(uint32_t crc, const unsigned char *p, size_t n);
-/* Write the header into p[0, SERIAL_HEADER_SIZE) for the backend's `payload` of n bytes */
-void fmi2c_write_header(unsigned char *p, const fmi2c_fields *fields, const unsigned char *payload, size_t n);
-/* Check and read the header of a serialized state (fmi2DeSerializeFMUstate): fmi2OK with the fields, or
- * fmi2Error logged (the instance in the error state) */
-fmi2Status fmi2c_read_header(fmi2c_instance *F, const fmi2Byte serialized[], size_t size, fmi2c_fields *fields);
 
 #endif

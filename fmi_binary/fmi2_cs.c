@@ -1,8 +1,9 @@
 /* FMI 2.0 co-simulation binary that hosts a Python slave (a pythonfmu `Fmi2Slave` subclass).
  *
- * This file is the Python backend of the FMI plumbing; the state machine, the argument checks, the status
- * bookkeeping, the messages and the FMU state's header are in fmi2_common.c, shared with the self-contained
- * FMUs' binary (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
+ * This file is the Python backend of the FMI plumbing: fmi2Instantiate and the hooks (fmi2c_backend_*) of the
+ * FMI calls that fmi2_common.c defines once for both binaries (the state machine, the argument checks, the
+ * status bookkeeping, the messages and the FMU states), shared with the self-contained FMUs' binary
+ * (standalone/fmi2_engine.c). It knows nothing of the model. The Python side (`fmi2_pyhost.py`,
  * in the FMU's resources) loads the slave class and creates the slave; every FMI call then goes straight to the
  * slave's pythonfmu methods (get_real, set_real, do_step, ...).
  *
@@ -44,7 +45,7 @@ static const char *method_names[N_METHODS] = {
     "set_real_input_derivatives"};
 
 const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7bu;
-#define STATE_MAGIC 0x5d7e0c19u
+const unsigned FMI2C_STATE_MAGIC = 0x5d7e0c19u;
 
 typedef struct {
     fmi2c_instance f;  /* the FMI part (fmi2_common.h): state, logger, time of the slave, statuses */
@@ -55,14 +56,9 @@ typedef struct {
     PyObject *strings; /* the last fmi2GetString result: keeps the returned UTF-8 buffers alive */
 } Instance;
 
-typedef struct {
-    unsigned magic;
-    PyObject *state;   /* the slave's state object */
-    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
-} SavedState;
-
-/* serialized FMU state: the header of fmi2_common.h (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the
- * slave's bytes (rocking_model/fmi_state.py: its own header and SHA-256) */
+/* an FMU state (fmi2_common.c) keeps the slave's state object; serialized: the header of fmi2_common.h
+ * (SERIAL_HEADER_SIZE bytes, with its CRC-32), then the slave's bytes (rocking_model/fmi_state.py: its own
+ * header and SHA-256) */
 
 /* ------------------------------------------------------------------------------------------ messages */
 
@@ -239,37 +235,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     if (fmi2c_check_instantiate(functions, instanceName, fmuType, fmuGUID) != 0) return NULL;
     char resources[4096], why[2048];
-    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+    if (fmi2c_resource_folder(functions, instanceName, fmuResourceLocation, resources, sizeof resources,
+                              is_directory, is_file, PYHOST_FILE) != 0)
         return NULL;
-    }
-    char pyhost[4200];
-    snprintf(pyhost, sizeof pyhost, "%s/%s", resources, PYHOST_FILE);
-    if (!is_directory(resources) || !is_file(pyhost)) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                                "fmuResourceLocation \"%.500s\") %s", resources, fmuResourceLocation,
-                                is_directory(resources) ? "has no " PYHOST_FILE " (not an FMU of this binary?)"
-                                                        : "does not exist or is not a folder");
-        return NULL;
-    }
     int started = 0;
     if (python_load(why, sizeof why, &started) != 0) {
         fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
         return NULL;
     }
-    Instance *S = (Instance *)calloc(1, sizeof(Instance));
-    if (!S) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
-    fmi2c_init(&S->f, functions, loggingOn, 2048); /* messages of at most 2047 bytes (longer texts are cut) */
-    S->f.name = (char *)malloc(strlen(instanceName) + 1);
-    if (S->f.name) strcpy(S->f.name, instanceName);
-    if (!S->f.name) {
-        free(S);
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
+    /* messages of at most 2047 bytes (longer texts are cut) */
+    Instance *S = (Instance *)fmi2c_new_instance(sizeof(Instance), functions, instanceName, loggingOn, 2048);
+    if (!S) return NULL;
 
     GIL_BEGIN;
     int ok = 0;
@@ -323,17 +299,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     GIL_END;
     if (!ok) {
-        S->f.magic = 0;
-        free(S->f.name);
-        free(S);
+        fmi2c_destroy(&S->f);
         return NULL;
     }
     return S;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return;
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave's methods */
+void fmi2c_backend_free_instance(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     release_slave(S);
     if (S->host) {
@@ -346,25 +321,19 @@ void fmi2FreeInstance(fmi2Component c) {
         S->host = NULL;
     }
     GIL_END;
-    fmi2c_free_categories(&S->f);
-    S->f.magic = 0;
-    free(S->f.name);
-    free(S);
 }
 
 /* a call of one slave method without results: status from the call and the messages it logged */
 static fmi2Status simple_call(Instance *S, PyObject *result) {
     fmi2Status logged = drain_log(S);
-    if (!result) return fail(S, fmi2Error);
+    if (!result) return fmi2Error;
     py.DecRef(result);
     return logged;
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    BEGIN(SetupExperiment);
-    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
-        return fmi2Error;
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     PyObject *a = py.Float_FromDouble(startTime);
     PyObject *b = stopTimeDefined ? py.Float_FromDouble(stopTime) : (py.IncRef(py.None), py.None);
@@ -374,42 +343,30 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     py.DecRef(b);
     py.DecRef(t);
     GIL_END;
-    if (status <= fmi2Warning) {
-        S->f.time = startTime;
-    }
     return status;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    BEGIN(EnterInitializationMode);
+/* a slave method without arguments: its status */
+static fmi2Status call_method(fmi2c_instance *F, const char *function, int m) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2EnterInitializationMode", M_ENTER, NULL));
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, function, m, NULL));
     GIL_END;
-    if (status <= fmi2Warning) S->f.state = INITIALIZATION_MODE;
     return status;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    BEGIN(ExitInitializationMode);
-    GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2ExitInitializationMode", M_EXIT, NULL));
-    GIL_END;
-    if (status <= fmi2Warning) fmi2c_enter_simulation(&S->f);
-    return status;
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F) {
+    return call_method(F, "fmi2EnterInitializationMode", M_ENTER);
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    BEGIN(Terminate);
-    if (S->f.state == ERROR_STATE) return fmi2OK; /* nothing to end; the instance stays in the error state */
-    GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2Terminate", M_TERMINATE, NULL));
-    GIL_END;
-    if (status <= fmi2Warning) S->f.state = TERMINATED;
-    return status;
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F) {
+    return call_method(F, "fmi2ExitInitializationMode", M_EXIT);
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    BEGIN(Reset);
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F) { return call_method(F, "fmi2Terminate", M_TERMINATE); }
+
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
     /* a new slave from the class: start values, not initialized (as fmi2Instantiate left it) */
     PyObject *renew = py.Object_GetAttrString(S->host, "new_slave");
@@ -424,9 +381,23 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if (r) py.DecRef(r);
     if (renew) py.DecRef(renew);
     GIL_END;
-    if (status == fmi2Error) return fail(S, fmi2Error);
-    fmi2c_reset(&S->f);
     return status;
+}
+
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h) {
+    Instance *S = (Instance *)F;
+    GIL_BEGIN;
+    PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
+    PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
+    int accepted = result ? py.Object_IsTrue(result) : -1;
+    if (accepted < 0 && result) log_exception(S, "fmi2DoStep");
+    fmi2Status logged = drain_log(S);
+    if (a) py.DecRef(a);
+    if (b) py.DecRef(b);
+    if (result) py.DecRef(result);
+    GIL_END;
+    if (accepted < 0) return fmi2c_step_failed(F);
+    return accepted ? logged : fmi2Discard; /* do_step returned False: refused, the slave stayed where it was */
 }
 
 /* ------------------------------------------------------------------------------------------ values */
@@ -446,12 +417,11 @@ static fmi2Status get_values(Instance *S, const char *function, int m, const fmi
     return logged;
 }
 
-#define GETTER(F, M, TYPE, CONVERT)                                                                         \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
-        BEGIN(Get);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+/* the backend's part of fmi2Get<Type> (fmi2_common.c checked the arguments): the slave's get_<type> */
+#define GETTER(HOOK, F, M, TYPE, CONVERT)                                                                   \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    TYPE value[]) {                                                         \
+        Instance *S = (Instance *)c;                                                                        \
         GIL_BEGIN;                                                                                          \
         PyObject *list = NULL;                                                                              \
         fmi2Status status = get_values(S, "fmi2" #F, M, vr, nvr, &list);                                    \
@@ -467,11 +437,11 @@ static fmi2Status get_values(Instance *S, const char *function, int m, const fmi
             py.DecRef(list);                                                                                \
         }                                                                                                   \
         GIL_END;                                                                                            \
-        return status == fmi2Error ? fail(S, status) : status;                                             \
+        return status;                                                                                      \
     }
 
-GETTER(GetReal, M_GET_REAL, fmi2Real, value[i] = py.Float_AsDouble(item))
-GETTER(GetInteger, M_GET_INTEGER, fmi2Integer, {
+GETTER(get_real, GetReal, M_GET_REAL, fmi2Real, value[i] = py.Float_AsDouble(item))
+GETTER(get_integer, GetInteger, M_GET_INTEGER, fmi2Integer, {
     long v = py.Long_AsLong(item);
     if (v < -2147483647L - 1 || v > 2147483647L) {
         if (!py.Err_Occurred()) log_error(S, "fmi2GetInteger: value %ld of reference %u is not a 32-bit integer", v, vr[i]);
@@ -479,16 +449,14 @@ GETTER(GetInteger, M_GET_INTEGER, fmi2Integer, {
     }
     value[i] = (fmi2Integer)v;
 })
-GETTER(GetBoolean, M_GET_BOOLEAN, fmi2Boolean, {
+GETTER(get_boolean, GetBoolean, M_GET_BOOLEAN, fmi2Boolean, {
     int v = py.Object_IsTrue(item);
     value[i] = v > 0 ? fmi2True : fmi2False;
 })
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetString, vr);
-    NOT_NULL(GetString, value);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]) {
+    Instance *S = (Instance *)c;
     GIL_BEGIN;
     PyObject *list = NULL;
     fmi2Status status = get_values(S, "fmi2GetString", M_GET_STRING, vr, nvr, &list);
@@ -506,7 +474,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         S->strings = list;
     }
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    return status;
 }
 
 static fmi2Status set_values(Instance *S, const char *function, int m, const fmi2ValueReference vr[], size_t nvr,
@@ -522,12 +490,11 @@ static fmi2Status set_values(Instance *S, const char *function, int m, const fmi
     return simple_call(S, result);
 }
 
-#define SETTER(F, M, TYPE, MAKE)                                                                            \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
-        BEGIN(Set);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+/* the backend's part of fmi2Set<Type> (fmi2_common.c checked the arguments): the slave's set_<type> */
+#define SETTER(HOOK, F, M, TYPE, MAKE)                                                                      \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    const TYPE value[]) {                                                   \
+        Instance *S = (Instance *)c;                                                                        \
         GIL_BEGIN;                                                                                          \
         PyObject *list = py.List_New((Py_ssize_t)nvr);                                                      \
         for (size_t i = 0; list && i < nvr; i++) {                                                          \
@@ -544,45 +511,17 @@ static fmi2Status set_values(Instance *S, const char *function, int m, const fmi
         return status;                                                                                      \
     }
 
-SETTER(SetReal, M_SET_REAL, fmi2Real, py.Float_FromDouble(value[i]))
-SETTER(SetInteger, M_SET_INTEGER, fmi2Integer, py.Long_FromLong(value[i]))
-SETTER(SetBoolean, M_SET_BOOLEAN, fmi2Boolean, py.Bool_FromLong(value[i] != fmi2False))
+SETTER(set_real, SetReal, M_SET_REAL, fmi2Real, py.Float_FromDouble(value[i]))
+SETTER(set_integer, SetInteger, M_SET_INTEGER, fmi2Integer, py.Long_FromLong(value[i]))
+SETTER(set_boolean, SetBoolean, M_SET_BOOLEAN, fmi2Boolean, py.Bool_FromLong(value[i] != fmi2False))
 /* strict UTF-8: a string that is not UTF-8 is an invalid value (fmi2Error), never a crash */
-SETTER(SetString, M_SET_STRING, fmi2String,
+SETTER(set_string, SetString, M_SET_STRING, fmi2String,
        value[i] ? py.Unicode_DecodeUTF8(value[i], (Py_ssize_t)strlen(value[i]), "strict") : NULL)
 
 /* ------------------------------------------------------------------------------------------ stepping */
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
-                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    (void)noSetFMUStatePriorToCurrentPoint;
-    BEGIN(DoStep);
-    const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
-    GIL_BEGIN;
-    PyObject *a = py.Float_FromDouble(t), *b = py.Float_FromDouble(h); /* the master's time is the reference */
-    PyObject *result = (a && b) ? CALL_SLAVE(S, "fmi2DoStep", M_DO_STEP, a, b) : NULL;
-    int accepted = result ? py.Object_IsTrue(result) : -1;
-    if (accepted < 0 && result) log_exception(S, "fmi2DoStep");
-    fmi2Status logged = drain_log(S);
-    if (a) py.DecRef(a);
-    if (b) py.DecRef(b);
-    if (result) py.DecRef(result);
-    GIL_END;
-    if (accepted < 0) {
-        S->f.last_step_status = fmi2Error;
-        return fail(S, fmi2Error);
-    }
-    /* refused: the slave stayed at S->f.time; the master may retry, or end at the last successful time */
-    return fmi2c_step_done(&S->f, accepted == 0, logged, t + h);
-}
-
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    BEGIN(SetRealInputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetRealInputDerivatives, vr);
-    NOT_NULL(SetRealInputDerivatives, order);
-    NOT_NULL(SetRealInputDerivatives, value);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]) {
+    Instance *S = (Instance *)c;
     GIL_BEGIN;
     fmi2Status status;
     if (!S->methods[M_SET_INPUT_DERIVATIVES]) {
@@ -608,175 +547,69 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
         status = simple_call(S, result);
     }
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
-}
-
-/* ------------------------------------------------------------------------------------------ FMU state */
-static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
-    SavedState *st = (SavedState *)p;
-    if (!st || st->magic != STATE_MAGIC || !st->state) {
-        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
-        return NULL;
-    }
-    return st;
-}
-
-/* Put the slave's `state` (a new reference, or NULL after a logged failure) with the FMI fields into `st`
- * (a new SavedState when NULL) and hand it out through `out`; fmi2Error when there is nothing to keep. */
-static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, PyObject *state,
-                             const fmi2c_fields *fields, fmi2FMUstate *out) {
-    if (!state) return fmi2Error;
-    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-    if (!st) {
-        log_error(S, "%s: out of memory", function);
-        py.DecRef(state);
-        return fmi2Error;
-    }
-    if (st->state) py.DecRef(st->state);
-    st->fields = *fields;
-    st->magic = STATE_MAGIC;
-    st->state = state;
-    *out = st;
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(GetFMUstate);
-    NOT_NULL(GetFMUstate, FMUstate);
-    SavedState *st = NULL;
-    if (*FMUstate) { /* FMI 2.0: a non-NULL state is overwritten */
-        st = saved(S, "fmi2GetFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    GIL_BEGIN;
-    PyObject *state = CALL_SLAVE(S, "fmi2GetFMUstate", M_GET_STATE, NULL);
-    fmi2Status status = drain_log(S);
-    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
-    if (keep_state(S, "fmi2GetFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
-    GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
-}
-
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    BEGIN(SetFMUstate);
-    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    GIL_BEGIN;
-    fmi2Status status = simple_call(S, CALL_SLAVE(S, "fmi2SetFMUstate", M_SET_STATE, st->state));
-    GIL_END;
-    if (status == fmi2Error) return status; /* rejected: the slave kept its state; the instance is in error */
-    fmi2c_restore_fields(&S->f, &st->fields);
     return status;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(FreeFMUstate);
-    if (!FMUstate || !*FMUstate) return fmi2OK;
-    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
-    if (!st) return fail(S, fmi2Error);
+/* ------------------------------------------------------------------------------------------ FMU state */
+/* the backend's part of the FMU state calls of fmi2_common.c: `data` is the slave's state object */
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    py.DecRef(st->state);
+    PyObject *state = CALL_SLAVE(S, function, M_GET_STATE, NULL);
+    fmi2Status status = drain_log(S);
     GIL_END;
-    st->state = NULL;
-    st->magic = 0;
-    free(st);
-    *FMUstate = NULL;
-    return fmi2OK;
+    *data = state;
+    return state ? status : fmi2Error;
 }
 
-/* the serialized form of a state: a new bytes object, or NULL with the error logged */
-static PyObject *serialize(Instance *S, const char *function, SavedState *st) {
-    PyObject *data = CALL_SLAVE(S, function, M_STATE_TO_BYTES, st->state);
-    if (!data) return NULL;
-    char *bytes = NULL;
-    Py_ssize_t n = 0;
-    if (py.Bytes_AsStringAndSize(data, &bytes, &n) != 0) {
-        log_exception(S, function);
-        py.DecRef(data);
-        return NULL;
-    }
-    PyObject *out = py.Bytes_FromStringAndSize(NULL, (Py_ssize_t)SERIAL_HEADER_SIZE + n);
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data) {
+    Instance *S = (Instance *)F;
+    GIL_BEGIN;
+    fmi2Status status = simple_call(S, CALL_SLAVE(S, function, M_SET_STATE, (PyObject *)data));
+    GIL_END;
+    return status; /* fmi2Error: the slave kept its state */
+}
+
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data) {
+    (void)F;
+    GIL_BEGIN;
+    py.DecRef((PyObject *)data);
+    GIL_END;
+}
+
+/* the slave's bytes of a state: `hold` the bytes object */
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+                              size_t *n, void **hold) {
+    Instance *S = (Instance *)F;
+    GIL_BEGIN;
+    PyObject *out = CALL_SLAVE(S, function, M_STATE_TO_BYTES, (PyObject *)data);
     char *p = NULL;
     Py_ssize_t m = 0;
-    if (!out || py.Bytes_AsStringAndSize(out, &p, &m) != 0) {
-        if (py.Err_Occurred()) log_exception(S, function);
-        py.DecRef(data);
-        if (out) py.DecRef(out);
-        return NULL;
-    }
-    memcpy(p + SERIAL_HEADER_SIZE, bytes, (size_t)n);
-    fmi2c_write_header((unsigned char *)p, &st->fields, (const unsigned char *)bytes, (size_t)n);
-    py.DecRef(data);
-    return out;
-}
-
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializedFMUstateSize, size);
-    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    GIL_BEGIN;
-    PyObject *out = serialize(S, "fmi2SerializedFMUstateSize", st);
-    fmi2Status status = drain_log(S);
-    if (out) {
-        char *p;
-        Py_ssize_t n = 0;
-        py.Bytes_AsStringAndSize(out, &p, &n);
-        *size = (size_t)n;
+    if (out && py.Bytes_AsStringAndSize(out, &p, &m) != 0) {
+        log_exception(S, function);
         py.DecRef(out);
-    } else {
-        status = fmi2Error;
+        out = NULL;
     }
+    fmi2Status status = drain_log(S);
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    if (!out) return fmi2Error;
+    *bytes = (const unsigned char *)p;
+    *n = (size_t)m;
+    *hold = out;
+    return status;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializeFMUstate, serializedState);
-    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    GIL_BEGIN;
-    PyObject *out = serialize(S, "fmi2SerializeFMUstate", st);
-    fmi2Status status = drain_log(S);
-    if (out) {
-        char *p;
-        Py_ssize_t n = 0;
-        py.Bytes_AsStringAndSize(out, &p, &n);
-        if ((size_t)n != size) {
-            log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zd (from "
-                      "fmi2SerializedFMUstateSize)", size, n);
-            status = fmi2Error;
-        } else {
-            memcpy(serializedState, p, size);
-        }
-        py.DecRef(out);
-    } else {
-        status = fmi2Error;
-    }
-    GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
-}
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold) { fmi2c_backend_free_state(F, hold); }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(DeSerializeFMUstate, serializedState);
-    NOT_NULL(DeSerializeFMUstate, FMUstate);
-    fmi2c_fields fields;
-    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+                                   void **data) {
+    Instance *S = (Instance *)F;
     GIL_BEGIN;
-    PyObject *data = py.Bytes_FromStringAndSize(serializedState + SERIAL_HEADER_SIZE,
-                                                (Py_ssize_t)(size - SERIAL_HEADER_SIZE));
-    PyObject *state = data ? CALL_SLAVE(S, "fmi2DeSerializeFMUstate", M_STATE_FROM_BYTES, data) : NULL;
-    if (data) py.DecRef(data);
+    PyObject *b = py.Bytes_FromStringAndSize((const char *)bytes, (Py_ssize_t)n);
+    PyObject *state = b ? CALL_SLAVE(S, function, M_STATE_FROM_BYTES, b) : NULL;
+    if (b) py.DecRef(b);
     fmi2Status status = drain_log(S);
-    if (keep_state(S, "fmi2DeSerializeFMUstate", st, state, &fields, FMUstate) == fmi2Error) status = fmi2Error;
     GIL_END;
-    return status == fmi2Error ? fail(S, status) : status;
+    *data = state;
+    return state ? status : fmi2Error;
 }

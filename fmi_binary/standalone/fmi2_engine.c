@@ -1,11 +1,11 @@
 /* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs of issue 22, with no
  * Python at all. C99 + libm.
  *
- * The state machine, the statuses, the messages and the serialized FMU state's header are fmi_binary/
- * fmi2_common.c's, shared with fmi2_cs.c (the binary of the pythonfmu FMUs; per-call state masks after
- * modelica/Reference-FMUs);
- * the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave) is written here in C with the same
- * checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
+ * The FMI calls (the state machine, the argument checks, the statuses, the messages, the FMU states) are
+ * fmi_binary/fmi2_common.c's, written once for this binary and fmi2_cs.c (the binary of the pythonfmu FMUs;
+ * per-call state masks after modelica/Reference-FMUs); this file has fmi2Instantiate and their hooks
+ * (fmi2c_backend_*): the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave), written here
+ * in C with the same checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
  * rocking_model/fmi/standalone.py from the declarations the pythonfmu FMUs use.
  *
  * Status of a call (FMI 2.0, section 2.1.3):
@@ -54,7 +54,7 @@ typedef struct {
 static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
 
 const unsigned FMI2C_INSTANCE_MAGIC = 0x46d12a7cu;
-#define STATE_MAGIC 0x5d7e0c1au
+const unsigned FMI2C_STATE_MAGIC = 0x5d7e0c1au;
 #define ERROR_LEN 1024
 
 /* the slave's part of the instance (RockingSlave._clear_state): what an FMU state holds */
@@ -75,12 +75,11 @@ typedef struct {
     rk_engine *engine;            /* NULL until initialized (or after an error without simulator) */
 } Instance;
 
+/* the backend's part of an FMU state (fmi2_common.c): the slave's bytes (see encode_slave) */
 typedef struct {
-    unsigned magic;
-    fmi2c_fields fields;          /* the FMI part of the state (fmi2_common.h) */
     size_t n;
-    unsigned char *payload;       /* the slave's bytes (see encode_slave) */
-} SavedState;
+    unsigned char bytes[];
+} Payload;
 
 /* serialized FMU state: the header of fmi2_common.h (magic, time, instance state, fmi2Terminated, last
  * DoStep status, CRC-32 of everything else), then the slave's bytes: PAYLOAD_MAGIC, the GUID, the Slave struct's
@@ -293,62 +292,41 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
      * binary refuses it (fmi_binary/uri.c, the same messages) */
-    char resources[4096], why[2048];
-    if (uri_to_path(fmuResourceLocation, resources, sizeof resources, why, sizeof why) != 0) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: %s", why);
+    char resources[4096];
+    if (fmi2c_resource_folder(functions, instanceName, fmuResourceLocation, resources, sizeof resources,
+                              is_directory, NULL, NULL) != 0)
         return NULL;
-    }
-    if (!is_directory(resources)) {
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: the resource folder %s (from "
-                                "fmuResourceLocation \"%.500s\") does not exist or is not a folder", resources,
-                                fmuResourceLocation);
-        return NULL;
-    }
-    Instance *S = (Instance *)calloc(1, sizeof(Instance));
-    if (!S || !(S->f.name = (char *)malloc(strlen(instanceName) + 1))) {
-        free(S);
-        fmi2c_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
-    strcpy(S->f.name, instanceName);
-    fmi2c_init(&S->f, functions, loggingOn, FMI2C_MESSAGE_MAX); /* messages of at most 4095 bytes */
+    /* messages of at most 4095 bytes */
+    Instance *S = (Instance *)fmi2c_new_instance(sizeof(Instance), functions, instanceName, loggingOn,
+                                                 FMI2C_MESSAGE_MAX);
+    if (!S) return NULL;
     slave_clear(&S->s);
     return S;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Instance *S = (Instance *)c;
-    if (!valid(S)) return;
-    rk_engine_free(S->engine);
-    fmi2c_free_categories(&S->f);
-    S->f.magic = 0;
-    free(S->f.name);
-    free(S);
-}
+/* ------------------------------------------------------------------------------------------ backend hooks */
+/* the backend's part of the FMI calls of fmi2_common.c (fmi2c_backend): the slave, the engine */
+void fmi2c_backend_free_instance(fmi2c_instance *F) { rk_engine_free(((Instance *)F)->engine); }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    BEGIN(SetupExperiment);
-    if (fmi2c_check_setup(&S->f, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime) != fmi2OK)
-        return fmi2Error;
-    S->s.t0 = startTime;
-    S->f.time = startTime;
+fmi2Status fmi2c_backend_setup_experiment(fmi2c_instance *F, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                   fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
+    ((Instance *)F)->s.t0 = startTime;
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    BEGIN(EnterInitializationMode);
-    S->f.state = INITIALIZATION_MODE;
+fmi2Status fmi2c_backend_enter_initialization_mode(fmi2c_instance *F) {
+    (void)F;
     return fmi2OK;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    BEGIN(ExitInitializationMode);
+fmi2Status fmi2c_backend_exit_initialization_mode(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     char why[RK_MSG_LEN + 128];
     rk_engine *e = create_engine(S->s.values, S->s.t0, why, sizeof why);
     if (!e) {
         log_error(S, "fmi2ExitInitializationMode: invalid parameters: %s", why);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     rk_engine_free(S->engine);
     S->engine = e;
@@ -358,24 +336,19 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     for (int k = 0; k < RK_FMU_N_INPUTS; k++)
         if (S->s.has_rate[k]) S->s.rate_t[k] = S->s.t0;
     update_outputs(S);
-    fmi2c_enter_simulation(&S->f);
     return S->f.worst_logged;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    BEGIN(Terminate);
-    if (S->f.state == ERROR_STATE) return fmi2OK;
-    S->s.terminated = 1;
-    S->f.state = TERMINATED;
+fmi2Status fmi2c_backend_terminate(fmi2c_instance *F) {
+    ((Instance *)F)->s.terminated = 1;
     return fmi2OK;
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    BEGIN(Reset);
+fmi2Status fmi2c_backend_reset(fmi2c_instance *F) {
+    Instance *S = (Instance *)F;
     rk_engine_free(S->engine);
     S->engine = NULL;
     slave_clear(&S->s);
-    fmi2c_reset(&S->f);
     return fmi2OK;
 }
 
@@ -413,25 +386,20 @@ static fmi2Status get_values(Instance *S, const char *function, int type, const 
     }
     if (problems[0]) {
         log_error(S, "%s: %s", function, problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     return fmi2OK;
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetReal, vr);
-    NOT_NULL(GetReal, value);
-    return get_values(S, "fmi2GetReal", RK_REAL, vr, nvr, value);
+/* the backend's part of the value calls of fmi2_common.c (fmi2c_backend hooks; the arguments are checked) */
+fmi2Status fmi2c_backend_get_real(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    return get_values((Instance *)c, "fmi2GetReal", RK_REAL, vr, nvr, value);
 }
 
-#define INT_GETTER(F, TYPE, KIND, CONVERT)                                                                  \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, TYPE value[]) {        \
-        BEGIN(Get);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+#define INT_GETTER(HOOK, F, TYPE, KIND, CONVERT)                                                            \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    TYPE value[]) {                                                         \
+        Instance *S = (Instance *)c;                                                                        \
         char problems[PROBLEMS_LEN] = "";                                                                   \
         for (size_t i = 0; i < nvr; i++) {                                                                  \
             const rk_fmu_var *v = lookup(vr[i], KIND, problems, sizeof problems);                           \
@@ -440,19 +408,17 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         }                                                                                                   \
         if (problems[0]) {                                                                                  \
             log_error(S, "fmi2" #F ": %s", problems);                                                       \
-            return fail(S, fmi2Error);                                                                      \
+            return fmi2Error;                                                                               \
         }                                                                                                   \
         return fmi2OK;                                                                                      \
     }
 
-INT_GETTER(GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
-INT_GETTER(GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
+INT_GETTER(get_integer, GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
+INT_GETTER(get_boolean, GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    BEGIN(Get);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(GetString, vr);
-    NOT_NULL(GetString, value);
+fmi2Status fmi2c_backend_get_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    fmi2String value[]) {
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) {
         lookup(vr[i], RK_STRING, problems, sizeof problems);
@@ -460,7 +426,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     }
     if (problems[0]) {
         log_error(S, "fmi2GetString: %s", problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     return fmi2OK;
 }
@@ -504,7 +470,7 @@ static fmi2Status set_values(Instance *S, const char *function, int type, const 
     }
     if (problems[0]) {
         log_error(S, "%s: %s (nothing was set)", function, problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     for (size_t i = 0; i < nvr; i++) {
         S->s.values[vr[i]] = x[i];
@@ -514,24 +480,19 @@ static fmi2Status set_values(Instance *S, const char *function, int type, const 
     return fmi2OK;
 }
 
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    BEGIN(Set);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetReal, vr);
-    NOT_NULL(SetReal, value);
-    return set_values(S, "fmi2SetReal", RK_REAL, vr, nvr, value);
+fmi2Status fmi2c_backend_set_real(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                  const fmi2Real value[]) {
+    return set_values((Instance *)c, "fmi2SetReal", RK_REAL, vr, nvr, value);
 }
 
-#define INT_SETTER(F, TYPE, KIND, CONVERT)                                                                  \
-    fmi2Status fmi2##F(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const TYPE value[]) {  \
-        BEGIN(Set);                                                                                         \
-        if (nvr == 0) return fmi2OK;                                                                        \
-        NOT_NULL(F, vr);                                                                                    \
-        NOT_NULL(F, value);                                                                                 \
+#define INT_SETTER(HOOK, F, TYPE, KIND, CONVERT)                                                            \
+    fmi2Status fmi2c_backend_##HOOK(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,        \
+                                    const TYPE value[]) {                                                   \
+        Instance *S = (Instance *)c;                                                                        \
         double *x = (double *)malloc(nvr * sizeof(double));                                                 \
         if (!x) {                                                                                           \
             log_error(S, "fmi2" #F ": out of memory");                                                      \
-            return fail(S, fmi2Error);                                                                      \
+            return fmi2Error;                                                                               \
         }                                                                                                   \
         for (size_t i = 0; i < nvr; i++) x[i] = CONVERT;                                                    \
         fmi2Status status = set_values(S, "fmi2" #F, KIND, vr, nvr, x);                                     \
@@ -539,18 +500,17 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         return status;                                                                                      \
     }
 
-INT_SETTER(SetInteger, fmi2Integer, RK_INTEGER, (double)value[i])
-INT_SETTER(SetBoolean, fmi2Boolean, RK_BOOLEAN, value[i] != fmi2False ? 1.0 : 0.0)
+INT_SETTER(set_integer, SetInteger, fmi2Integer, RK_INTEGER, (double)value[i])
+INT_SETTER(set_boolean, SetBoolean, fmi2Boolean, RK_BOOLEAN, value[i] != fmi2False ? 1.0 : 0.0)
 
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    BEGIN(Set);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetString, vr);
-    NOT_NULL(SetString, value);
+fmi2Status fmi2c_backend_set_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                    const fmi2String value[]) {
+    (void)value;
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) lookup(vr[i], RK_STRING, problems, sizeof problems);
     log_error(S, "fmi2SetString: %s (nothing was set)", problems[0] ? problems : "no String variables");
-    return fail(S, fmi2Error);
+    return fmi2Error;
 }
 
 /* the value of the variable called `name` (a model parameter of every rocking model: g, e_N), or `fallback` */
@@ -632,18 +592,15 @@ static int has_failed_step(const rk_engine *e, const char **first) {
     return n;
 }
 
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
-                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    (void)noSetFMUStatePriorToCurrentPoint;
-    BEGIN(DoStep);
-    const double t = currentCommunicationPoint, h = communicationStepSize;
-    if (fmi2c_check_step(&S->f, t, h) != fmi2OK) return fmi2Error;
+/* the step [t, t + h] (fmi2c_backend.do_step) */
+fmi2Status fmi2c_backend_do_step(fmi2c_instance *F, double t, double h) {
+    Instance *S = (Instance *)F;
     const double t_end = t + h;
     Slave *s = &S->s;
-    if (s->has_error || !S->engine) {
+    if (s->has_error || !S->engine) { /* refused before it began: fmi2DoStepStatus stays */
         log_error(S, "fmi2DoStep: RuntimeError: step refused after an earlier failure (call fmi2Reset): %s",
                   s->has_error ? s->error : "no simulator");
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     char rt[40], rte[40];
     py_repr(t, rt, sizeof rt);
@@ -735,22 +692,17 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                          rk_status_name(st), rk_engine_message(e));
                 s->has_error = 1;
                 log_error(S, "fmi2DoStep: RuntimeError: %s", s->error);
-                S->f.last_step_status = fmi2Error;
-                return fail(S, fmi2Error);
+                return fmi2c_step_failed(F);
             }
         }
     }
     if (!refused) s->t = t_end;
-    return fmi2c_step_done(&S->f, refused, S->f.worst_logged, t_end);
+    return refused ? fmi2Discard : S->f.worst_logged;
 }
 
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    BEGIN(SetRealInputDerivatives);
-    if (nvr == 0) return fmi2OK;
-    NOT_NULL(SetRealInputDerivatives, vr);
-    NOT_NULL(SetRealInputDerivatives, order);
-    NOT_NULL(SetRealInputDerivatives, value);
+fmi2Status fmi2c_backend_set_real_input_derivatives(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
+                                                    const fmi2Integer order[], const fmi2Real value[]) {
+    Instance *S = (Instance *)c;
     char problems[PROBLEMS_LEN] = "";
     for (size_t i = 0; i < nvr; i++) {
         char text[600];
@@ -775,7 +727,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     }
     if (problems[0]) {
         log_error(S, "fmi2SetRealInputDerivatives: %s (nothing was set)", problems);
-        return fail(S, fmi2Error);
+        return fmi2Error;
     }
     /* all checked: set them in order (a reference given twice: the last rate, from the line of the first) */
     Slave *s = &S->s;
@@ -863,17 +815,18 @@ static void get_plain(const unsigned char *p, rk_plain_state *ps) {
     ps->impacts = impacts, ps->n_steps = n_steps, ps->painleve = painleve;
 }
 
-static unsigned char *encode_slave(Instance *S, size_t *n) {
+static Payload *encode_slave(Instance *S) {
     const Slave *sl = &S->s;
     int32_t has_engine = S->engine != NULL;
     int32_t n_vars = RK_FMU_N_VARS, len = sl->has_error ? (int32_t)strlen(sl->error) : 0;
     int32_t flags[4] = {sl->initialized, sl->terminated, sl->frozen, sl->has_error};
     double times[2] = {sl->t, sl->t0};
     int32_t n_inputs = RK_FMU_N_INPUTS;
-    *n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
-    unsigned char *p = (unsigned char *)calloc(1, *n);
-    if (!p) return NULL;
-    unsigned char *q = p;
+    const size_t n = fixed_payload_size() + (size_t)len + 4 + (has_engine ? PLAIN_SIZE : 0) + 4; /* + CRC-32 */
+    Payload *pl = (Payload *)calloc(1, sizeof(Payload) + n);
+    if (!pl) return NULL;
+    pl->n = n;
+    unsigned char *p = pl->bytes, *q = p;
     memcpy(q, PAYLOAD_MAGIC, PAYLOAD_MAGIC_SIZE);
     q += PAYLOAD_MAGIC_SIZE;
     memcpy(q, RK_FMU_GUID, GUID_SIZE);
@@ -901,9 +854,9 @@ static unsigned char *encode_slave(Instance *S, size_t *n) {
         put_plain(q, &ps);
         q += PLAIN_SIZE;
     }
-    uint32_t crc = fmi2c_crc32_update(0, p, *n - 4);
+    uint32_t crc = fmi2c_crc32_update(0, p, n - 4);
     memcpy(q, &crc, 4);
-    return p;
+    return pl;
 }
 
 /* Check the slave's bytes and set them (RockingSlave._restore): nothing changes unless all is valid. */
@@ -1009,118 +962,55 @@ static int decode_slave(Instance *S, const unsigned char *p, size_t n, char *why
     return 0;
 }
 
-static SavedState *saved(Instance *S, const char *function, fmi2FMUstate p) {
-    SavedState *st = (SavedState *)p;
-    if (!st || st->magic != STATE_MAGIC || !st->payload) {
-        log_error(S, "%s: the FMU state is NULL or not a state of this FMU (freed already?)", function);
-        return NULL;
-    }
-    return st;
-}
-
-static fmi2Status keep_state(Instance *S, const char *function, SavedState *st, unsigned char *payload, size_t n,
-                             const fmi2c_fields *fields, fmi2FMUstate *out) {
-    if (!payload) {
+/* the backend's part of the FMU state calls of fmi2_common.c: `data` is a Payload */
+fmi2Status fmi2c_backend_save_state(fmi2c_instance *F, const char *function, void **data) {
+    Instance *S = (Instance *)F;
+    Payload *pl = encode_slave(S);
+    if (!pl) {
         log_error(S, "%s: out of memory", function);
         return fmi2Error;
     }
-    if (!st) st = (SavedState *)calloc(1, sizeof(SavedState));
-    if (!st) {
-        log_error(S, "%s: out of memory", function);
-        free(payload);
-        return fmi2Error;
-    }
-    free(st->payload);
-    st->fields = *fields;
-    st->magic = STATE_MAGIC;
-    st->payload = payload;
-    st->n = n;
-    *out = st;
+    *data = pl;
     return fmi2OK;
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(GetFMUstate);
-    NOT_NULL(GetFMUstate, FMUstate);
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2GetFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    size_t n = 0;
-    unsigned char *payload = encode_slave(S, &n);
-    const fmi2c_fields fields = fmi2c_fields_of(&S->f);
-    if (keep_state(S, "fmi2GetFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error) return fail(S, fmi2Error);
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    BEGIN(SetFMUstate);
-    SavedState *st = saved(S, "fmi2SetFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
+fmi2Status fmi2c_backend_restore_state(fmi2c_instance *F, const char *function, void *data) {
+    Instance *S = (Instance *)F;
+    const Payload *pl = (const Payload *)data;
     char why[2048];
-    if (decode_slave(S, st->payload, st->n, why, sizeof why) != 0) {
-        log_error(S, "fmi2SetFMUstate: state rejected, the instance keeps its current state: %s", why);
-        return fail(S, fmi2Error);
+    if (decode_slave(S, pl->bytes, pl->n, why, sizeof why) != 0) {
+        log_error(S, "%s: state rejected, the instance keeps its current state: %s", function, why);
+        return fmi2Error;
     }
-    fmi2c_restore_fields(&S->f, &st->fields);
     return fmi2OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    BEGIN(FreeFMUstate);
-    if (!FMUstate || !*FMUstate) return fmi2OK;
-    SavedState *st = saved(S, "fmi2FreeFMUstate", *FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    free(st->payload);
-    st->payload = NULL;
-    st->magic = 0;
-    free(st);
-    *FMUstate = NULL;
+void fmi2c_backend_free_state(fmi2c_instance *F, void *data) {
+    (void)F;
+    free(data);
+}
+
+fmi2Status fmi2c_backend_state_bytes(fmi2c_instance *F, const char *function, void *data, const unsigned char **bytes,
+                              size_t *n, void **hold) {
+    (void)F; (void)function;
+    const Payload *pl = (const Payload *)data;
+    *bytes = pl->bytes;
+    *n = pl->n;
+    *hold = NULL;
     return fmi2OK;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializedFMUstateSize, size);
-    SavedState *st = saved(S, "fmi2SerializedFMUstateSize", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    *size = SERIAL_HEADER_SIZE + st->n;
-    return fmi2OK;
-}
+void fmi2c_backend_release_bytes(fmi2c_instance *F, void *hold) { (void)F; (void)hold; }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(SerializeFMUstate, serializedState);
-    SavedState *st = saved(S, "fmi2SerializeFMUstate", FMUstate);
-    if (!st) return fail(S, fmi2Error);
-    if (size != SERIAL_HEADER_SIZE + st->n) {
-        log_error(S, "fmi2SerializeFMUstate: size = %zu does not match the serialized size %zu (from "
-                  "fmi2SerializedFMUstateSize)", size, SERIAL_HEADER_SIZE + st->n);
-        return fail(S, fmi2Error);
+fmi2Status fmi2c_backend_state_from_bytes(fmi2c_instance *F, const char *function, const unsigned char *bytes, size_t n,
+                                   void **data) {
+    Payload *pl = (Payload *)malloc(sizeof(Payload) + n);
+    if (!pl) {
+        log_error((Instance *)F, "%s: out of memory", function);
+        return fmi2Error;
     }
-    char *p = serializedState;
-    memcpy(p + SERIAL_HEADER_SIZE, st->payload, st->n);
-    fmi2c_write_header((unsigned char *)p, &st->fields, st->payload, st->n);
-    return fmi2OK;
-}
-
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    BEGIN(SetFMUstate);
-    NOT_NULL(DeSerializeFMUstate, serializedState);
-    NOT_NULL(DeSerializeFMUstate, FMUstate);
-    fmi2c_fields fields;
-    if (fmi2c_read_header(&S->f, serializedState, size, &fields) != fmi2OK) return fmi2Error;
-    SavedState *st = NULL;
-    if (*FMUstate) {
-        st = saved(S, "fmi2DeSerializeFMUstate", *FMUstate);
-        if (!st) return fail(S, fmi2Error);
-    }
-    size_t n = size - SERIAL_HEADER_SIZE;
-    unsigned char *payload = (unsigned char *)malloc(n ? n : 1);
-    if (payload) memcpy(payload, serializedState + SERIAL_HEADER_SIZE, n);
-    if (keep_state(S, "fmi2DeSerializeFMUstate", st, payload, n, &fields, FMUstate) == fmi2Error)
-        return fail(S, fmi2Error);
+    pl->n = n;
+    memcpy(pl->bytes, bytes, n);
+    *data = pl;
     return fmi2OK;
 }
