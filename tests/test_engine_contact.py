@@ -296,7 +296,7 @@ class ConstantModel:
     def inverse_mass_matrix(self, q):
         return self.Minv
 
-    def forces(self, q, v, ag):
+    def forces(self, q, v, ag, ag_v=0.0):
         return self.f
 
     def gaps(self, q):
