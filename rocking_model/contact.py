@@ -24,12 +24,6 @@ if TYPE_CHECKING:                      # the models import this module (no impor
     from .models.base import RockingModel
 
 
-def forces_of(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
-    """model.forces(q, v, ag, ag_v) [N]; without the vertical ground acceleration (ag_v = 0) called as
-    forces(q, v, ag), so that a model written before ag_v existed keeps working where there is none."""
-    return model.forces(q, v, ag) if ag_v == 0.0 else model.forces(q, v, ag, ag_v)
-
-
 def inverse_mass(model: "RockingModel", q: np.ndarray) -> np.ndarray:
     """M(q)^-1 of ``model`` (its closed form where it has one)."""
     return model.inverse_mass_matrix(q)
@@ -79,7 +73,7 @@ def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candi
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
-    acc_free = Minv @ forces_of(model, q, v, ag, ag_v)
+    acc_free = Minv @ model.forces(q, v, ag, ag_v)
     sliding = None
     if slip_tol is not None:
         U_T = W_T.T @ v
@@ -235,5 +229,5 @@ def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: f
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
-    return solve_contact_lcp(Minv, W_N, W_T, Minv @ forces_of(model, q, v, ag, ag_v), a_N, a_T, closed, closed,
+    return solve_contact_lcp(Minv, W_N, W_T, Minv @ model.forces(q, v, ag, ag_v), a_N, a_T, closed, closed,
                              rtol=DEFAULT_TOLERANCES.lcp_exact).P_N

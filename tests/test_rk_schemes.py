@@ -81,3 +81,14 @@ def test_failed_step_is_flagged():
         stepper.step(0.5)
     assert stepper.failed
     assert "accepted at the smallest step size" in stepper.failure
+
+
+def test_dop853_takes_an_underflowing_error_estimate_as_zero():
+    """A state near 1e-155 of its scale: e5 is 0.0 and 0.01 e3 underflows, so Hairer's norm is 0 / 0. The step's
+    error is zero (as scipy's DOP853 and the C engine take it), not a ZeroDivisionError: the run reaches t_bound
+    with every step accepted and the state still of that size."""
+    stepper = DOP853(lambda t, y: [math.sin(y[0]) - 0.5 * y[0]], 0.0, [6.702559824942551e-155], 0.01, [0.01])
+    while stepper.t < 1.5:
+        stepper.step(1.5)
+    assert stepper.t == 1.5 and stepper.n_rejected == 0 and not stepper.failed
+    assert 0.0 < stepper.y[0] < 1e-150

@@ -54,11 +54,14 @@ class _DOP853Tableau(Tableau):
         return [_lincomb(self.E5, names, j), _lincomb(self.E3, names, j)]
 
     def error_norm_source(self, n):
-        # Hairer's norm: |h| e5 / sqrt((e5 + 0.01 e3) n), e5 and e3 the sums of the squared scaled estimates
+        # Hairer's norm: |h| e5 / sqrt((e5 + 0.01 e3) n), e5 and e3 the sums of the squared scaled estimates.
+        # The denominator is 0.0 only where e5 == 0.0 and 0.01 e3 is 0.0 too (both sums zero, or estimates near
+        # 1e-155 of their scale, whose 0.01 e3 underflows): the estimate is zero, err = 0.0, as rk_rk.c does
         lines = [f"p{j}, q{j} = er{2 * j} / s{j}, er{2 * j + 1} / s{j}" for j in range(n)]
         lines.append("e5 = " + " + ".join(f"p{j}*p{j}" for j in range(n)))
         lines.append("e3 = " + " + ".join(f"q{j}*q{j}" for j in range(n)))
-        lines.append(f"err = 0.0 if e5 == 0.0 and e3 == 0.0 else abs(h) * e5 / sqrt((e5 + 0.01 * e3) * {n})")
+        lines.append(f"den = sqrt((e5 + 0.01 * e3) * {n})")
+        lines.append("err = 0.0 if den == 0.0 else abs(h) * e5 / den")
         return lines
 
     def dense_sources(self, j):

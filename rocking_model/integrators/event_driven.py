@@ -47,8 +47,7 @@ from collections import deque
 
 import numpy as np
 
-from ..contact import (closed_candidates, forces_of, impact, inverse_mass, next_mode, painleve_sticks,
-                       project_to_ground)
+from ..contact import closed_candidates, impact, inverse_mass, next_mode, painleve_sticks, project_to_ground
 from ..lcp import SLIDE_NEG, SLIDE_POS, STICK
 from ..models.sliding import shift_of
 from ..modes import OVERTURNED, SLIDING, BoundedLog, bounded_log
@@ -735,7 +734,7 @@ class EventDriven(Integrator):
                    and (i not in sol.active or U_plus[i] > self.v_tol)]
             if not new and not forced and cand and all(U_plus[i] >= self.v_zeno for i in cand):
                 # bounce test, in flight only: a_N the corner's normal acceleration in free flight
-                acc = inverse_mass(model, q) @ forces_of(model, q, sol.v, *ag_t)
+                acc = inverse_mass(model, q) @ model.forces(q, sol.v, *ag_t)
                 a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
                 falling = [i for i in cand if a_N[i] < 0.0]
                 if falling:
@@ -760,9 +759,7 @@ class EventDriven(Integrator):
         solution; with friction ``prefer`` (a sliding state) is tried first for the closed contacts. An inexact
         solve is reported unless it is a Painleve situation (which `_decide` resolves)."""
         ag, ag_v = ag_t
-        # (without a vertical component the call of the horizontal-only API: wrappers of next_mode keep working)
-        extra = {} if ag_v == 0.0 else {"ag_v": ag_v}
-        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer, **extra)
+        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer, ag_v=ag_v)
         if sol is not None and not sol.exact and not sol.painleve:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol

@@ -47,10 +47,10 @@ A subclass may provide (the defaults here are generic and correct, the overrides
     force_totals_of(mode, ag)                   float-level (sum lambda_N, sum lambda_T) of a mode (the
                                                 friction demand and cone); default generic numpy
     mode_closures(mode, ag)                     (rhs, monitors, totals) built together (shared work)
+    SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
 
 The functions that take a GroundMotion ``ag`` (mode_closures, mode_functions, functions_of, force_totals_of)
-read its vertical component from ``ag.vertical`` (None: ag_v = 0; `vertical_of`).
-    SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
+read its vertical component from ``ag.vertical`` (None: ag_v = 0; `vertical_of`, `effective_gravity`).
 
 The sliding modes (`rocking_model.modes.SLIDING`) need nothing more: their coordinates, right-hand sides and
 events are derived from the sticking modes' (`rocking_model.models.sliding`); the integrators reach every
@@ -65,7 +65,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..contact import forces_of, mode_forces
+from ..contact import mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, SLIDING, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
 from . import sliding
@@ -95,17 +95,16 @@ def vertical_of(ag):
     return vert
 
 
-def _no_args(t: float) -> tuple:
-    return ()
-
-
-def vertical_args(ag):
-    """t -> the extra arguments (ag_v(t),) of the float functions of a model under the GroundMotion ``ag``, or ()
-    without a vertical component (so that a model written before ag_v existed keeps working without one)."""
-    if ag.vertical is None:
-        return _no_args
-    av_of = vertical_of(ag)
-    return lambda t: (av_of(t),)
+def effective_gravity(ag, g: float):
+    """(g_e0, vert) for closed forms under the effective gravity g_e = g + ag_v(t) [m/s2] of the GroundMotion
+    ``ag`` and the gravity ``g`` [m/s2]: vert None means the constant g_e = g_e0 (g itself without a vertical
+    component, so that g_e / g == 1.0 exactly; g + ag_v for a constant one), else g_e = g + vert(t)."""
+    vert = ag.vertical
+    if vert is None:
+        return g, None
+    if vert.constant:
+        return g + vert.value, None
+    return 0.0, vert
 
 
 def body_outputs(body: str, point: str) -> tuple:
@@ -262,6 +261,9 @@ class RockingModel(ABC):
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M(q), shape (n, n)."""
 
+    # Every caller passes ag_v (0.0 without a vertical component), so a model must take it. There is no shim
+    # calling forces(q, v, ag) for models written before ag_v: such a model would run where ag_v = 0 and break
+    # only under a vertical motion, deep inside a contact problem; a TypeError at its first call is honest.
     @abstractmethod
     def forces(self, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
         """Non-contact generalized forces f(q, v, ag, ag_v), shape (n,), so that M q_ddot = f + contact forces;
@@ -343,7 +345,7 @@ class RockingModel(ABC):
         q, v = self.embed(mode, r, r_dot)
         J, jd = self.mode_jacobian(mode, r, r_dot)
         M = self.mass_matrix(q)
-        rhs = J.T @ (forces_of(self, q, v, ag, ag_v) - M @ jd)
+        rhs = J.T @ (self.forces(q, v, ag, ag_v) - M @ jd)
         return np.linalg.solve(J.T @ M @ J, rhs)
 
     def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
@@ -477,17 +479,17 @@ class RockingModel(ABC):
         nc = self.n_contacts
         F, L, ip = self.force_scale, self.length_scale, self.phi_index
         a_of = (lambda t: ag.value) if ag.constant else ag
-        av_of = vertical_args(ag)
+        av_of = vertical_of(ag)
 
         def rhs(t, y):
             if k == 0:
                 return []
             r, rd = np.array(y[:k]), np.array(y[k:])
-            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), *av_of(t)).tolist()
+            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), av_of(t)).tolist()
 
         def monitors(t, y):
             q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            lam = self.contact_forces(mode, q, v, a_of(t), *av_of(t)) if closed else None
+            lam = self.contact_forces(mode, q, v, a_of(t), av_of(t)) if closed else None
             g = self.gaps(q)
             phi = float(q[ip])
             out = []

@@ -32,7 +32,8 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param, impact_law_param
+from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
+                   impact_law_param)
 from .flexible_impact import classical_impact
 
 
@@ -426,15 +427,18 @@ class FlexibleOscillator(RockingModel):
         return totals or super().force_totals_of(mode, ag)
 
     def mode_closures(self, mode, ag):
-        """(rhs, monitors, totals) of ``mode`` in closed form; while rocking the totals reuse what the monitors
-        computed at the same (t, y)."""
-        if ag.vertical is not None:
-            return self._vertical_closures(mode, ag)
+        """(rhs, monitors, totals) of ``mode`` in closed form under the effective gravity g_e = g + ag_v(t)
+        [m/s2] (`effective_gravity`) wherever gravity acts (Eq. 55's gravity terms and the weight M_t g_e that
+        the corners carry; the normalisation by the weight W = M_t g stays). Without a vertical component g_e is
+        the constant g itself: today's floating-point operations, bit for bit. While rocking the totals reuse
+        what the monitors computed at the same (t, y)."""
         const = ag.constant
         a0 = ag.value if const else 0.0
+        hor = ag.horizontal
         mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
         A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
-        W = Mt * g
+        ge0, vert = effective_gravity(ag, g)          # vert None: g_e = ge0 at all t
+        W, We0 = Mt * g, Mt * ge0           # (Mt * g_e == W exactly for g_e = g)
         if mode == Mode.FLIGHT:
             # M(q) v_dot = f(q, v, ag) on floats: M_xx = M_yy = M_t and M_xy = 0, so x and y are condensed out
             # (Schur complement) and the 2x2 system in (u, phi) is solved by Cramer's rule; about ten times
@@ -444,115 +448,8 @@ class FlexibleOscillator(RockingModel):
 
             def rhs(t, y):
                 u, x, yc, phi, ud, xd, yd, w = y
-                a = a0 if const else ag(t)
-                sp, cp = math.sin(phi), math.cos(phi)
-                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-                ww = w * w
-                f_u = -c * ud - kt * u + mt * u * ww - D * cp * a - D * sp * g
-                f_x = Myp * ww + 2.0 * D * sp * ud * w - Mt * a
-                f_y = -Mxp * ww - 2.0 * D * cp * ud * w - Mt * g
-                f_p = -2.0 * mt * u * ud * w - Mxp * a - g * Myp
-                a12 = -C - D * (cp * Mxp + sp * Myp) / Mt
-                a22 = J0 + mt * u * u - (Mxp * Mxp + Myp * Myp) / Mt
-                r1 = f_u - D * (cp * f_x + sp * f_y) / Mt
-                r2 = f_p - (Mxp * f_x + Myp * f_y) / Mt
-                det = a11 * a22 - a12 * a12
-                udd = (a22 * r1 - a12 * r2) / det
-                wd = (a11 * r2 - a12 * r1) / det
-                return [ud, xd, yd, w, udd, (f_x - D * cp * udd - Mxp * wd) / Mt,
-                        (f_y - D * sp * udd - Myp * wd) / Mt, wd]
-
-            def monitors(t, y):
-                yc, phi = y[2], y[3]
-                bs = b * math.sin(phi)
-                return [(yc - bs) / L, (yc + bs) / L, HALF_PI - abs(phi)]
-            return rhs, monitors, None
-        if mode == Mode.FULL:
-            def rhs(t, y):
-                u, ud = y
-                return [ud, (-c * ud - kt * u - D * (a0 if const else ag(t))) / mt]
-
-            def monitors(t, y):
-                u, ud = y
-                a = a0 if const else ag(t)
-                udd = (-c * ud - kt * u - D * a) / mt
-                # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g D u)
-                d = (-C * udd - A_h * a + g * D * u) / b
-                return [0.5 * (W - d) / W, 0.5 * (W + d) / W, HALF_PI]
-
-            def totals(t, y):
-                u, ud = y
-                a = a0 if const else ag(t)
-                return W, D * (-c * ud - kt * u - D * a) / mt + Mt * a
-            return rhs, monitors, totals
-        s = pivot_sign(mode)
-        sb = s * b
-        sbM = sb * Mt
-        K0 = J0 + Mt * b * b
-        pivot_first = s < 0
-
-        def accel(u, phi, ud, w, a):
-            sp, cp = math.sin(phi), math.cos(phi)
-            K = K0 + mt * u * u - 2.0 * sb * D * u
-            E = mt * u - sb * D
-            f_u = -c * ud - kt * u - g * D * sp - D * cp * a + E * w * w
-            f_p = -2.0 * E * ud * w - g * (D * u - sbM) * cp + g * A_h * sp + a * (A_h * cp + (D * u - sbM) * sp)
-            det = mt * K - C * C
-            return (K * f_u + C * f_p) / det, (C * f_u + mt * f_p) / det, sp, cp
-
-        def rhs(t, y):
-            u, phi, ud, w = y
-            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else ag(t))
-            return [ud, w, udd, wd]
-
-        last = [None, None, None]         # (t, y, (ag, u_dd, phi_dd, sin, cos, pivot force)) of the last monitors
-
-        def monitors(t, y):
-            u, phi, ud, w = y
-            a = a0 if const else ag(t)
-            udd, wd, sp, cp = accel(u, phi, ud, w, a)
-            # pivot force = y row of M v_dot - f (the tangential direction is horizontal)
-            ydd = -sb * cp * wd + sb * sp * w * w
-            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + W
-            last[0], last[1], last[2] = t, y, (a, udd, wd, sp, cp, lam)
-            margin = HALF_PI - abs(phi)
-            return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
-
-        def totals(t, y):
-            if not (last[1] is y and last[0] == t):
-                monitors(t, y)            # (fills ``last``)
-            a, udd, wd, sp, cp, lam_N = last[2]
-            u, phi, ud, w = y
-            ww = w * w
-            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            xdd = sb * sp * wd + sb * cp * ww
-            lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
-            return lam_N, lam_T
-        return rhs, monitors, totals
-
-    def _vertical_closures(self, mode, ag):
-        """`mode_closures` under a ground motion with a vertical component ag_v(t) = ag.vertical(t): the same
-        closed forms with the effective gravity g_e = g + ag_v(t) wherever gravity acts (Eq. 55's gravity terms
-        and the weight carried by the corners; the normalisation by the weight M_t g stays). Written with the
-        same floating-point operations as `mode_closures` where g was, so that ag_v = 0 gives the same results
-        bit for bit."""
-        const = ag.constant
-        a0 = ag.value if const else 0.0
-        hor, vert = ag.horizontal, ag.vertical
-        vconst = vert.constant
-        mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
-        ge0 = g + vert.value if vconst else 0.0
-        A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
-        W = Mt * g
-        if mode == Mode.FLIGHT:
-            L = self.length_scale
-            a11 = mt - D * D / Mt
-
-            def rhs(t, y):
-                u, x, yc, phi, ud, xd, yd, w = y
                 a = a0 if const else hor(t)
-                ge = ge0 if vconst else g + vert(t)
+                ge = ge0 if vert is None else g + vert(t)
                 sp, cp = math.sin(phi), math.cos(phi)
                 Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
                 ww = w * w
@@ -583,10 +480,10 @@ class FlexibleOscillator(RockingModel):
             def monitors(t, y):
                 u, ud = y
                 a = a0 if const else hor(t)
-                ge = ge0 if vconst else g + vert(t)
+                ge = ge0 if vert is None else g + vert(t)
                 udd = (-c * ud - kt * u - D * a) / mt
-                # phi row at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g_e D u); the corners carry
-                # the effective weight M_t g_e
+                # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g_e D u); the
+                # corners carry the effective weight M_t g_e
                 d = (-C * udd - A_h * a + ge * D * u) / b
                 We = Mt * ge
                 return [0.5 * (We - d) / W, 0.5 * (We + d) / W, HALF_PI]
@@ -594,7 +491,7 @@ class FlexibleOscillator(RockingModel):
             def totals(t, y):
                 u, ud = y
                 a = a0 if const else hor(t)
-                return Mt * (ge0 if vconst else g + vert(t)), D * (-c * ud - kt * u - D * a) / mt + Mt * a
+                return (We0 if vert is None else Mt * (g + vert(t))), D * (-c * ud - kt * u - D * a) / mt + Mt * a
             return rhs, monitors, totals
         s = pivot_sign(mode)
         sb = s * b
@@ -613,30 +510,32 @@ class FlexibleOscillator(RockingModel):
 
         def rhs(t, y):
             u, phi, ud, w = y
-            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else hor(t), ge0 if vconst else g + vert(t))
+            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else hor(t), ge0 if vert is None else g + vert(t))
             return [ud, w, udd, wd]
 
-        def forces(t, y):
+        last = [None, None, None]         # (t, y, (ag, u_dd, phi_dd, sin, cos, pivot force)) of the last monitors
+
+        def monitors(t, y):
             u, phi, ud, w = y
             a = a0 if const else hor(t)
-            ge = ge0 if vconst else g + vert(t)
+            ge = ge0 if vert is None else g + vert(t)
             udd, wd, sp, cp = accel(u, phi, ud, w, a, ge)
-            # pivot force = y row of M v_dot - f, with the effective weight M_t g_e
+            # pivot force = y row of M v_dot - f (the tangential direction is horizontal), with the effective
+            # weight M_t g_e
             ydd = -sb * cp * wd + sb * sp * w * w
             Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
             lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + Mt * ge
-            return a, udd, wd, sp, cp, lam, Mxp, Myp
-
-        def monitors(t, y):
-            lam = forces(t, y)[5]
-            phi = y[1]
+            last[0], last[1], last[2] = t, y, (a, udd, wd, sp, cp, lam)
             margin = HALF_PI - abs(phi)
             return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
 
         def totals(t, y):
-            a, udd, wd, sp, cp, lam_N, Mxp, Myp = forces(t, y)
+            if not (last[1] is y and last[0] == t):
+                monitors(t, y)            # (fills ``last``)
+            a, udd, wd, sp, cp, lam_N = last[2]
             u, phi, ud, w = y
             ww = w * w
+            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
             xdd = sb * sp * wd + sb * cp * ww
             lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
             return lam_N, lam_T

@@ -2,9 +2,9 @@
 
 Rectangular block of half-width b [m], half-height h [m] and mass m [kg] on a rigid ground moving
 horizontally with acceleration ag [m/s2] (positive along +x) and vertically with ag_v [m/s2] (positive upward:
-in the ground frame the inertial force -m ag_v along +y, an effective gravity g + ag_v). Full coordinates q = [x, y, phi]: centroid position in the ground
-frame (y absolute, y = h at rest) and rotation phi, positive counter-clockwise; phi > 0 pivots on the left
-corner. Corner i sits at body coordinates (s_i b, -h), s = (-1, +1).
+in the ground frame the inertial force -m ag_v along +y, an effective gravity g + ag_v). Full coordinates
+q = [x, y, phi]: centroid position in the ground frame (y absolute, y = h at rest) and rotation phi, positive
+counter-clockwise; phi > 0 pivots on the left corner. Corner i sits at body coordinates (s_i b, -h), s = (-1, +1).
 """
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ import numpy as np
 
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
-from .base import HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param, impact_law_param
+from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
+                   impact_law_param)
 
 _S = (-1.0, 1.0)
 
@@ -236,32 +237,38 @@ class RigidBlock(RockingModel):
         return totals or super().force_totals_of(mode, ag)
 
     def mode_closures(self, mode, ag):
-        """(rhs, monitors, totals) in closed form; while rocking the totals reuse what the monitors computed at
-        the same (t, y)."""
-        if ag.vertical is not None:
-            return self._vertical_closures(mode, ag)
+        """(rhs, monitors, totals) in closed form under the effective gravity g_e = g + ag_v(t) [m/s2]
+        (`effective_gravity`); the normalisations by the weight m g stay. Without a vertical component g_e is
+        the constant g itself, g_e / g == 1.0 and (1.0 s) x == s x exactly: today's results bit for bit. While
+        rocking the totals reuse what the monitors computed at the same (t, y)."""
         m, g, b, h = self.m, self.g, self.b, self.h
         const = ag.constant
         a0 = ag.value if const else 0.0
+        hor = ag.horizontal
+        ge0, vert = effective_gravity(ag, g)          # vert None: g_e = ge0 at all t
         if mode == Mode.FULL:
             seen = [None, 0.0]            # (t, ag) of the last monitors call
+            c0, W0 = 0.5 * (ge0 / g), m * ge0
 
             def rhs(t, y):
                 return []
 
             def monitors(t, y):
-                a = a0 if const else ag(t)
+                a = a0 if const else hor(t)
                 seen[0], seen[1] = t, a
+                # the corners' normal forces / (m g): 0.5 g_e / g -+ 0.5 ag h / (b g)
                 d = 0.5 * a * h / b / g
-                return [0.5 + d, 0.5 - d, HALF_PI]
+                c = c0 if vert is None else 0.5 * ((g + vert(t)) / g)
+                return [c + d, c - d, HALF_PI]
 
             def totals(t, y):
-                # vertical and horizontal equilibrium: the weight, and the sticking force m ag
-                return m * g, m * (a0 if const else seen[1] if seen[0] == t else ag(t))
+                # vertical and horizontal equilibrium: the effective weight m g_e, and the sticking force m ag
+                return (W0 if vert is None else m * (g + vert(t)),
+                        m * (a0 if const else seen[1] if seen[0] == t else hor(t)))
             return rhs, monitors, totals
         if mode == Mode.FLIGHT:
             def rhs(t, y):
-                return [y[3], y[4], y[5], -(a0 if const else ag(t)), -g, 0.0]
+                return [y[3], y[4], y[5], -(a0 if const else hor(t)), -(ge0 if vert is None else g + vert(t)), 0.0]
 
             def monitors(t, y):
                 yc, phi = y[1], y[2]
@@ -272,21 +279,24 @@ class RigidBlock(RockingModel):
         s = pivot_sign(mode)
         p2, al = self._p ** 2, self._alpha
         pivot_first = s < 0
+        gr0 = ge0 / g                     # g_e / g: the restoring moment's factor 1 + ag_v / g
+        sr0 = gr0 * s
         last = [None, None, None]         # (t, y, (ag, phi_dd, sin, cos, pivot force / m g)) of the last monitors
 
         def rhs(t, y):
-            phi = y[0]
-            x = al + s * phi
-            return [y[1], p2 * ((a0 if const else ag(t)) / g * math.cos(x) + s * math.sin(x))]
+            x = al + s * y[0]
+            sr = sr0 if vert is None else (g + vert(t)) / g * s
+            return [y[1], p2 * ((a0 if const else hor(t)) / g * math.cos(x) + sr * math.sin(x))]
 
         def monitors(t, y):
             phi, w = y
-            a = a0 if const else ag(t)
+            a = a0 if const else hor(t)
+            gr = gr0 if vert is None else (g + vert(t)) / g
             x = al + s * phi
-            acc = p2 * (a / g * math.cos(x) + s * math.sin(x))
+            acc = p2 * (a / g * math.cos(x) + gr * s * math.sin(x))
             sp, cp = math.sin(phi), math.cos(phi)
-            # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + 1
-            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + 1.0
+            # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + g_e / g
+            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + gr
             last[0], last[1], last[2] = t, y, (a, acc, sp, cp, lam)
             margin = HALF_PI - abs(phi)
             return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
@@ -296,73 +306,6 @@ class RigidBlock(RockingModel):
                 monitors(t, y)            # (fills ``last``)
             a, acc, sp, cp, lam = last[2]
             w = y[1]
-            x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
-            return m * g * lam, m * (x_dd + a)
-        return rhs, monitors, totals
-
-    def _vertical_closures(self, mode, ag):
-        """`mode_closures` under a ground motion with a vertical component ag_v(t) = ag.vertical(t): the same
-        closed forms with the effective gravity g_e = g + ag_v(t) where gravity acts (the normalisations by the
-        weight m g stay). Written so that ag_v = 0 gives the same floating-point operations (g + 0.0 == g,
-        g_e / g == 1.0) and the same results bit for bit."""
-        m, g, b, h = self.m, self.g, self.b, self.h
-        const = ag.constant
-        a0 = ag.value if const else 0.0
-        vert = ag.vertical
-        vconst = vert.constant
-        ge0 = g + vert.value if vconst else 0.0
-        hor = ag.horizontal
-        if mode == Mode.FULL:
-            def rhs(t, y):
-                return []
-
-            def monitors(t, y):
-                a = a0 if const else hor(t)
-                ge = ge0 if vconst else g + vert(t)
-                # the corners' normal forces / (m g): 0.5 m g_e +- 0.5 m ag h / b
-                d = 0.5 * a * h / b / g
-                c = 0.5 * (ge / g)
-                return [c + d, c - d, HALF_PI]
-
-            def totals(t, y):
-                return m * (ge0 if vconst else g + vert(t)), m * (a0 if const else hor(t))
-            return rhs, monitors, totals
-        if mode == Mode.FLIGHT:
-            def rhs(t, y):
-                return [y[3], y[4], y[5], -(a0 if const else hor(t)), -(ge0 if vconst else g + vert(t)), 0.0]
-
-            def monitors(t, y):
-                yc, phi = y[1], y[2]
-                bs, hc = b * math.sin(phi), h * math.cos(phi)
-                L = self._R
-                return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
-            return rhs, monitors, None
-        s = pivot_sign(mode)
-        p2, al = self._p ** 2, self._alpha
-        pivot_first = s < 0
-
-        def accel(t, phi):
-            a = a0 if const else hor(t)
-            ge = ge0 if vconst else g + vert(t)
-            x = al + s * phi
-            return a, ge, p2 * (a / g * math.cos(x) + (ge / g) * s * math.sin(x))
-
-        def rhs(t, y):
-            return [y[1], accel(t, y[0])[2]]
-
-        def monitors(t, y):
-            phi, w = y
-            a, ge, acc = accel(t, phi)
-            sp, cp = math.sin(phi), math.cos(phi)
-            # lambda_N / (m g) = (y_dd + g_e) / g
-            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + ge / g
-            return [lam, -s * phi, HALF_PI - abs(phi)] if pivot_first else [-s * phi, lam, HALF_PI - abs(phi)]
-
-        def totals(t, y):
-            phi, w = y
-            a, ge, acc = accel(t, phi)
-            sp, cp = math.sin(phi), math.cos(phi)
-            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + ge / g
             x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
             return m * g * lam, m * (x_dd + a)
         return rhs, monitors, totals

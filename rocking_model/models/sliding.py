@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..contact import forces_of
 from ..modes import SLIDING, stick_mode
 
 if TYPE_CHECKING:
@@ -79,7 +78,7 @@ def slide_motion(model: "RockingModel", mode, q, v, ag: float, ag_v: float = 0.0
     Minv = model.inverse_mass_matrix(q)
     inv_mu = 0.0 if math.isinf(model.mu) else 1.0 / model.mu
     C = inv_mu * W_N[:, closed] - sigma * W_T[:, closed]
-    a_free = Minv @ forces_of(model, q, v, ag, ag_v)
+    a_free = Minv @ model.forces(q, v, ag, ag_v)
     MC = Minv @ C
     A = W_N[:, closed].T @ MC
     rhs = -(W_N[:, closed].T @ a_free + a_N[closed])
@@ -143,7 +142,6 @@ def force_totals(model: "RockingModel", mode, q, v, ag: float, ag_v: float = 0.0
     [m/s2]."""
     r, rd = model.reduce(mode, q, v)
     J, jd = model.mode_jacobian(mode, r, rd)
-    extra = () if ag_v == 0.0 else (ag_v,)        # (models written before ag_v existed: without it)
-    a = J @ model.reduced_acceleration(mode, r, rd, ag, *extra) + jd if len(r) else jd
-    resid = model.mass_matrix(q) @ a - forces_of(model, q, v, ag, ag_v)
+    a = J @ model.reduced_acceleration(mode, r, rd, ag, ag_v) + jd if len(r) else jd
+    resid = model.mass_matrix(q) @ a - model.forces(q, v, ag, ag_v)
     return float(resid[model.lift_index]), float(resid[model.slide_index])
