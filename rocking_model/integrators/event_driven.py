@@ -727,7 +727,7 @@ class EventDriven(Integrator):
         model = self.model
         W_N, _ = model.contact_jacobians(q)
         forced = [i for i in cand if i in closed]
-        sol = impact(model, q, v, cand, forced=tuple(forced))
+        sol = impact(model, q, v, cand, forced=tuple(forced), tolerances=self.tolerances)
         while True:
             U_plus = W_N.T @ sol.v
             # velocity test (a corner that takes impulse and stays at rest needs no closure)
@@ -745,7 +745,7 @@ class EventDriven(Integrator):
             if not new:
                 break
             forced += new
-            sol = impact(model, q, v, cand, forced=tuple(forced))
+            sol = impact(model, q, v, cand, forced=tuple(forced), tolerances=self.tolerances)
         if not sol.exact:
             self.report("inexact_contact", t, inexact_message(sol, t, "impact LCP"))
         return sol.v
@@ -762,7 +762,8 @@ class EventDriven(Integrator):
         ag, ag_v = ag_t
         # (without a vertical component the call of the horizontal-only API: wrappers of next_mode keep working)
         extra = {} if ag_v == 0.0 else {"ag_v": ag_v}
-        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer, **extra)
+        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer,
+                              tolerances=self.tolerances, **extra)
         if sol is not None and not sol.exact and not sol.painleve:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol
@@ -784,7 +785,7 @@ class EventDriven(Integrator):
             self.painleve += 1
             sol_i = impact(self.model, q, v, sol.active or closed_candidates(self.model, q, v, self.gap_tol,
                                                                              self.v_tol), e_N=0.0, e_T=0.0,
-                           prefer=STICK)
+                           prefer=STICK, tolerances=self.tolerances)
             if not sol_i.exact:
                 self.report("inexact_contact", t, inexact_message(sol_i, t, "Painleve impact LCP"))
             v = sol_i.v
