@@ -171,3 +171,54 @@ def test_landing_reads_lcp_exact(engine):
     assert o["contact"] == Mode.FLIGHT and o["impacts"] == 1 and U_N[1] > 0.04
     o, _, _, U_N = res[0.5, engine]
     assert o["contact"] != Mode.FLIGHT and o["impacts"] == 1 and abs(U_N[1]) < 1e-12
+
+
+# ------------------------------------------------------------------------------------- every other field
+def _run(scheme, engine, tolerances, mu=math.inf, amplitude=0.45):
+    """A 0.2 x 1 m block (e_N = 0.8) under a one-cycle sine pulse of ``amplitude`` g at 2 Hz, 2 s sampled every
+    0.05 s: (phi, impacts, painleve, friction_demand, contact) per sample, and the scheme's step count."""
+    block = RigidBlock(b=B, h=H, e_N=0.8, mu=mu)
+    sim = Simulator(block, scheme, tolerances=tolerances, engine=engine, on_report="ignore",
+                    dt_max=1e-3 if scheme == "moreau_jean" else None)
+    pulse = SinePulse(amplitude * G, 4 * math.pi)
+    rows = []
+    for k in range(1, 41):
+        sim.advance(0.05 * k, pulse)
+        o = sim.outputs()
+        rows.append([o["phi"], o["impacts"], o["painleve"], o["friction_demand"], int(o["contact"])])
+    return np.array(rows), sim.integrator.n_steps
+
+
+#: (scheme, field, value, scene keywords of `_run`): a value on the other side of a decision of the scene from
+#: the default (gap, rest_velocity, event, step_gap, step_rest_velocity, lcp_exact: corners counted at the
+#: ground or at rest, events fired, impacts counted or solutions taken that the default does not; grazing:
+#: landings put back onto the ground; stateless_step: the steps of the phase at rest under a pulse below uplift)
+FIELD_SCENES = [
+    ("event_driven", "gap", 1e-3, {}),
+    ("event_driven", "grazing", 1e-9, {}),
+    ("event_driven", "rest_velocity", 1e-3, {}),
+    ("event_driven", "event", 1e-2, {}),
+    ("event_driven", "stateless_step", 1e-2, {"amplitude": 0.15}),
+    ("moreau_jean", "step_gap", 1e-3, {}),
+    ("moreau_jean", "step_rest_velocity", 1e-3, {}),
+    ("moreau_jean", "lcp_exact", 0.5, {"mu": 0.3}),
+]
+
+
+@pytest.mark.parametrize("scheme, field, value, scene", FIELD_SCENES,
+                         ids=[f"{s}-{f}" for s, f, _, _ in FIELD_SCENES])
+def test_each_field_changes_the_run_in_both_engines(scheme, field, value, scene):
+    """Each field, changed, changes the run of the scheme that reads it, in the Python and in the compiled
+    engine, and both engines still agree: the same impacts, contact modes, Painleve counts and steps, phi to
+    1e-9 rad. (lcp_exact of the event-driven scheme: `test_landing_reads_lcp_exact`.)"""
+    tol = dataclasses.replace(DEFAULT_TOLERANCES, **{field: value})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        runs = {(t is tol, e): _run(scheme, e, t, **scene) for t in (DEFAULT_TOLERANCES, tol) for e in ENGINES}
+    for changed in (False, True):
+        (py, n_py), (c, n_c) = runs[changed, "python"], runs[changed, "c"]
+        assert n_py == n_c and np.array_equal(py[:, [1, 2, 4]], c[:, [1, 2, 4]])
+        np.testing.assert_allclose(c, py, rtol=0, atol=1e-9)
+    for engine in ENGINES:
+        (base, n_base), (new, n_new) = runs[False, engine], runs[True, engine]
+        assert n_new != n_base or np.max(np.abs(new - base)) > 1e-6, (engine, n_new, n_base)
