@@ -174,13 +174,13 @@ def test_landing_reads_lcp_exact(engine):
 
 
 # ------------------------------------------------------------------------------------- every other field
-def _run(scheme, engine, tolerances, mu=math.inf, amplitude=0.45):
-    """A 0.2 x 1 m block (e_N = 0.8) under a one-cycle sine pulse of ``amplitude`` g at 2 Hz, 2 s sampled every
-    0.05 s: (phi, impacts, painleve, friction_demand, contact) per sample, and the scheme's step count."""
-    block = RigidBlock(b=B, h=H, e_N=0.8, mu=mu)
+def _run(scheme, engine, tolerances, mu=math.inf, amplitude=0.45, e_N=0.8, hz=2.0):
+    """A 0.2 x 1 m block under a one-cycle sine pulse of ``amplitude`` g at ``hz``, 2 s sampled every 0.05 s:
+    (phi, impacts, painleve, friction_demand, contact) per sample, and the scheme's step count."""
+    block = RigidBlock(b=B, h=H, e_N=e_N, mu=mu)
     sim = Simulator(block, scheme, tolerances=tolerances, engine=engine, on_report="ignore",
                     dt_max=1e-3 if scheme == "moreau_jean" else None)
-    pulse = SinePulse(amplitude * G, 4 * math.pi)
+    pulse = SinePulse(amplitude * G, 2 * math.pi * hz)
     rows = []
     for k in range(1, 41):
         sim.advance(0.05 * k, pulse)
@@ -192,7 +192,8 @@ def _run(scheme, engine, tolerances, mu=math.inf, amplitude=0.45):
 #: (scheme, field, value, scene keywords of `_run`): a value on the other side of a decision of the scene from
 #: the default (gap, rest_velocity, event, step_gap, step_rest_velocity, lcp_exact: corners counted at the
 #: ground or at rest, events fired, impacts counted or solutions taken that the default does not; grazing:
-#: landings put back onto the ground; stateless_step: the steps of the phase at rest under a pulse below uplift)
+#: landings put back onto the ground; stateless_step: the steps of the phase at rest under a pulse below uplift;
+#: demand_floor: the friction demand of the instants when the block presses the ground with less than its weight)
 FIELD_SCENES = [
     ("event_driven", "gap", 1e-3, {}),
     ("event_driven", "grazing", 1e-9, {}),
@@ -202,6 +203,8 @@ FIELD_SCENES = [
     ("moreau_jean", "step_gap", 1e-3, {}),
     ("moreau_jean", "step_rest_velocity", 1e-3, {}),
     ("moreau_jean", "lcp_exact", 0.5, {"mu": 0.3}),
+    ("event_driven", "demand_floor", 0.99, {"amplitude": 1.0, "e_N": 0.5, "hz": 1.0}),
+    ("moreau_jean", "demand_floor", 0.99, {"amplitude": 1.0, "e_N": 0.5, "hz": 1.0}),
 ]
 
 
@@ -222,3 +225,32 @@ def test_each_field_changes_the_run_in_both_engines(scheme, field, value, scene)
     for engine in ENGINES:
         (base, n_base), (new, n_new) = runs[False, engine], runs[True, engine]
         assert n_new != n_base or np.max(np.abs(new - base)) > 1e-6, (engine, n_new, n_base)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_lcp_hint_takes_the_hint_within_it(engine):
+    """lcp_hint (Moreau-Jean: its last closed set is the hint of the next step's LCP): the block in full contact
+    under ag = 3 m/s2 (above uplift, g b / h = 1.96 m/s2) has one corner lift; the hint "both closed" violates the
+    conditions by 0.21 (the pull on the lifting corner). With lcp_exact = 0.5 (so that the hint counts as exact;
+    an inexact one is superseded by the mu -> inf limit) it is taken with lcp_hint = 0.5, not with the default,
+    in both engines (the least-violating set, one corner closed, otherwise). The event-driven scheme gives no
+    hint."""
+    block = RigidBlock(b=B, h=H)
+    q, v = block.initial_state()[1:]
+    W_N, W_T = block.contact_jacobians(q)
+    Minv = block.inverse_mass_matrix(q)
+    acc = Minv @ block.forces(q, v, 3.0)
+    a_N, a_T = block.contact_drift(q, v)
+    got = {}
+    for tol in (LOOSE, dataclasses.replace(LOOSE, lcp_hint=0.5)):
+        if engine == "python":
+            sol = contact.solve_with_friction(block, Minv, W_N, W_T, acc, a_N, a_T, [0, 1], hint=[0, 1],
+                                              tolerances=tol)
+            got[tol.lcp_hint] = (tuple(sol.active), sol.violation)
+        else:
+            c = _engine.contact_model_call("solve_with_friction", _spec(block), acc.tolist(), a_N.tolist(),
+                                           a_T.tolist(), [0, 1], [], None, False, [0, 1], -1, tol.lcp_exact,
+                                           tol.lcp_hint, Minv.tolist(), W_N.tolist(), W_T.tolist())
+            got[tol.lcp_hint] = (tuple(c["active"]), c["violation"])
+    assert got[1e-12][0] == (0,) and got[1e-12][1] < 1e-12
+    assert got[0.5][0] == (0, 1) and 0.15 < got[0.5][1] < 0.3
