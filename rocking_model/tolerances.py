@@ -27,7 +27,8 @@ The contact LCPs (`rocking_model.lcp`, through `rocking_model.contact`) of both 
 tells an exact solution (an inexact one is reported, `inexact_contact`; with mu = inf the sticking LCP's mu -> inf
 limit is tried where it is inexact); with friction it also picks the solution (the first state combination,
 in the order of preference, that violates the conditions by less than it) and counts them (Painleve). ``lcp_hint``
-applies where a hint is given: Moreau-Jean's last closed set; the event-driven scheme gives none. The forces of a
+applies where a hint is given: Moreau-Jean's last closed set (taken within it, it is still exact only within
+``lcp_exact``); the event-driven scheme gives none. The forces of a
 mode held closed (`contact.mode_forces`) take neither: all its contacts are forced, one active set.
 
 The Zeno rule (event-driven: the end of an impact accumulation; README, "Impact accumulation (Zeno)") has two
@@ -104,9 +105,9 @@ class ContactTolerances:
     #: [1] Moreau-Jean's step LCP: violation below which the time-stepper's last active set is taken without
     #: enumerating the others (round-off of a persistent contact); the event-driven scheme has no such hint
     lcp_hint: float = 1e-12
-    #: [weight] friction demand: a total normal force (or per time-step percussion over the step) below this
-    #: fraction of the weight carries no load, so the ratio |lambda_T| / lambda_N there is round-off over
-    #: round-off and is not counted; near a lift-off the demand therefore grows to at most ~1/demand_floor
+    #: [weight] friction demand (both schemes): a total normal force (or per time-step percussion over the step)
+    #: below this fraction of the weight carries no load, so the ratio |lambda_T| / lambda_N there is round-off
+    #: over round-off and is not counted; near a lift-off the demand therefore grows to at most ~1/demand_floor
     demand_floor: float = 1e-6
 
     def __post_init__(self):
