@@ -23,13 +23,13 @@ Why the two schemes use different values for what looks like one notion:
 
 The contact LCPs (`rocking_model.lcp`, through `rocking_model.contact`) of both schemes take the user's
 ``lcp_exact`` and ``lcp_hint``: the event-driven scheme's impact LCP (and its Zeno re-solves), uplift LCP
-(`contact.next_mode`, the mode after every event) and Painleve impact LCP; Moreau-Jean's step LCP. ``lcp_exact``
-tells an exact solution (an inexact one is reported, `inexact_contact`; with mu = inf the sticking LCP's mu -> inf
-limit is tried where it is inexact); with friction it also picks the solution (the first state combination,
-in the order of preference, that violates the conditions by less than it) and counts them (Painleve). ``lcp_hint``
-applies where a hint is given: Moreau-Jean's last closed set (taken within it, it is still exact only within
-``lcp_exact``); the event-driven scheme gives none. The forces of a
-mode held closed (`contact.mode_forces`) take neither: all its contacts are forced, one active set.
+(`contact.next_mode`, the mode after every event) and Painleve impact LCP; Moreau-Jean's step LCP.
+``lcp_exact`` tells an exact solution (an inexact one is reported, `inexact_contact`; with mu = inf the
+sticking LCP's mu -> inf limit is tried where it is inexact); with friction it also picks the solution (the
+first state combination, in the order of preference, that violates the conditions by less than it) and counts
+them (Painleve). ``lcp_hint`` applies where a hint is given: Moreau-Jean's last closed set (taken within it, it
+is still exact only within ``lcp_exact``); the event-driven scheme gives none. The forces of a mode held closed
+(`contact.mode_forces`) take neither: all its contacts are forced, one active set.
 
 The Zeno rule (event-driven: the end of an impact accumulation; README, "Impact accumulation (Zeno)") has two
 tests, applied after every impact to the corners at the ground, with two thresholds:
