@@ -260,3 +260,33 @@ def test_lcp_hint_takes_the_hint_within_it(engine):
             got[tol.lcp_hint] = (tuple(c["active"]), c["violation"])
     assert got[1e-12][0] == (0,) and got[1e-12][1] < 1e-12
     assert got[0.5][0] == (0, 1) and 0.15 < got[0.5][1] < 0.3
+
+
+def test_paradox_scene_reads_lcp_exact_in_both_engines():
+    """The uplift LCP in the scheme: the right corner sliding at 1 m/s at phi = -0.59 with mu = 1.45 (Painleve's
+    configuration) under ag = 30 m/s2. With the default lcp_exact no sliding or open motion is consistent (the
+    least violating, the open one, by 0.33): the stick-making impulse is applied (counted) and the block rocks
+    on the corner; with 0.5 the open combination counts as a solution and the corner leaves the ground (it
+    comes back at once: an impact, whose stick is the Painleve count).
+    The compiled engine takes the same decisions and reaches the same state as the Python in both."""
+    res = {}
+    for tol in (DEFAULT_TOLERANCES, LOOSE):
+        for engine in ENGINES:
+            block = RigidBlock(b=B, h=H, mu=1.45)
+            sim = Simulator(block, "event_driven", phi_0=PHI_P, on_report="raise", engine=engine, tolerances=tol)
+            state = sim.get_state()
+            state.update(mode=int(Mode.RIGHT_SLIDE_NEG), y=[PHI_P, 0.0, 0.0, -1.0])
+            sim.set_state(state)
+            if engine == "python":
+                q, v = sim.state()
+                sol = contact.next_mode(block, q, v, 30.0, 1e-9 * block.length_scale,
+                                        1e-10 * math.sqrt(G * block.length_scale), tolerances=tol)[1]
+                assert sol.exact == (tol is LOOSE) and 0.3 < sol.violation < 0.35 and sol.painleve != sol.exact
+            sim.advance(1e-4, 30.0)
+            res[tol.lcp_exact, engine] = (sim.outputs(), *sim.state())
+    for lcp_exact, contact_mode, impacts in ((1e-9, Mode.RIGHT, 0), (0.5, Mode.FLIGHT, 1)):
+        (o_py, q_py, v_py), (o_c, q_c, v_c) = res[lcp_exact, "python"], res[lcp_exact, "c"]
+        for o in (o_py, o_c):
+            assert (o["contact"], o["impacts"], o["painleve"]) == (contact_mode, impacts, 1)
+        np.testing.assert_allclose(q_c, q_py, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(v_c, v_py, rtol=0, atol=1e-12)
