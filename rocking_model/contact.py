@@ -30,7 +30,8 @@ def inverse_mass(model: "RockingModel", q: np.ndarray) -> np.ndarray:
 
 
 def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates, forced=(),
-           e_N: float | None = None, e_T: float | None = None, prefer=None) -> ContactSolution:
+           e_N: float | None = None, e_T: float | None = None, prefer=None,
+           tolerances: ContactTolerances = DEFAULT_TOLERANCES) -> ContactSolution:
     """Post-impact velocities from the impact LCP: Newton's law in the normal direction (coefficient e_N) and,
     on the contacts that take impulse, the tangential law of the model (`RockingModel.e_T`): the paper's
     sticking (e_T = 0, U_T+ = 0) or the tangential restitution U_T+ = -e_T U_T- of the energetically
@@ -39,7 +40,8 @@ def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates
     has no solution its mu -> inf limit (`solve_with_friction`).
 
     ``forced`` contacts are closed plastically (w_N = 0, e_N = e_T = 0 on them): the Zeno rule. ``prefer``:
-    the state (`rocking_model.lcp.STICK`, ...) tried first for every candidate where several solve it."""
+    the state (`rocking_model.lcp.STICK`, ...) tried first for every candidate where several solve it.
+    ``tolerances``: the scheme's (`solve_with_friction`)."""
     e = model.e_N if e_N is None else e_N
     et = model.e_T if e_T is None else e_T
     W_N, W_T = model.contact_jacobians(q)
@@ -57,19 +59,19 @@ def impact(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, candidates
     else:
         b_T = np.zeros(model.n_contacts)
     return solve_with_friction(model, inverse_mass(model, q), W_N, W_T, v_minus, b_N, b_T, candidates, forced,
-                               prefer=prefer)
+                               prefer=prefer, tolerances=tolerances)
 
 
 def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candidates,
            forced=(), slip_tol: float | None = None, count: bool = False, prefer=None,
-           ag_v: float = 0.0) -> ContactSolution:
+           ag_v: float = 0.0, tolerances: ContactTolerances = DEFAULT_TOLERANCES) -> ContactSolution:
     """Acceleration-level LCP: which of ``candidates`` stay closed (active), whether they stick or slide
     (Coulomb, a finite ``model.mu``, or where sticking has no solution its mu -> inf limit), and their
     contact forces. Candidates whose tangential velocity exceeds ``slip_tol`` [m/s] already slide: they
     can only open or keep sliding that way (None: none slides). ``count``: count the solutions (Painleve,
     `FrictionSolution`); ``prefer``: the state tried first for every candidate. ag, ag_v [m/s2]: the ground
     accelerations (ag_v positive upward; where g + ag_v < 0 the free motion leaves the ground and the LCP
-    returns flight)."""
+    returns flight). ``tolerances``: the scheme's (`solve_with_friction`)."""
     W_N, W_T = model.contact_jacobians(q)
     a_N, a_T = model.contact_drift(q, v)
     Minv = inverse_mass(model, q)
@@ -80,7 +82,7 @@ def uplift(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, candi
         sliding = {i: (1 if U_T[i] > 0.0 else -1) for i in set(candidates) | set(forced)
                    if abs(U_T[i]) > slip_tol}
     return solve_with_friction(model, Minv, W_N, W_T, acc_free, a_N, a_T, candidates, forced, sliding, count,
-                               prefer=prefer)
+                               prefer=prefer, tolerances=tolerances)
 
 
 def solve_with_friction(model: "RockingModel", Minv, W_N, W_T, v_free, b_N, b_T, candidates, forced=(),
@@ -92,7 +94,9 @@ def solve_with_friction(model: "RockingModel", Minv, W_N, W_T, v_free, b_N, b_T,
     mu (or contacts that already slide) the frictional LCP (`solve_friction_lcp`, which counts its solutions
     when ``count``). ``hint``: the contacts that were closed (a time-stepper's last step), tried first;
     ``prefer``: with friction, the state tried first for every candidate (a stuck contact that reached its
-    friction cone: the slide)."""
+    friction cone: the slide). ``tolerances``: the scheme's (`Simulator(tolerances=...)`, both schemes): its
+    ``lcp_exact`` tells an exact solution (and, with friction, which one is taken and how many are counted:
+    Painleve), its ``lcp_hint`` when the ``hint`` is taken without enumerating."""
     rtol = tolerances.lcp_exact
     mu = model.mu
     if math.isinf(mu) and not sliding:
@@ -194,16 +198,17 @@ def painleve_sticks(model: "RockingModel", q: np.ndarray, v_minus: np.ndarray, v
 
 
 def next_mode(model: "RockingModel", q: np.ndarray, v: np.ndarray, ag: float, gap_tol: float,
-              v_tol: float, prefer=None, ag_v: float = 0.0):
+              v_tol: float, prefer=None, ag_v: float = 0.0, tolerances: ContactTolerances = DEFAULT_TOLERANCES):
     """(mode, uplift solution) that follow a consistent state (q, v): the active set and the stick / slide
     states of the uplift LCP on the contacts at the ground at rest (`closed_candidates`); (FLIGHT-like mode
     of no closed contact, None) when there is none. ``v_tol`` [m/s] also tells a sliding contact. With
     friction the solutions are counted (Painleve: `FrictionSolution.n_solutions`); ``prefer``: see
-    `solve_with_friction`. ag, ag_v [m/s2]: the ground accelerations (ag_v positive upward)."""
+    `solve_with_friction`. ag, ag_v [m/s2]: the ground accelerations (ag_v positive upward). ``tolerances``: the
+    scheme's (`solve_with_friction`)."""
     cand = closed_candidates(model, q, v, gap_tol, v_tol)
     if not cand:
         return model.mode_of(()), None
-    sol = uplift(model, q, v, ag, cand, slip_tol=v_tol, count=True, prefer=prefer, ag_v=ag_v)
+    sol = uplift(model, q, v, ag, cand, slip_tol=v_tol, count=True, prefer=prefer, ag_v=ag_v, tolerances=tolerances)
     return model.mode_of(sol.active, solution_sigma(sol)), sol
 
 
@@ -222,7 +227,10 @@ def solution_sigma(sol: ContactSolution) -> int:
 def mode_forces(model: "RockingModel", mode, q: np.ndarray, v: np.ndarray, ag: float,
                 ag_v: float = 0.0) -> np.ndarray:
     """Normal contact forces [N] of the closed contacts of the sticking ``mode`` held closed (bilateral, stuck),
-    shape (n_contacts,); ag, ag_v [m/s2] the ground accelerations (ag_v positive upward)."""
+    shape (n_contacts,); ag, ag_v [m/s2] the ground accelerations (ag_v positive upward).
+
+    No tolerance to pass: every closed contact is forced, so the LCP has one active set and its forces do not
+    depend on ``lcp_exact`` (which would only flag them exact, a flag not read here) nor on ``lcp_hint``."""
     closed = model.closed_of(mode)
     if not closed:
         return np.zeros(model.n_contacts)

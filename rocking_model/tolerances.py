@@ -1,6 +1,7 @@
 """The numerical thresholds of the contact handling, named once, each with its reason and its unit.
 
-Both schemes read them from one `ContactTolerances` (`Simulator(..., tolerances=...)`); the defaults are
+Both schemes read them from one `ContactTolerances` (`Simulator(..., tolerances=...)`), in the Python reference
+and in the compiled engine alike (each field's comment names the scheme that reads it); the defaults are
 what every published figure of this package was computed with. Relative values are scaled by the model's
 length scale L [m] (`RockingModel.length_scale`: R = sqrt(b^2 + h^2) for the rigid block, sqrt(b^2 + h^2) of
 base half-width and column height for the flexible oscillator), its velocity scale sqrt(g L) [m/s] or its time
@@ -19,6 +20,16 @@ Why the two schemes use different values for what looks like one notion:
   Moreau-Jean step leaves O(dt * |f| / m) of residual velocity on corners it keeps closed through the
   theta-method's force average; ``step_rest_velocity`` = 1e-9 sqrt(g L) separates that from an approach
   that is an impact (the slowest impact of a rocking block at rest-tilt energies is some 1e-4 sqrt(g L)).
+
+The contact LCPs (`rocking_model.lcp`, through `rocking_model.contact`) of both schemes take the user's
+``lcp_exact`` and ``lcp_hint``: the event-driven scheme's impact LCP (and its Zeno re-solves), uplift LCP
+(`contact.next_mode`, the mode after every event) and Painleve impact LCP; Moreau-Jean's step LCP.
+``lcp_exact`` tells an exact solution (an inexact one is reported, `inexact_contact`; with mu = inf the
+sticking LCP's mu -> inf limit is tried where it is inexact); with friction it also picks the solution (the
+first state combination, in the order of preference, that violates the conditions by less than it) and counts
+them (Painleve). ``lcp_hint`` applies where a hint is given: Moreau-Jean's last closed set (taken within it, it
+is still exact only within ``lcp_exact``); the event-driven scheme gives none. The forces of a mode held closed
+(`contact.mode_forces`) take neither: all its contacts are forced, one active set.
 
 The Zeno rule (event-driven: the end of an impact accumulation; README, "Impact accumulation (Zeno)") has two
 tests, applied after every impact to the corners at the ground, with two thresholds:
@@ -87,15 +98,16 @@ class ContactTolerances:
     #: [1] event-driven: sub-intervals a step is cut into when a contact function may dip below zero and
     #: come back within it (the dip and earlier-event searches)
     sub_samples: int = 16
-    #: [1] contact LCP: a solution violating the conditions by less than this (relative to the problem's
-    #: scales) is exact; above it the least-violating active set is returned and reported as inexact
+    #: [1] contact LCPs of both schemes: a solution violating the conditions by less than this (relative to the
+    #: problem's scales) is exact; above it the least-violating active set is returned and reported as inexact
+    #: (with friction: the first combination of contact states within it is taken; module docstring)
     lcp_exact: float = 1e-9
-    #: [1] contact LCP: violation below which the time-stepper's last active set is taken without
-    #: enumerating the others (round-off of a persistent contact)
+    #: [1] Moreau-Jean's step LCP: violation below which the time-stepper's last active set is taken without
+    #: enumerating the others (round-off of a persistent contact); the event-driven scheme has no such hint
     lcp_hint: float = 1e-12
-    #: [weight] friction demand: a total normal force (or per time-step percussion over the step) below this
-    #: fraction of the weight carries no load, so the ratio |lambda_T| / lambda_N there is round-off over
-    #: round-off and is not counted; near a lift-off the demand therefore grows to at most ~1/demand_floor
+    #: [weight] friction demand (both schemes): a total normal force (or per time-step percussion over the step)
+    #: below this fraction of the weight carries no load, so the ratio |lambda_T| / lambda_N there is round-off
+    #: over round-off and is not counted; near a lift-off the demand therefore grows to at most ~1/demand_floor
     demand_floor: float = 1e-6
 
     def __post_init__(self):

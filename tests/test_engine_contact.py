@@ -276,6 +276,7 @@ def test_bad_problems_raise():
 # ---------------------------------------------------------------------------------------------- contact.py
 from rocking_model import contact  # noqa: E402
 from rocking_model.modes import CLOSED, mode_from_closed  # noqa: E402
+from rocking_model.tolerances import DEFAULT_TOLERANCES  # noqa: E402
 
 
 class ConstantModel:
@@ -713,22 +714,24 @@ class ContactSpy:
     def compare(self, py, c, q):
         self.ties += compare_solution(py, c, W_T=self.model.contact_jacobians(q)[1])
 
-    def impact(self, model, q, v_minus, candidates, forced=(), e_N=None, e_T=None, prefer=None):
-        py = contact.impact(model, q, v_minus, candidates, forced, e_N, e_T, prefer)
+    def impact(self, model, q, v_minus, candidates, forced=(), e_N=None, e_T=None, prefer=None,
+               tolerances=DEFAULT_TOLERANCES):
+        py = contact.impact(model, q, v_minus, candidates, forced, e_N, e_T, prefer, tolerances=tolerances)
         e = None if e_N is None and e_T is None else (model.e_N if e_N is None else e_N,
                                                       model.e_T if e_T is None else e_T)
         c = _engine.contact_model_call("impact", self.spec, list(map(float, q)), list(map(float, v_minus)),
                                        [int(i) for i in candidates], [int(i) for i in forced],
-                                       -1 if prefer is None else int(prefer), e)
+                                       -1 if prefer is None else int(prefer), e, tolerances.lcp_exact,
+                                       tolerances.lcp_hint)
         self.compare(py, c, q)
         self.note("impact")
         return py
 
-    def next_mode(self, model, q, v, ag, gap_tol, v_tol, prefer=None, ag_v=0.0):
-        mode, sol = contact.next_mode(model, q, v, ag, gap_tol, v_tol, prefer, ag_v=ag_v)
+    def next_mode(self, model, q, v, ag, gap_tol, v_tol, prefer=None, ag_v=0.0, tolerances=DEFAULT_TOLERANCES):
+        mode, sol = contact.next_mode(model, q, v, ag, gap_tol, v_tol, prefer, ag_v=ag_v, tolerances=tolerances)
         c_mode, c_sol = _engine.contact_model_call("next_mode", self.spec, list(map(float, q)), list(map(float, v)),
                                                    float(ag), gap_tol, v_tol, -1 if prefer is None else int(prefer),
-                                                   float(ag_v))
+                                                   float(ag_v), tolerances.lcp_exact, tolerances.lcp_hint)
         assert (sol is None) == (c_sol is None)
         if sol is None or not compare_solution(sol, c_sol, W_T=model.contact_jacobians(q)[1]):
             assert int(mode) == c_mode

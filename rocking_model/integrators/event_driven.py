@@ -726,7 +726,7 @@ class EventDriven(Integrator):
         model = self.model
         W_N, _ = model.contact_jacobians(q)
         forced = [i for i in cand if i in closed]
-        sol = impact(model, q, v, cand, forced=tuple(forced))
+        sol = impact(model, q, v, cand, forced=tuple(forced), tolerances=self.tolerances)
         while True:
             U_plus = W_N.T @ sol.v
             # velocity test (a corner that takes impulse and stays at rest needs no closure)
@@ -744,7 +744,7 @@ class EventDriven(Integrator):
             if not new:
                 break
             forced += new
-            sol = impact(model, q, v, cand, forced=tuple(forced))
+            sol = impact(model, q, v, cand, forced=tuple(forced), tolerances=self.tolerances)
         if not sol.exact:
             self.report("inexact_contact", t, inexact_message(sol, t, "impact LCP"))
         return sol.v
@@ -759,7 +759,8 @@ class EventDriven(Integrator):
         solution; with friction ``prefer`` (a sliding state) is tried first for the closed contacts. An inexact
         solve is reported unless it is a Painleve situation (which `_decide` resolves)."""
         ag, ag_v = ag_t
-        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer, ag_v=ag_v)
+        mode, sol = next_mode(self.model, q, v, ag, self.gap_tol, self.v_tol, prefer=prefer, ag_v=ag_v,
+                              tolerances=self.tolerances)
         if sol is not None and not sol.exact and not sol.painleve:
             self.report("inexact_contact", t, inexact_message(sol, t, "uplift LCP"))
         return mode, sol
@@ -781,7 +782,7 @@ class EventDriven(Integrator):
             self.painleve += 1
             sol_i = impact(self.model, q, v, sol.active or closed_candidates(self.model, q, v, self.gap_tol,
                                                                              self.v_tol), e_N=0.0, e_T=0.0,
-                           prefer=STICK)
+                           prefer=STICK, tolerances=self.tolerances)
             if not sol_i.exact:
                 self.report("inexact_contact", t, inexact_message(sol_i, t, "Painleve impact LCP"))
             v = sol_i.v

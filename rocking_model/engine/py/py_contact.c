@@ -523,14 +523,17 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
     nd = m.ops->n_dof;
     n = m.ops->n_contacts;
     if (strcmp(name, "impact") == 0) {
-        /* (q, v_minus, candidates, forced, prefer, e) with e None or (e_N, e_T) */
+        /* (q, v_minus, candidates, forced, prefer, e[, lcp_exact, lcp_hint]) with e None or (e_N, e_T) */
         PyObject *q, *v, *cand, *forced, *e;
         double qa[RK_MAX_DOF], va[RK_MAX_DOF];
+        rk_tolerances tol = RK_DEFAULT_TOLERANCES;
         rk_contact_args a;
         int prefer;
-        if (!PyArg_ParseTuple(rest, "OOOOiO", &q, &v, &cand, &forced, &prefer, &e))
+        if (!PyArg_ParseTuple(rest, "OOOOiO|dd", &q, &v, &cand, &forced, &prefer, &e, &tol.lcp_exact,
+                              &tol.lcp_hint))
             goto done;
         rk_contact_args_default(&a);
+        a.tolerances = &tol;
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd
             || get_set(forced, "forced", &a.forced, NULL) < 0)
             goto bad_vec;
@@ -551,16 +554,18 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         }
         res = narrow_dict(&sol, nd, n);
     } else if (strcmp(name, "uplift") == 0) {
-        /* (q, v, ag, candidates, forced, slip_tol or None, count, prefer[, ag_v]) */
+        /* (q, v, ag, candidates, forced, slip_tol or None, count, prefer[, ag_v, lcp_exact, lcp_hint]) */
         PyObject *q, *v, *cand, *forced, *slip;
         double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, ag_v = 0.0;
+        rk_tolerances tol = RK_DEFAULT_TOLERANCES;
         rk_contact_args a;
         rk_set c;
         int count, prefer;
-        if (!PyArg_ParseTuple(rest, "OOdOOOpi|d", &q, &v, &ag, &cand, &forced, &slip, &count, &prefer,
-                              &ag_v))
+        if (!PyArg_ParseTuple(rest, "OOdOOOpi|ddd", &q, &v, &ag, &cand, &forced, &slip, &count, &prefer,
+                              &ag_v, &tol.lcp_exact, &tol.lcp_hint))
             goto done;
         rk_contact_args_default(&a);
+        a.tolerances = &tol;
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
             goto bad_vec;
         if (get_set(cand, "candidates", &c, NULL) < 0 || get_set(forced, "forced", &a.forced, NULL) < 0)
@@ -684,12 +689,14 @@ static PyObject *py_model_call(PyObject *self, PyObject *args)
         PyObject *q, *v, *d;
         double qa[RK_MAX_DOF], va[RK_MAX_DOF], ag, gap_tol, v_tol, ag_v = 0.0;
         int prefer, mode, has;
-        /* (q, v, ag, gap_tol, v_tol, prefer[, ag_v]) */
-        if (!PyArg_ParseTuple(rest, "OOdddi|d", &q, &v, &ag, &gap_tol, &v_tol, &prefer, &ag_v))
+        rk_tolerances tol = RK_DEFAULT_TOLERANCES;
+        /* (q, v, ag, gap_tol, v_tol, prefer[, ag_v, lcp_exact, lcp_hint]) */
+        if (!PyArg_ParseTuple(rest, "OOdddi|ddd", &q, &v, &ag, &gap_tol, &v_tol, &prefer, &ag_v, &tol.lcp_exact,
+                              &tol.lcp_hint))
             goto done;
         if (get_vector(q, "q", qa, nd) != nd || get_vector(v, "v", va, nd) != nd)
             goto bad_vec;
-        if (rk_next_mode(&m, qa, va, ag, ag_v, gap_tol, v_tol, prefer, &mode, &sol, &has, &err) != RK_OK) {
+        if (rk_next_mode(&m, qa, va, ag, ag_v, gap_tol, v_tol, prefer, &tol, &mode, &sol, &has, &err) != RK_OK) {
             raise_err(&err);
             goto done;
         }

@@ -3,8 +3,9 @@
  * Painleve configuration (sliding_delassus, painleve_sticks), the mode that follows a state (next_mode,
  * solution_sigma) and the forces of a sticking mode held closed (mode_forces).
  *
- * As the Python: impact, uplift and mode_forces solve with the default tolerances (RK_DEFAULT_TOLERANCES)
- * whatever the user's; only a caller of rk_solve_with_friction (Moreau-Jean) passes its own (DESIGN.md 10).
+ * As the Python: impact, uplift and next_mode solve with the caller's tolerances (rk_contact_args.tolerances,
+ * rk_next_mode's argument; NULL: RK_DEFAULT_TOLERANCES), both schemes pass the user's; mode_forces needs none
+ * (every closed contact forced: one active set, forces independent of lcp_exact and lcp_hint).
  * The numpy products (W^T v, M^-1 f, the Delassus blocks) are plain loops in index order (DESIGN.md 7.4). */
 #include "rk_contact.h"
 
@@ -199,6 +200,7 @@ rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, r
     p.forced = a->forced;
     rk_contact_args_default(&args);
     args.prefer = a->prefer;
+    args.tolerances = a->tolerances;
     return rk_solve_with_friction(m, &p, &args, out, err);
 }
 
@@ -241,6 +243,7 @@ rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double 
     p.forced = a->forced;
     args.count = a->count;
     args.prefer = a->prefer;
+    args.tolerances = a->tolerances;
     return rk_solve_with_friction(m, &p, &args, out, err);
 }
 
@@ -383,8 +386,8 @@ int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts)
 }
 
 rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double gap_tol,
-                       double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
-                       rk_error *err)
+                       double v_tol, int prefer, const rk_tolerances *tolerances, int *mode, rk_lcp_solution *sol,
+                       int *has_solution, rk_error *err)
 {
     rk_set cand = rk_closed_candidates(m, q, v, gap_tol, v_tol);
     rk_contact_args a;
@@ -399,6 +402,7 @@ rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, doub
     a.slip_tol = v_tol;
     a.count = 1;
     a.prefer = prefer;
+    a.tolerances = tolerances;
     st = rk_uplift(m, q, v, ag, ag_v, cand, &a, sol, err);
     if (st != RK_OK)
         return st;
@@ -438,7 +442,7 @@ rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const dou
     p.b_T = a_T;
     p.candidates = closed;
     p.forced = closed;
-    p.rtol = RK_DEFAULT_TOLERANCES.lcp_exact;
+    p.rtol = RK_DEFAULT_TOLERANCES.lcp_exact;   /* sets sol.exact only, not read: one active set (all forced) */
     p.mu = INFINITY;
     st = rk_solve_contact_lcp(&p, &sol, err);
     if (st != RK_OK)

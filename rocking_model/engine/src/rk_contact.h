@@ -112,8 +112,8 @@ typedef struct rk_contact_args {
     int has_slip_tol;           /**< uplift: ``slip_tol`` given (not None) */
     double slip_tol;            /**< [m/s] */
     const int *sliding;         /**< solve_with_friction ``sliding`` (NULL: None) */
-    const rk_tolerances *tolerances;  /**< solve_with_friction ``tolerances``; NULL: RK_DEFAULT_TOLERANCES
-                                           (what contact.impact / uplift / mode_forces always pass) */
+    const rk_tolerances *tolerances;  /**< impact / uplift / solve_with_friction ``tolerances`` (lcp_exact,
+                                           lcp_hint); NULL: RK_DEFAULT_TOLERANCES. Both schemes pass the user's */
 } rk_contact_args;
 
 /** The defaults: nothing forced, prefer -1, no hint, no e override, count 0, no slip_tol, no sliding,
@@ -142,10 +142,11 @@ double rk_sliding_delassus(const rk_model *m, const double *q, int i, double sig
 rk_set rk_painleve_sticks(const rk_model *m, const double *q, const double *v_minus, const double *v_plus,
                           rk_set candidates, double v_tol);
 /** contact.next_mode: the mode that follows a consistent state, and whether an uplift solution was computed
- *  (*has_solution 0: no candidate, the mode of no closed contact, sol untouched). prefer: -1 or a state. */
+ *  (*has_solution 0: no candidate, the mode of no closed contact, sol untouched). prefer: -1 or a state;
+ *  tolerances: the uplift LCP's (``tolerances``; NULL: RK_DEFAULT_TOLERANCES). */
 rk_status rk_next_mode(const rk_model *m, const double *q, const double *v, double ag, double ag_v, double gap_tol,
-                       double v_tol, int prefer, int *mode, rk_lcp_solution *sol, int *has_solution,
-                       rk_error *err);
+                       double v_tol, int prefer, const rk_tolerances *tolerances, int *mode, rk_lcp_solution *sol,
+                       int *has_solution, rk_error *err);
 /** contact.solution_sigma: +1, -1 or 0. */
 int rk_solution_sigma(const rk_lcp_solution *sol, int n_contacts);
 /** contact.mode_forces: normal forces [N] of the closed contacts of a sticking mode held closed. */

@@ -494,6 +494,7 @@ static rk_status ed_impact_velocity(rk_engine *e, const double *q, const double 
     m->ops->contact_jacobians(m, q, W_N, W_T);
     rk_contact_args_default(&a);
     a.forced = forced;
+    a.tolerances = &e->options.tolerances;
     ED_TRY(rk_impact(m, q, v, cand, &a, &sol, err));
     for (;;) {
         rk_set new_ = 0;
@@ -557,7 +558,8 @@ static rk_status ed_select_mode(rk_engine *e, const double *q, const double *v, 
                                 int prefer, int *mode, rk_lcp_solution *sol, int *has_sol, rk_error *err)
 {
     rk_ed_state *s = ED(e);
-    ED_TRY(rk_next_mode(&e->model, q, v, ag_t, av_t, s->gap_tol, s->v_tol, prefer, mode, sol, has_sol, err));
+    ED_TRY(rk_next_mode(&e->model, q, v, ag_t, av_t, s->gap_tol, s->v_tol, prefer, &e->options.tolerances, mode, sol,
+                        has_sol, err));
     if (*has_sol && !sol->exact && !rk_lcp_painleve(sol))
         ed_report_inexact(e, sol, t, "uplift LCP");
     return RK_OK;
@@ -586,6 +588,7 @@ static rk_status ed_decide(rk_engine *e, const double *q, const double *v, doubl
         a.e_N = 0.0;
         a.e_T = 0.0;
         a.prefer = RK_STICK;
+        a.tolerances = &e->options.tolerances;
         ED_TRY(rk_impact(m, q, v, cands, &a, &sol_i, err));
         if (!sol_i.exact)
             ed_report_inexact(e, &sol_i, t, "Painleve impact LCP");
