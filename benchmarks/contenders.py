@@ -31,10 +31,12 @@ MIN_TOTAL = 0.5  # s of timed runs per setting at least (many repeats of a short
 MAX_REPEATS = 10000  # bound on the repeats of a very short run
 
 
-def timed(fn, repeats: int = 3, budget: float = 6.0, min_total: float = MIN_TOTAL):
+def timed(fn, repeats: int = 3, budget: float = 6.0, min_total: float = MIN_TOTAL, post=None):
     """Run ``fn`` with the garbage collector disabled during each run, at least ``repeats`` times and until the
     runs took ``min_total`` seconds, but no more once they took ``budget`` seconds (at least once); return
-    (result of the last run, list of wall times [s]). Every contender is timed by this one function."""
+    (result of the last run, list of wall times [s]), the result passed through ``post`` (untimed: the
+    benchmark's own bookkeeping, e.g. `outputs_of` a package Result) when given. Every contender is timed by
+    this one function."""
     times, out = [], None
     enabled = gc.isenabled()
     while True:
@@ -48,7 +50,7 @@ def timed(fn, repeats: int = 3, budget: float = 6.0, min_total: float = MIN_TOTA
                 gc.enable()
         total = sum(times)
         if total > budget or len(times) >= MAX_REPEATS or (len(times) >= max(1, repeats) and total >= min_total):
-            return out, times
+            return (out if post is None else post(out)), times
 
 
 def grid_of(scene: Scene) -> np.ndarray:
@@ -74,12 +76,21 @@ def _outputs(res) -> dict:
     return out
 
 
+def package_result(scene: Scene, scheme: str, engine: str = "python", **settings):
+    """One run of ``simulate`` (the public API, the model built as a user builds it) on the scene's grid, on the
+    Python engine (the reference implementation) or the compiled one (``engine="c"``): its `Result`. This is
+    what the benchmark times (`timed(..., post=outputs_of)`)."""
+    return simulate(scene.model(), scene.ground_motion(), scene.t_end, scheme=scheme, output_interval=scene.grid,
+                    hold="exact", engine=engine, **scene.initial, **settings)
+
+
+#: a package Result as the benchmark's dict of arrays (untimed bookkeeping)
+outputs_of = _outputs
+
+
 def run_package(scene: Scene, scheme: str, engine: str = "python", **settings) -> dict:
-    """One run of ``simulate`` (the public API) on the scene's grid, on the Python engine (the reference
-    implementation) or the compiled one (``engine="c"``)."""
-    res = simulate(scene.model(), scene.ground_motion(), scene.t_end, scheme=scheme, output_interval=scene.grid,
-                   hold="exact", engine=engine, **scene.initial, **settings)
-    return _outputs(res)
+    """`package_result` as the benchmark's dict of arrays."""
+    return _outputs(package_result(scene, scheme, engine, **settings))
 
 
 def reference(scene: Scene, hold: str = "exact") -> dict:

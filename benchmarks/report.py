@@ -260,8 +260,8 @@ def write_report(res, docs: Path) -> Path:
       f"timed run (no `gc.collect()` before it), runs repeated until they took {res.get('min_total', 0.5):g} s (at least "
       f"{res['repeats']}, no more once a setting's runs took {res['budget']:g} s; the count is in the tables), and the "
       "minimum reported (the median too); single process, one contender at a time, `time.perf_counter` around the "
-      "whole public call (`simulate(...)` for the package, on the Python engine and on the compiled one with "
-      "`engine=\"c\"`; the full restart loop for the baseline; the stepping loop incl. model set-up for Siconos; the "
+      "whole public call (`simulate(...)` for the package, the model built inside, on the Python engine and on the "
+      "compiled one with `engine=\"c\"`; the full restart loop for the baseline; the stepping loop incl. model set-up for Siconos; the "
       "stepping loop for the FMUs).")
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))

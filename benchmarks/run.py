@@ -105,11 +105,13 @@ def bench_scene(scene: S.Scene, args) -> dict:
 
     reps, budget = args.repeats, args.budget
     for dt in scene.mj_dts:
-        sol, times = C.timed(lambda: C.run_package(scene, "moreau_jean", dt_max=dt), reps, budget)
+        sol, times = C.timed(lambda: C.package_result(scene, "moreau_jean", dt_max=dt), reps, budget,
+                             post=C.outputs_of)
         out["entries"].append(_entry("moreau_jean", "package Moreau-Jean", {"dt_max": dt}, times, sol, ref, names,
                                      window))
     for tol in scene.ed_tols:
-        sol, times = C.timed(lambda: C.run_package(scene, "event_driven", tolerance=tol), reps, budget)
+        sol, times = C.timed(lambda: C.package_result(scene, "event_driven", tolerance=tol), reps, budget,
+                             post=C.outputs_of)
         out["entries"].append(_entry("event_driven", "package event-driven", {"tolerance": tol}, times, sol, ref,
                                      names, window))
     log(f"  package sweeps done ({time.perf_counter() - t0:.0f} s)")
@@ -118,12 +120,13 @@ def bench_scene(scene: S.Scene, args) -> dict:
     # 1e-5 s: on the pulse below overturning the error of the first-order scheme is the shift of the late impacts,
     # 1.0e-3 rad at 2e-5 s and 2e-4 rad at 1e-5 s, where Siconos' Moreau-Jean reaches 1e-3 rad)
     for dt in tuple(scene.mj_dts) + (() if args.quick else (1e-4, 5e-5, 2e-5, 1e-5)):
-        sol, times = C.timed(lambda: C.run_package(scene, "moreau_jean", engine="c", dt_max=dt), reps, budget)
+        sol, times = C.timed(lambda: C.package_result(scene, "moreau_jean", engine="c", dt_max=dt), reps,
+                             budget, post=C.outputs_of)
         out["entries"].append(_entry("c_moreau_jean", "compiled Moreau-Jean", {"dt_max": dt}, times, sol, ref,
                                      names, window))
     for tol in scene.ed_tols:
-        sol, times = C.timed(lambda: C.run_package(scene, "event_driven", engine="c", tolerance=tol), reps,
-                             budget)
+        sol, times = C.timed(lambda: C.package_result(scene, "event_driven", engine="c", tolerance=tol), reps,
+                             budget, post=C.outputs_of)
         out["entries"].append(_entry("c_event_driven", "compiled event-driven", {"tolerance": tol}, times, sol,
                                      ref, names, window))
     log(f"  compiled sweeps done ({time.perf_counter() - t0:.0f} s)")

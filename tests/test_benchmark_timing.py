@@ -42,3 +42,11 @@ def test_short_runs_repeated_long_runs_once():
 
 def test_tables_compare_the_minimum():
     assert C.best([3.0, 1.0, 2.0]) == 1.0
+
+
+def test_post_is_applied_once_to_the_last_result_outside_the_timed_runs():
+    calls, seen = [], []
+    out, ts = C.timed(lambda: calls.append(1) or len(calls), repeats=4, budget=1.0, min_total=0.0,
+                      post=lambda r: seen.append(gc.isenabled()) or r * 10)
+    assert len(ts) == len(calls) == 4
+    assert out == 40 and seen == [True]
