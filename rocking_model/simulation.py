@@ -60,6 +60,8 @@ DT_MIN_REL = 1e-6
 #: the types of a number that `Simulator.advance` passes to the compiled engine as is (a non-finite numpy float
 #: takes the checked path: its message names it as the Python does, np.float64(nan))
 _NUMBERS = (float, int, np.float64)
+#: the accepted values of ``Simulator(on_report=...)``
+_ON_REPORT = {"warn": "warn", "raise": "raise", "ignore": "ignore"}
 
 #: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
 #: event-driven, the base's offset; states of version 1 are refused by their version)
@@ -144,8 +146,7 @@ class Simulator:
                              f"1/p = {model.time_scale:.3g} s")
         if not isinstance(tolerances, ContactTolerances):
             raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
-        self.on_report = check_choice("on_report", on_report, {"warn": "warn", "raise": "raise",
-                                                               "ignore": "ignore"})
+        self.on_report = check_choice("on_report", on_report, _ON_REPORT)
         options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
                                 impact_log_size=impact_log_size, tolerances=tolerances)
         self.engine = check_choice("engine", engine, ENGINES)
@@ -481,7 +482,12 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     dt = check_real("output_interval", output_interval, lo=0.0, lo_open=True)
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
     # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
-    times = np.minimum(t0 + dt * np.arange(n + 1) if t0 else dt * np.arange(n + 1), t_end)   # (0 + x is x)
+    # (0 + x is x; k dt in place: the same products as dt * np.arange(n + 1), without two temporaries)
+    times = np.arange(n + 1, dtype=float)
+    times *= dt
+    if t0:
+        times += t0
+    np.minimum(times, t_end, out=times)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples

@@ -215,6 +215,31 @@ def test_rigid_full_coordinate_functions(kw, state, ag):
 
 @SETTINGS
 @given(rigid_params(), STATE, AG)
+def test_rigid_monitor_one_is_the_monitors_value(kw, state, ag):
+    """rk_mode_monitor_one (the event location's single-function evaluation, issue 21): in the rocking modes the
+    open corner's gap and the overturning margin alone, without ag and the pivot's force; each value it gives is
+    the one rk_mode_monitors writes, bit for bit (with the friction cone when mu is finite); the rest is left to
+    rk_mode_monitors (None)."""
+    model = RigidBlock(**kw)
+    p = values_of(model)
+    for mode in STICK:
+        y = rigid_state(model, mode, *state)
+        g = call("rigid", p, "monitors_only", mode=mode, a=y, ag=ag)
+        one = call("rigid", p, "monitor_one", mode=mode, a=y, ag=ag)
+        assert len(one) == len(g)
+        for gi, oi in zip(g, one):
+            if oi is not None:
+                same([oi], [gi])
+        if mode in (Mode.LEFT, Mode.RIGHT):
+            gap = 1 if mode == Mode.LEFT else 0     # the open corner: the right one rocking on the left pivot
+            assert one[gap] is not None and one[-1] is not None
+            assert one[1 - gap] is None             # the pivot's normal force needs ag and the trigonometry
+        else:
+            assert all(oi is None for oi in one)
+
+
+@SETTINGS
+@given(rigid_params(), STATE, AG)
 def test_rigid_sticking_modes_bitwise(kw, state, ag):
     """FULL, LEFT, RIGHT, FLIGHT: embed, mode_jacobian, the closures' rhs, monitors and totals, mode_outputs,
     contact_forces: the C closed forms equal the Python's bit for bit."""

@@ -227,7 +227,12 @@ class CompiledIntegrator(Integrator):
         names = _PARAM_NAMES.get(cls)
         if names is None:
             names = _PARAM_NAMES[cls] = tuple(p.name for p in cls.parameters())
-        return cls.__name__, [float(getattr(model, name)) for name in names]
+        d = model.__dict__
+        try:
+            values = [d[name] for name in names]      # the dataclass fields themselves (checked floats)
+        except KeyError:
+            values = [getattr(model, name) for name in names]
+        return cls.__name__, [x if type(x) is float else float(x) for x in values]
 
     def _engine_kwargs(self):
         o = self._options
@@ -367,7 +372,8 @@ class CompiledIntegrator(Integrator):
         return id(ag)
 
     def sample(self, times, ag, max_steps: int | None = None):
-        times = np.ascontiguousarray(times, dtype=float)
+        if type(times) is not np.ndarray or times.dtype != np.float64 or not times.flags.c_contiguous:
+            times = np.ascontiguousarray(times, dtype=float)
         n = times.size + 1
         names = self._names
         modes = np.empty(n, dtype=np.intc)

@@ -370,6 +370,23 @@ static PyObject *py_model_call(PyObject *self, PyObject *args, PyObject *kwargs)
         int ng = rk_mode_monitors(&m, mode, a, ag, ag_v, x1, NULL, NULL);
         return list_of(x1, ng);
     }
+    if (strcmp(name, "monitor_one") == 0) {    /* rk_mode_monitor_one for each index: its value or None */
+        int ng = rk_mode_monitors(&m, mode, a, ag, ag_v, x1, NULL, NULL);
+        PyObject *lst = PyList_New(ng);
+        if (lst == NULL)
+            return NULL;
+        for (i = 0; i < ng; i++) {
+            double gi = NAN;
+            PyObject *item = rk_mode_monitor_one(&m, mode, a, i, &gi) ? PyFloat_FromDouble(gi)
+                                                                       : (Py_INCREF(Py_None), Py_None);
+            if (item == NULL) {
+                Py_DECREF(lst);
+                return NULL;
+            }
+            PyList_SET_ITEM(lst, i, item);
+        }
+        return lst;
+    }
     if (strcmp(name, "outputs_of") == 0) {     /* a = y, ag = shift */
         rk_outputs_of(&m, mode, a, ag, x1);
         return list_of(x1, m.ops->n_outputs);

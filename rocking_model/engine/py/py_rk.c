@@ -524,6 +524,7 @@ static test_setup *event_setup(PyObject *setup, rk_event_ctx *c)
     c->G = test_G;
     c->G_ctx = &ts->ev;
     c->n_events = ts->ev.n_events;
+    c->G_one = NULL;
     return ts;
 }
 

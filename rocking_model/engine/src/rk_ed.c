@@ -130,8 +130,17 @@ typedef struct ed_fn {
     int constant;               /**< both components constant (TwoComponentMotion.constant) */
     double a0;                  /**< ag.value of a constant input */
     double v0;                  /**< ag.vertical.value of a constant input (0 without vertical component) */
+    int pure;                   /**< ag(t) (and ag_v(t)) calls no callback: evaluating it or not changes nothing */
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
 } ed_fn;
+
+/** a motion evaluated without side effects or failure (no Python callback inside) */
+static int ed_motion_pure(const rk_motion *m)
+{
+    if (m->kind == RK_MOTION_CALLBACK)
+        return 0;
+    return m->kind != RK_MOTION_SCALED || ed_motion_pure(m->inner);
+}
 
 static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motion *ag_v)
 {
@@ -143,6 +152,7 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     /* (ScaledMotion.value = factor * motion(0.0); ConstantMotion.value = the value) */
     f->a0 = f->constant ? rk_motion_eval(ag, 0.0, NULL, NULL) : 0.0;
     f->v0 = f->constant && ag_v != NULL ? rk_motion_eval(ag_v, 0.0, NULL, NULL) : 0.0;
+    f->pure = f->constant || (ed_motion_pure(ag) && (ag_v == NULL || ed_motion_pure(ag_v)));
     rk_error_clear(&f->err);
 }
 
@@ -198,6 +208,19 @@ static rk_status ed_G(void *ctx, double t, const double *y, double *g)
     if (st != RK_OK)
         return st;
     rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL);
+    return RK_OK;
+}
+
+/** G(t, y)[i] alone where the model has it without ag and the forces (a corner gap, the overturning margin); a
+ *  motion with a callback is still called, as G calls it (the same calls, the same failures) */
+static rk_status ed_G_one(void *ctx, int i, double t, const double *y, double *gi, int *done)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    *done = rk_mode_monitor_one(&f->e->model, f->mode, y, i, gi);
+    if (*done && !f->pure) {
+        double a, av;
+        return ed_ag(f, t, &a, &av);
+    }
     return RK_OK;
 }
 
@@ -961,6 +984,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     c.G = ed_G;
     c.G_ctx = &f;
     c.n_events = ev.n;
+    c.G_one = ed_G_one;
     for (i = 0; i < ev.n; i++) {
         ev.armed[i] = g_prev[i] > 0.0;
         ev.watch[i] = !ev.armed[i] && g_prev[i] > -s->event_tol;

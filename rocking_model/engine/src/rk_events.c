@@ -33,11 +33,39 @@ rk_status rk_event_eval(rk_event_ctx *c, double t, double *g, rk_error *err)
     return RK_OK;
 }
 
-/* function i of G on the dense output, shifted up by shift */
+/* function i of G on the dense output, shifted up by shift (G_one when it has that function alone: the same value
+ * without the others, e.g. a corner gap without the contact force's trigonometry) */
 static rk_status eval_one(rk_event_ctx *c, int i, double shift, double t, double *out, rk_error *err)
 {
     double g[RK_MAX_EVENTS];
-    rk_status st = rk_event_eval(c, t, g, err);
+    rk_status st;
+    if (c->G_one != NULL) {
+        double y[RK_MAX_Y], gi = 0.0;
+        int done = 0;
+        rk_error_clear(err);
+        st = rk_dense_eval(c->stepper, t, y, err);
+        if (st != RK_OK)
+            return st;
+        st = c->G_one(c->G_ctx, i, t, y, &gi, &done);
+        if (st != RK_OK) {
+            if (err != NULL && err->status == st && err->message[0] != '\0')
+                return st;
+            return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
+        }
+        if (done) {
+            *out = gi + shift;
+            return RK_OK;
+        }
+        st = c->G(c->G_ctx, t, y, g);
+        if (st != RK_OK) {
+            if (err != NULL && err->status == st && err->message[0] != '\0')
+                return st;
+            return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
+        }
+        *out = g[i] + shift;
+        return RK_OK;
+    }
+    st = rk_event_eval(c, t, g, err);
     if (st != RK_OK)
         return st;
     *out = g[i] + shift;
@@ -56,7 +84,7 @@ rk_status rk_locate(rk_event_ctx *c, int i, double shift, double a, double ga, d
                        c->n_events);
     while (b - a > xtol) {
         int clamped = 0;
-        double t, gt;
+        double t, gt = 0.0;
         rk_status st;
         if (++iter > LOCATE_MAX_ITER)
             return rk_fail(err, RK_ERR_INTERNAL,

@@ -606,5 +606,6 @@ const rk_model_ops RK_FLEXIBLE_OSCILLATOR = {
     flexible_mode_dofs, flexible_embed, flexible_mode_jacobian, flexible_mode_rhs, flexible_mode_monitors,
     flexible_mode_outputs, flexible_contact_forces,
     flexible_rest_position, flexible_energy, flexible_outputs, flexible_initial_state,
-    flexible_classical_impact_velocity, flexible_work_note
+    flexible_classical_impact_velocity, flexible_work_note,
+    NULL        /* mode_monitor_one: none (locate evaluates all of G) */
 };

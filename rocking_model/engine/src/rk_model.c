@@ -621,6 +621,20 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
     }
 }
 
+int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, double *gi)
+{
+    int nc = m->ops->n_contacts, cone;
+    if (m->ops->mode_monitor_one == NULL || m->ops->mode_monitors == NULL || is_sliding(m, mode))
+        return 0;
+    /* rk_mode_monitors' layout: the contacts' functions, [the friction cone,] the overturning margin */
+    cone = m->ops->closed_of(m, mode) != 0u && !isinf(m->mu);
+    if (i < nc)
+        return m->ops->mode_monitor_one(m, mode, y, i, gi);
+    if (i == nc + cone)
+        return m->ops->mode_monitor_one(m, mode, y, nc, gi);
+    return 0;
+}
+
 void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out)
 {
     double q[RK_MAX_DOF], v[RK_MAX_DOF];

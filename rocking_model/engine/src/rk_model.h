@@ -147,6 +147,10 @@ typedef struct rk_model_ops {
     /** optional (NULL: ""): RockingModel.work_note, what drives the cost of a step (the flexible column's
      *  omega), written into buf (size n, NUL-terminated) for the work-limit messages. */
     void (*work_note)(const rk_model *m, char *buf, size_t n);
+    /** optional (NULL: none): the event function i of a sticking mode alone where it needs neither ag nor the
+     *  contact forces (i < n_contacts: a gap; i == n_contacts: the overturning margin), bit for bit the value
+     *  mode_monitors writes; returns 1 with *gi set, 0 where only mode_monitors has it. */
+    int (*mode_monitor_one)(const rk_model *m, int mode, const double *y, int i, double *gi);
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
@@ -201,6 +205,10 @@ rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, d
  *  closed contacts (functions_of()[2]) and *has_totals is set to 1 (0 in flight). */
 int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals,
                      int *has_totals);
+/** rk_mode_monitors' g[i] alone where the model has it without ag and the contact forces (mode_monitor_one):
+ *  returns 1 with *gi set (the same value bit for bit), 0 otherwise (sliding modes, the friction event, the
+ *  contact force monitors). */
+int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, double *gi);
 /** outputs_of(mode, y, shift): out in the order of ops->output_decls; shift [m] added to the SHIFTED outputs. */
 void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out);
 /** RockingModel.slip(q) [m]. */

@@ -290,6 +290,27 @@ static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, do
     }
 }
 
+/* rigid_mode_monitors' gap of the open corner (-s phi) and overturning margin of a rocking mode, the same
+ * expressions, without the pivot's force (its trigonometry and ag): locate's iterations on an impact read these */
+static int rigid_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, double *gi)
+{
+    double s, phi;
+    (void)m;
+    if (mode == RK_MODE_FULL || mode == RK_MODE_FLIGHT)
+        return 0;
+    s = (double)rk_pivot_sign(mode);
+    phi = y[0];
+    if (i == 2) {
+        *gi = RK_HALF_PI - fabs(phi);
+        return 1;
+    }
+    if ((s < 0 && i == 1) || (!(s < 0) && i == 0)) {
+        *gi = -s * phi;
+        return 1;
+    }
+    return 0;
+}
+
 static void rigid_outputs(const rk_model *m, const double *q, const double *v, double *out);
 
 static void rigid_mode_outputs(const rk_model *m, int mode, const double *y, double *out)
@@ -404,5 +425,6 @@ const rk_model_ops RK_RIGID_BLOCK = {
     rigid_mode_dofs, rigid_embed, rigid_mode_jacobian, rigid_mode_rhs, rigid_mode_monitors,
     rigid_mode_outputs, rigid_contact_forces,
     rigid_rest_position, rigid_energy, rigid_outputs, rigid_initial_state,
-    NULL, NULL
+    NULL, NULL,
+    rigid_mode_monitor_one
 };

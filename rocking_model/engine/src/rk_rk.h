@@ -35,6 +35,9 @@ extern "C" {
 typedef rk_status (*rk_rhs_fn)(void *ctx, double t, const double *y, double *dy);
 /** G(t, y): the event functions (n_events values) of the current mode. */
 typedef rk_status (*rk_event_fn)(void *ctx, double t, const double *y, double *g);
+/** G(t, y)[i] alone where that is cheaper than all of G and bit for bit the same value: *done = 1 with *gi set, or
+ *  *done = 0 (the caller evaluates G). Any work of G that can fail or call back (ag(t)) is done as by G. */
+typedef rk_status (*rk_event_one_fn)(void *ctx, int i, double t, const double *y, double *gi, int *done);
 
 /** A tableau with its generated coefficients (rk_tableaux.h, static const data). Layout private to part C. */
 typedef struct rk_tableau rk_tableau;
@@ -95,6 +98,7 @@ typedef struct rk_event_ctx {
     rk_event_fn G;
     void *G_ctx;
     int n_events;
+    rk_event_one_fn G_one;      /**< optional (NULL: none): one function of G, for locate's iterations */
 } rk_event_ctx;
 
 /** G(t, dense(t)) into g. */
