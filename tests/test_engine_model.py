@@ -359,6 +359,8 @@ def test_rigid_sliding_modes(kw, state, ag):
         same(jd, pjd)
         a, tau = call("rigid", p, "slide_motion", mode=mode, a=q, b=v, ag=ag)
         pa, ptau = sliding.slide_motion(model, mode, pq, pv, ag)
+        if slide_singular(model, mode, pq):
+            continue        # a singular sliding problem (mu = inf at phi ~ 0): numpy's solve returns noise
         rtol = LA_RTOL * slide_cond(model, mode, pq)
         close(a, pa, rtol, scale=acc)
         close(tau, ptau, rtol, scale=model.m * acc)
@@ -605,6 +607,8 @@ def test_flexible_sliding_modes(kw, state, ag):
         same(q, pq)
         same(v, pv)
         same(call("flexible", p, "reduce_any", mode=mode, a=q, b=v), np.concatenate(model.reduce_any(mode, pq, pv)))
+        if slide_singular(model, mode, pq):
+            continue        # a singular sliding problem (mu = inf at phi ~ 0): numpy's solve returns noise
         rtol = LA_RTOL * slide_cond(model, mode, pq) * np.linalg.cond(model.mass_matrix(pq))
         a, tau = call("flexible", p, "slide_motion", mode=mode, a=q, b=v, ag=ag)
         pa, ptau = sliding.slide_motion(model, mode, pq, pv, ag)
