@@ -27,7 +27,10 @@
   defaults). The impact LCP is then solved again from the pre-impact velocities with the closed corners held
   closed, and both tests are applied to the new outcome: a corner that leaves while another is closed rotates
   about it (not a free flight) and is closed only below v_Zeno. The kinetic energy this removes is at most of
-  the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not counted.
+  the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not counted. A corner closed
+  within gap_tol above the ground is a rocking mode's pivot exactly at it: the entry projects the state onto
+  the ground (`_onto_ground`), so no mode starts with its open corner below it; a loaded state that does and
+  whose corner approaches starts with an impact (`_lands_now`).
 - Painleve count (``painleve``): each stick-making impulse of a Painleve situation, applied where the uplift LCP
   of a sliding corner has no or several solutions (`_decide`) or made by an impact LCP on a corner that slid
   in Painleve's configuration (`rocking_model.contact.painleve_sticks`).
