@@ -582,3 +582,35 @@ def test_max_events_refusal():
         eng.advance(4.0, 0.0)
     assert str(ec.value) == str(ep.value)
     assert eng.t == 0.0 and eng.impacts == 0 and eng.n_steps == 0
+
+
+@needs_engine
+@pytest.mark.parametrize("kw, init, times", [
+    (dict(b=0.3, e_N=0.5, impact_law=0), dict(phi_0=0.01, u_0=3e-4), [0.5, 1.0, 1.5]),
+    (dict(b=0.2, e_N=0.2, impact_law=0), dict(phi_0=-0.02, u_0=3e-4), [0.3, 0.65]),
+])
+def test_no_mode_starts_with_its_open_corner_below_the_ground(monkeypatch, kw, init, times):
+    """Flexible chatters with no ground motion: every mode entry starts its open corners' event functions at or
+    above -event_tol (armed or watched). The first scene's Zeno rule closes a corner hovering ~1e-9 L up (the
+    entry is projected onto the ground: `_onto_ground`; before, the reduction to the rocking mode sank the other
+    corner to a tilt of -2e-9 rad); in the second an armed corner crosses the ground inside the last unsampled
+    sub-interval before another corner's located impact (now searched at the located time: `_find_event`; before,
+    it was found 5e-9 L below and a mode started with it at -2e-8 rad). Both engines the same: impacts, modes,
+    steps, phi (`_assert_same`)."""
+    from rocking_model.integrators import event_driven as ed
+    from rocking_model.modes import SLIDING, Mode, pivot_sign
+    entries = []
+    original = ed.EventDriven._set_state
+
+    def recorded(self, mode, q, v):
+        original(self, mode, q, v)
+        base = SLIDING[mode][0] if mode in SLIDING else mode
+        out = self.outputs()
+        if base in (Mode.LEFT, Mode.RIGHT):
+            entries.append(-pivot_sign(base) * out["phi"])
+        elif base == Mode.FLIGHT:
+            entries.append(float(min(self.model.gaps(self.state()[0]))) / self.model.length_scale)
+    monkeypatch.setattr(ed.EventDriven, "_set_state", recorded)
+    py, c = _run_steps(FlexibleOscillator(**kw), times, 0.0, slack=100.0, max_steps=None, **init)
+    assert len(entries) > 10 and py.integrator.impacts > 10
+    assert min(entries) >= -py.integrator.event_tol, min(entries)

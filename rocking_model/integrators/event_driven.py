@@ -625,7 +625,8 @@ class EventDriven(Integrator):
         An armed function fires at zero, a disarmed one (watched) at -event_tol; without a sign change at
         the ends, a dip inside the step is looked for (`dip_search`). Before the event found, another armed
         contact function may dip below zero and come back (the pivot force of a block that lifts off just
-        before it overturns): the step up to it is sub-sampled for that (`first_negative`)."""
+        before it overturns): the step up to it is sub-sampled for that (`first_negative`), the event's time
+        included."""
         tol = self.event_tol
         n_sub = self.tolerances.sub_samples
         t0, t_hit = stepper.t_old, stepper.t
@@ -644,6 +645,14 @@ class EventDriven(Integrator):
         others = [j for j in range(len(g_new) - 1) if armed[j] and j not in hits]
         if others and te > t0:
             found = first_negative(G, dense, t0, g_a, te, others, n_sub)
+            if found is None:
+                # te itself: a corner that crosses inside the last sub-interval (not sampled) would be found below
+                # the ground at the impact and could start the next mode there, beyond the watch margin
+                g_te = G(te, dense(te))
+                neg = [j for j in others if g_te[j] <= 0.0]
+                if neg:
+                    ta = t0 + (te - t0) * (n_sub - 1) / float(n_sub)
+                    found = neg, ta, G(ta, dense(ta)), te, g_te
             if found is not None:
                 neg, ta, ga, tn, gn = found
                 te, i = earliest_root(G, dense, neg, shifts, rose, ta, ga, tn, gn, xtol)

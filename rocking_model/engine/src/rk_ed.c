@@ -878,6 +878,19 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
         double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS];
         ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga, &tn,
                                      gn, err));
+        if (!fn) {
+            /* te itself: a corner that crosses inside the last sub-interval (not sampled) */
+            ED_TRYF(f, rk_event_eval(c, *te, gn, err));
+            for (i = 0; i < n_others; i++)
+                if (gn[others[i]] <= 0.0)
+                    neg[n_neg++] = others[i];
+            if (n_neg) {
+                fn = 1;
+                tn = *te;
+                ta = t0 + (*te - t0) * (n_sub - 1) / (double)n_sub;
+                ED_TRYF(f, rk_event_eval(c, ta, ga, err));
+            }
+        }
         if (fn)
             ED_TRYF(f, rk_earliest_root(c, neg, n_neg, shifts, ev->has_start, ev->start_t, ev->start_g, ta, ga,
                                         tn, gn, xtol, te, idx, err));
