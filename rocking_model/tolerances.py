@@ -44,7 +44,10 @@ tests, applied after every impact to the corners at the ground, with two thresho
 A closed corner is held closed plastically (the impact LCP is solved again from the pre-impact velocities) and
 both tests are applied again to the new outcome: a corner that leaves while another is closed rotates about
 it (its normal acceleration is the rocking one, 2 b p^2 sin(alpha) for the block, not g) and only the velocity
-test applies to it.
+test applies to it. A corner closed within ``gap`` above the ground becomes the pivot of a rocking mode exactly
+at the ground: the event-driven scheme then projects the state onto the ground (that corner and any the
+reduction would put below it), so no mode starts with an open corner below the ground beyond round-off
+(``grazing`` ``gap``) and every open corner's event function starts armed or watched.
 """
 from __future__ import annotations
 

@@ -27,7 +27,10 @@
   defaults). The impact LCP is then solved again from the pre-impact velocities with the closed corners held
   closed, and both tests are applied to the new outcome: a corner that leaves while another is closed rotates
   about it (not a free flight) and is closed only below v_Zeno. The kinetic energy this removes is at most of
-  the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not counted.
+  the order of 1/2 m v_Zeno^2 + m |a_N| gap_tol. Impacts slower than v_Zeno are not counted. A corner closed
+  within gap_tol above the ground is a rocking mode's pivot exactly at it: the entry projects the state onto
+  the ground (`_onto_ground`), so no mode starts with its open corner below it; a loaded state that does and
+  whose corner approaches starts with an impact (`_lands_now`).
 - Painleve count (``painleve``): each stick-making impulse of a Painleve situation, applied where the uplift LCP
   of a sliding corner has no or several solutions (`_decide`) or made by an impact LCP on a corner that slid
   in Painleve's configuration (`rocking_model.contact.painleve_sticks`).
@@ -159,6 +162,7 @@ class EventDriven(Integrator):
         model = self.model
         old = self.__dict__.get("mode")
         self.mode = mode
+        q = self._onto_ground(mode, q, v)
         r, rd = model.reduce_any(self.mode, q, v)
         self.k = len(r)
         self.y = [float(a) for a in r] + [float(a) for a in rd]
@@ -175,6 +179,29 @@ class EventDriven(Integrator):
                 if abs(shift) <= self.gap_tol:
                     shift = 0.0
         self.shift = shift
+
+    def _onto_ground(self, mode, q, v):
+        """q, projected onto the ground where entering ``mode`` would otherwise put an open corner below it.
+
+        The reduced coordinates of a mode hold its closed corners exactly at the ground (a rocking mode's pivot),
+        while the contact problems close any corner within gap_tol of it: the Zeno rule closes a corner that
+        hovers some 1e-9 L up at the end of a chatter. Reducing then lowers the body by that gap and an open corner
+        that the impact left at the ground ends below it, its tilt on the far side of the pivot, beyond event_tol:
+        its event function never fires and it would sink through the ground unseen. Instead every corner the
+        reduction would put below the ground and the closed ones are put exactly onto it (`project_to_ground`, a
+        shift of at most gap_tol), so that the open one starts the mode at the ground, watched, and the contact
+        problems decide whether it lands."""
+        model = self.model
+        closed = model.closed_of(mode)
+        if not closed or len(closed) == model.n_contacts:
+            return q
+        g = model.gaps(q)
+        rnd = self.tolerances.grazing * self.gap_tol      # [m] round-off of a located event's gap
+        if all(g[i] <= rnd for i in closed):
+            return q                                      # (the reduction lowers nothing)
+        g_in = model.gaps(model.embed_any(mode, *model.reduce_any(mode, q, v))[0])
+        sunk = [i for i in range(model.n_contacts) if i not in closed and g_in[i] < -rnd]
+        return project_to_ground(model, q, set(closed) | set(sunk)) if sunk else q
 
     def state(self):
         """Full (q, v) at the current time."""
@@ -443,6 +470,9 @@ class EventDriven(Integrator):
         stepper = self._stepper(mode, rhs, max_step)
         g_prev = G(self.t, self.y)
         tol = self.event_tol
+        if self._lands_now(kinds, g_prev):
+            self._handle(_KIND_IMPACT, self.t, ag)
+            return True
         armed = [g > 0.0 for g in g_prev]
         watch = [not a and g > -tol for a, g in zip(armed, g_prev)]
         first = True
@@ -540,6 +570,20 @@ class EventDriven(Integrator):
         xtol = max(math.sqrt(self.tolerance) * (t1 - t0), 4.0 * math.ulp(max(abs(t1), 1.0)))
         self.note_ratio(brent_max(demand, t0, t1, tv, demand(tv), xtol)[1])
 
+    def _lands_now(self, kinds, g_prev) -> bool:
+        """Whether an open corner starts the segment below the ground beyond the watch margin (its event function
+        below -event_tol: neither armed nor watched) while it approaches it (U_N < -v_tol): it is landing now,
+        and the impact LCP decides at once (the corner is a candidate, put back onto the ground as a grazing
+        landing) rather than letting it go through the ground unseen. Reached from a loaded state; a mode entry
+        does not lead there (`_onto_ground`), and an impact leaves no candidate approaching, so this fires once."""
+        tol = self.event_tol
+        sunk = [i for i, kind in enumerate(kinds) if kind == _KIND_IMPACT and g_prev[i] <= -tol]
+        if not sunk:
+            return False
+        q, v = self.state()
+        U = self.model.contact_jacobians(q)[0].T @ v
+        return any(U[i] < -self.v_tol for i in sunk)
+
     def _kinds(self, mode) -> list:
         """What each event function of ``mode`` means: per contact release (closed) or impact (open), then the
         slip's stop (sliding) or the friction cone (sticking with a finite mu), last overturning."""
@@ -581,7 +625,8 @@ class EventDriven(Integrator):
         An armed function fires at zero, a disarmed one (watched) at -event_tol; without a sign change at
         the ends, a dip inside the step is looked for (`dip_search`). Before the event found, another armed
         contact function may dip below zero and come back (the pivot force of a block that lifts off just
-        before it overturns): the step up to it is sub-sampled for that (`first_negative`)."""
+        before it overturns): the step up to it is sub-sampled for that (`first_negative`), the event's time
+        included."""
         tol = self.event_tol
         n_sub = self.tolerances.sub_samples
         t0, t_hit = stepper.t_old, stepper.t
@@ -600,6 +645,14 @@ class EventDriven(Integrator):
         others = [j for j in range(len(g_new) - 1) if armed[j] and j not in hits]
         if others and te > t0:
             found = first_negative(G, dense, t0, g_a, te, others, n_sub)
+            if found is None:
+                # te itself: a corner that crosses inside the last sub-interval (not sampled) would be found below
+                # the ground at the impact and could start the next mode there, beyond the watch margin
+                g_te = G(te, dense(te))
+                neg = [j for j in others if g_te[j] <= 0.0]
+                if neg:
+                    ta = t0 + (te - t0) * (n_sub - 1) / float(n_sub)
+                    found = neg, ta, G(ta, dense(ta)), te, g_te
             if found is not None:
                 neg, ta, ga, tn, gn = found
                 te, i = earliest_root(G, dense, neg, shifts, rose, ta, ga, tn, gn, xtol)

@@ -299,13 +299,44 @@ static void ed_atol(const rk_engine *e, int mode, double *atol)
 
 /* ------------------------------------------------------------------------------------------ state */
 
+/** `_onto_ground`: q_out = q, projected onto the ground at the closed corners of ``mode`` and at the open ones
+ *  that its reduction would put below it (a closed corner within gap_tol above the ground, closed by the Zeno
+ *  rule, lowers the body by its gap); see the Python */
+static rk_status ed_onto_ground(rk_engine *e, int mode, const double *q, const double *v, double *q_out,
+                                rk_error *err)
+{
+    const rk_model *m = &e->model;
+    int nc = m->ops->n_contacts, n = m->ops->n_dof, i, lowers = 0;
+    rk_set closed = m->ops->closed_of(m, mode), sunk = 0;
+    double g[RK_MAX_CONTACTS], y[2 * RK_MAX_DOF], q_in[RK_MAX_DOF], v_in[RK_MAX_DOF];
+    double rnd = e->options.tolerances.grazing * ED(e)->gap_tol;     /* [m] round-off of a located gap */
+    memcpy(q_out, q, (size_t)n * sizeof(double));
+    if (!closed || ed_popcount(closed) == nc)
+        return RK_OK;
+    m->ops->gaps(m, q, g);
+    for (i = 0; i < nc; i++)
+        if (RK_IN(closed, i) && g[i] > rnd)
+            lowers = 1;
+    if (!lowers)
+        return RK_OK;
+    rk_reduce_any(m, mode, q, v, y);
+    rk_embed_any(m, mode, y, q_in, v_in);
+    m->ops->gaps(m, q_in, g);
+    for (i = 0; i < nc; i++)
+        if (!RK_IN(closed, i) && g[i] < -rnd)
+            sunk |= 1u << i;
+    return sunk ? rk_project_to_ground(m, q, closed | sunk, q_out, err) : RK_OK;
+}
+
 /** `_set_state` (has_old 0 at __init__: no previous mode) */
-static void ed_set_state(rk_engine *e, int mode, const double *q, const double *v, int has_old)
+static rk_status ed_set_state(rk_engine *e, int mode, const double *q_given, const double *v, int has_old,
+                              rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
     int old = s->mode;
-    double shift = 0.0;
+    double shift = 0.0, q[RK_MAX_DOF];
+    ED_TRY(ed_onto_ground(e, mode, q_given, v, q, err));
     s->mode = mode;
     s->k = rk_reduce_any(m, mode, q, v, s->y);
     /* a sticking mode on the ground keeps the base's horizontal offset outside its reduced state: unchanged
@@ -322,6 +353,7 @@ static void ed_set_state(rk_engine *e, int mode, const double *q, const double *
     s->shift = shift;
     s->live = 0;
     e->core.token++;
+    return RK_OK;
 }
 
 void rk_ed_full_state(rk_engine *e, double *q, double *v)
@@ -389,8 +421,7 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
     s->rhs_mode = -1;
     s->max_work = -1;
     s->work_end = INFINITY;
-    ed_set_state(e, mode, q, v, 0);
-    return RK_OK;
+    return ed_set_state(e, mode, q, v, 0, err);
 }
 
 /* ------------------------------------------------------------------------------------------ samples */
@@ -629,8 +660,7 @@ static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double
     int mode, changed;
     double v2[RK_MAX_DOF];
     ED_TRY(ed_decide(e, q, v, ag_t, av_t, t, prefer, &mode, v2, &changed, err));
-    ed_set_state(e, mode, q, v2, 1);
-    return RK_OK;
+    return ed_set_state(e, mode, q, v2, 1, err);
 }
 
 /** `_impact` */
@@ -686,8 +716,7 @@ static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, do
     if (recorded)
         ED_TRY(ed_record_impact(e, t, v, v_plus, err));
     ed_count_painleve(e, q, v, v_impact, cand);
-    ed_set_state(e, mode, q, v_plus, 1);
-    return RK_OK;
+    return ed_set_state(e, mode, q, v_plus, 1, err);
 }
 
 /** `_note_percussions`: |sum Lambda_T| / sum Lambda_N of the impact from v_minus to the current velocity */
@@ -875,6 +904,19 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
         double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS];
         ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga, &tn,
                                      gn, err));
+        if (!fn) {
+            /* te itself: a corner that crosses inside the last sub-interval (not sampled) */
+            ED_TRYF(f, rk_event_eval(c, *te, gn, err));
+            for (i = 0; i < n_others; i++)
+                if (gn[others[i]] <= 0.0)
+                    neg[n_neg++] = others[i];
+            if (n_neg) {
+                fn = 1;
+                tn = *te;
+                ta = t0 + (*te - t0) * (n_sub - 1) / (double)n_sub;
+                ED_TRYF(f, rk_event_eval(c, ta, ga, err));
+            }
+        }
         if (fn)
             ED_TRYF(f, rk_earliest_root(c, neg, n_neg, shifts, ev->has_start, ev->start_t, ev->start_g, ta, ga,
                                         tn, gn, xtol, te, idx, err));
@@ -933,6 +975,29 @@ static rk_status ed_work_limit(rk_engine *e, rk_error *err)
                    rk_tableau_name(s->tab), stiff, m->time_scale);
 }
 
+/** `_lands_now`: an open corner starts the segment below -event_tol (neither armed nor watched) approaching the
+ *  ground (U_N < -v_tol): the impact LCP decides at once */
+static int ed_lands_now(rk_engine *e, const int *kinds, int n_events, const double *g_prev)
+{
+    const rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int i, any = 0;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], U[RK_MAX_CONTACTS];
+    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS];
+    for (i = 0; i < n_events; i++)
+        if (kinds[i] == ED_IMPACT && g_prev[i] <= -s->event_tol)
+            any = 1;
+    if (!any)
+        return 0;
+    rk_ed_full_state(e, q, v);
+    m->ops->contact_jacobians(m, q, W_N, W_T);
+    ed_wtx(m, W_N, v, U);
+    for (i = 0; i < n_events; i++)
+        if (kinds[i] == ED_IMPACT && g_prev[i] <= -s->event_tol && U[i] < -s->v_tol)
+            return 1;
+    return 0;
+}
+
 /** `_segment`: integrate the current mode towards t_stop; *event 1 if an event ended it */
 static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motion *ag_v, ed_out *o, int *event,
                             rk_error *err)
@@ -975,6 +1040,11 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     if (has_totals) {
         d_prev = ed_ratio(s, lam);
         ed_note_ratio(e, d_prev);
+    }
+    if (ed_lands_now(e, kinds, ev.n, g_prev)) {
+        ED_TRY(ed_handle(e, ED_IMPACT, s->t, &f, err));
+        *event = 1;
+        return RK_OK;
     }
     /* without state a step only samples the contact forces under a varying input: short enough for the dip
      * search to see a force that comes and goes */
@@ -1105,7 +1175,7 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
     ED_TRY(ed_ag_call(ag, ag_v, t, &a, &av, err));
     ED_TRY(ed_decide(e, q, v, a, av, t, -1, &new_mode, v_new, &changed, err));
     if (new_mode != mode || changed)
-        ed_set_state(e, new_mode, q, v_new, 1);
+        return ed_set_state(e, new_mode, q, v_new, 1, err);
     return RK_OK;
 }
 
