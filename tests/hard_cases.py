@@ -3,7 +3,8 @@ output grid, the documented penetration tolerances and the sanity checks, and th
 (`nominal`, `roundoff_tests`) of the named scenes. The topics: test_hard_rest.py (impact accumulation, exact
 rest, communication steps), test_hard_blocks.py (slender and squat blocks, grazing uplift, scale),
 test_hard_overturning.py (the overturning boundary, a pulse that overturns), test_hard_columns.py (stiff
-columns, large steps, records, tilts and steps).
+columns, large steps, records, tilts and steps), test_hard_vertical.py (the vertical ground acceleration: a
+three-component record, flight where g + ag_v < 0, overturning because of ag_v).
 
 Every test checks physical invariants on the output grid (finite values, no penetration beyond a measured
 and documented tolerance, rotation on the correct side of the pivot, |phi| < pi/2 unless overturning is

@@ -92,7 +92,10 @@ def summarize(tr, checks: dict | None = None) -> dict:
 
     checks (all optional): ``rest_after`` [s]: from this time on the body must be exactly at rest (full
     contact, phi = phi_dot = 0); ``log_size``: the bounded impact log's length; ``pen`` [m]: penetration
-    tolerance (default `pen_tol`)."""
+    tolerance (default `pen_tol`); ``tipping_energy`` (default True): False drops the verdict
+    energy_below_tipping (its figure stays), which certifies nothing under a vertical ground motion (the
+    energy keeps g, the ground works on the body); ``verdict`` / ``figures``: the scene's own booleans /
+    numbers (e.g. flight seen), added as they are."""
     from hard_cases import sanity_report
     from rocking_model.modes import Mode
     from rocking_model import RigidBlock
@@ -131,7 +134,10 @@ def summarize(tr, checks: dict | None = None) -> dict:
         # driven cannot overturn (e_N = 0: energy does not grow without input)
         e_tip = model.m * model.g * model.R * (1.0 - math.cos(model.alpha))
         figures["max_E_over_E_tip"] = float(np.max(tr.energy)) / e_tip
-        verdict["energy_below_tipping"] = figures["max_E_over_E_tip"] < 1.0
+        if checks.get("tipping_energy", True):
+            verdict["energy_below_tipping"] = figures["max_E_over_E_tip"] < 1.0
+    verdict.update({k: bool(x) for k, x in checks.get("verdict", {}).items()})
+    figures.update(checks.get("figures", {}))
     return {"verdict": verdict, "figures": figures, "messages": rep["messages"]}
 
 
