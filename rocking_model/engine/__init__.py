@@ -86,9 +86,10 @@ def vertical_spec(gm: GroundMotion):
 
 def _sampled(names, modes, values, impacts, overturned) -> tuple:
     """`Integrator.sample`'s (modes, outputs, impacts, overturned) from the rows the engine wrote (``values``: the
-    outputs, friction_demand, painleve per row): one contiguous array per output, as the Python scheme returns
-    (the rows of one transposed copy: a copy per column costs more than the run of a short scene)."""
-    cols = values.T.copy()
+    outputs, friction_demand, painleve, one row each: the engine wrote them in columns): one contiguous array per
+    output, as the Python scheme returns (rows of one block: a copy per column costs more than the run of a short
+    scene)."""
+    cols = values
     out = dict(zip(names, cols))
     out["friction_demand"] = cols[-2]
     out["painleve"] = cols[-1].astype(np.int64)
@@ -377,14 +378,14 @@ class CompiledIntegrator(Integrator):
         n = times.size + 1
         names = self._names
         modes = np.empty(n, dtype=np.intc)
-        values = np.empty((n, len(names) + 2), dtype=float)
+        values = np.empty((len(names) + 2, n), dtype=float)        # one row per output (columns=True)
         impacts = np.empty(n, dtype=np.int64)
         overturned = np.empty(n, dtype=np.intc)
         spec = motion_spec(ag)
         vspec = vertical_spec(ag)
         ident = self._identity(ag)
         self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident,
-                                              vspec))
+                                              vspec, True))
         return _sampled(names, modes, values, impacts, overturned)
 
     # ------------------------------------------------------------------ state

@@ -755,7 +755,7 @@ static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssi
 static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
     static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", "identity",
-                             "vspec", NULL};
+                             "vspec", "columns", NULL};
     PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r, *vspec = Py_None;
     rk_motion *mv = NULL;
     unsigned long long identity = 0;
@@ -764,12 +764,12 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     Py_buffer bm, bv, bi, bo;
     const double *times;
     Py_ssize_t n;
-    int idx, stride;
+    int idx, stride, columns = 0;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|KO", kwlist, &times_obj, &spec, &ms,
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|KOp", kwlist, &times_obj, &spec, &ms,
                                                       &modes_obj, &values_obj, &impacts_obj, &over_obj,
-                                                      &identity, &vspec))
+                                                      &identity, &vspec, &columns))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
@@ -822,13 +822,15 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
             rk_fail(&self->e->error, st, "out of memory");
         } else {
             rk_engine_save(self->e, saved);
-            st = rk_engine_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, (int *)bm.buf,
-                                  (double *)bv.buf, (long long *)bi.buf, (int *)bo.buf);
+            st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
+                                                                         max_steps, (int *)bm.buf, (double *)bv.buf,
+                                                                         (long long *)bi.buf, (int *)bo.buf);
         }
     } else {
         Py_BEGIN_ALLOW_THREADS
-        st = rk_engine_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, (int *)bm.buf, (double *)bv.buf,
-                              (long long *)bi.buf, (int *)bo.buf);
+        st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
+                                                                     max_steps, (int *)bm.buf, (double *)bv.buf,
+                                                                     (long long *)bi.buf, (int *)bo.buf);
         Py_END_ALLOW_THREADS
     }
     PyBuffer_Release(&bm);
@@ -1352,8 +1354,9 @@ static PyMethodDef engine_methods[] = {
      "advance_motion(t_end, motion, max_steps=None, identity=0, vspec=None): integrate to t_end under a motion "
      "spec (vspec: the vertical component's, None: none)."},
     {"sample", (PyCFunction)(void (*)(void))engine_sample, METH_VARARGS | METH_KEYWORDS,
-     "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None): "
-     "Integrator.sample into the given arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1)."},
+     "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None, columns=False): "
+     "Integrator.sample into the given arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1; "
+     "columns=True: values (n_outputs+2) x (n+1), one row per output)."},
     {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
     {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
      "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "

@@ -447,9 +447,21 @@ void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *mod
 {
     const rk_ed_state *s = ED(e);
     int n_out = e->model.ops->n_outputs;
-    rk_outputs_of(&e->model, mode, y, s->shift, values);
-    values[n_out] = s->friction_demand;
-    values[n_out + 1] = (double)s->painleve;
+    long long cs = e->sample_cs;
+    if (cs > 1) {
+        /* the column layout (rk_engine_sample_columns): one value per column, rows count apart */
+        double row[RK_MAX_OUTPUTS];
+        int j;
+        rk_outputs_of(&e->model, mode, y, s->shift, row);
+        for (j = 0; j < n_out; j++)
+            values[j * cs] = row[j];
+        values[n_out * cs] = s->friction_demand;
+        values[(n_out + 1) * cs] = (double)s->painleve;
+    } else {
+        rk_outputs_of(&e->model, mode, y, s->shift, values);
+        values[n_out] = s->friction_demand;
+        values[n_out + 1] = (double)s->painleve;
+    }
     *modes = overturned ? 10 : mode;        /* modes.OVERTURNED */
     *impacts = s->impacts;
     *over = overturned;
@@ -458,11 +470,11 @@ void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *mod
 /** `_sample_row` appended to out; overturned < 0: the current flag (the Python's None) */
 static void ed_row(rk_engine *e, ed_out *o, int mode, const double *y, int overturned)
 {
-    int stride = e->model.ops->n_outputs + 2;
+    long long rs = e->sample_cs > 1 ? 1 : e->model.ops->n_outputs + 2;      /* from one row to the next */
     long long r = o->row++;
     o->next++;
     rk_ed_row(e, mode, y, overturned < 0 ? ED(e)->overturned : overturned, o->modes + r,
-              o->values + r * stride, o->impacts + r, o->overturned + r);
+              o->values + r * rs, o->impacts + r, o->overturned + r);
 }
 
 /** `_record_samples`: the pending samples before (or up to, inclusive) t_last, read from the dense output */

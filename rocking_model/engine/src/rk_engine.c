@@ -724,18 +724,50 @@ rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk
 /** Integrator._row into row ``r`` of the sample arrays. */
 static void write_row(rk_engine *e, long long r, int *modes, double *values, long long *impacts, int *overturned)
 {
-    int n = e->model.ops->n_outputs, stride = n + 2;
-    double *row = values + r * stride;
-    rk_engine_outputs(e, row);
-    row[n] = rk_engine_friction_demand(e);
-    row[n + 1] = (double)rk_engine_painleve(e);
+    int n = e->model.ops->n_outputs, stride = n + 2, j;
+    long long cs = e->sample_cs;
+    if (cs > 1) {
+        /* the column layout (rk_engine_sample_columns) */
+        double row[RK_MAX_OUTPUTS];
+        rk_engine_outputs(e, row);
+        for (j = 0; j < n; j++)
+            values[j * cs + r] = row[j];
+        values[n * cs + r] = rk_engine_friction_demand(e);
+        values[(n + 1) * cs + r] = (double)rk_engine_painleve(e);
+    } else {
+        double *row = values + r * stride;
+        rk_engine_outputs(e, row);
+        row[n] = rk_engine_friction_demand(e);
+        row[n + 1] = (double)rk_engine_painleve(e);
+    }
     modes[r] = rk_engine_contact_code(e);
     impacts[r] = rk_engine_impacts(e);
     overturned[r] = rk_engine_overturned(e);
 }
 
+static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
+                             long long max_steps, int *modes, double *values, long long *impacts, int *overturned);
+
 rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
                            long long max_steps, int *modes, double *values, long long *impacts, int *overturned)
+{
+    e->sample_cs = 0;
+    return sample_impl(e, ag, ag_v, times, n_times, max_steps, modes, values, impacts, overturned);
+}
+
+rk_status rk_engine_sample_columns(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times,
+                                   long long n_times, long long max_steps, int *modes, double *values,
+                                   long long *impacts, int *overturned)
+{
+    rk_status st;
+    e->sample_cs = n_times >= 1 ? n_times + 1 : 0;
+    st = sample_impl(e, ag, ag_v, times, n_times, max_steps, modes, values, impacts, overturned);
+    e->sample_cs = 0;
+    return st;
+}
+
+static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
+                             long long max_steps, int *modes, double *values, long long *impacts, int *overturned)
 {
     rk_core saved;
     rk_status st = RK_OK;
@@ -769,10 +801,10 @@ rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const d
         }
     } else {
         /* row 0: the state now (EventDriven.sample's first _sample_row), then the rows of _run */
-        int stride = e->model.ops->n_outputs + 2;
+        long long rs = e->sample_cs > 1 ? 1 : e->model.ops->n_outputs + 2;     /* from one row to the next */
         rk_ed_row(e, e->core.s.ed.mode, e->core.s.ed.y, e->core.s.ed.overturned, modes, values, impacts,
                   overturned);
-        st = rk_ed_run(e, times[n_times - 1], ag, ag_v, times, n_times, max_steps, modes + 1, values + stride,
+        st = rk_ed_run(e, times[n_times - 1], ag, ag_v, times, n_times, max_steps, modes + 1, values + rs,
                        impacts + 1, overturned + 1, 0u, &e->error);
     }
     return guarded_end(e, st, &saved);

@@ -94,6 +94,11 @@ rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk
  *  vertical component (NULL: zero). */
 rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
                            long long max_steps, int *modes, double *values, long long *impacts, int *overturned);
+/** rk_engine_sample with values in columns: values[j * (n_times + 1) + row] (one contiguous array per output,
+ *  what the Python API returns, without a transposed copy); the same numbers. */
+rk_status rk_engine_sample_columns(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times,
+                                   long long n_times, long long max_steps, int *modes, double *values,
+                                   long long *impacts, int *overturned);
 
 /* ------------------------------------------------------------------------------------------ read */
 int rk_engine_n_outputs(const rk_engine *e);

@@ -114,6 +114,8 @@ struct rk_engine {
     rk_model_tolerances scaled;         /**< options.tolerances for this model */
     rk_core core;
     rk_core saved;                      /**< the checkpoint slot of rk_engine_checkpoint */
+    long long sample_cs;                /**< during rk_engine_sample_columns: the distance between the values of
+                                         *   one row (the rows count); 0 otherwise (rows contiguous) */
     int has_saved;
     rk_log impact_times;
     rk_log impact_log;                  /**< event-driven only (maxlen min(1000, impact_log_size)) */
@@ -164,7 +166,7 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, 
  * RK_ADVANCE_CONTINUOUS skips the settle at the start (the Python's ``kink``). */
 /** One row of Integrator.sample for the reduced state y of mode (shift, friction_demand, painleve, impacts:
  *  the current ones): modes[0] (modes.OVERTURNED = 10 when overturned), values[0 .. n_outputs + 1] (the
- *  outputs, friction_demand, painleve), impacts[0], over[0]. */
+ *  outputs, friction_demand, painleve; values[j * e->sample_cs] in the column layout), impacts[0], over[0]. */
 void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *modes, double *values,
                long long *impacts, int *over);
 void rk_ed_full_state(rk_engine *e, double *q, double *v);
