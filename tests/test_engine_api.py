@@ -601,3 +601,30 @@ def test_sample_in_columns_writes_the_rows_transposed_bit_for_bit(kind, scheme):
     assert np.array_equal(v0, v1) and not np.isnan(v1).any()
     assert np.array_equal(m0, m1) and np.array_equal(i0, i1) and np.array_equal(o0, o1)
     assert s0 == s1
+
+
+def test_the_engine_reads_each_tolerances_object_it_is_given():
+    """The engine keeps the fields of the last frozen ContactTolerances it read (every run reads the same default
+    object): another object is read afresh (its results are the Python engine's, not the default's), the default
+    again gives the default's results, and a mutable object with the same attributes is read every time."""
+    import dataclasses
+    import types
+
+    from rocking_model.tolerances import DEFAULT_TOLERANCES
+
+    model, gm = RigidBlock(b=0.2, h=1.0), SinePulse(0.4 * 9.81, 4 * math.pi)
+    base = simulate(model, gm, 4.0, engine="c", tolerance=1e-8).phi
+    coarse = dataclasses.replace(DEFAULT_TOLERANCES, event=1e-4)   # events located less tightly: phi moves ~1e-9
+    c = simulate(model, gm, 4.0, engine="c", tolerance=1e-8, tolerances=coarse).phi
+    py = simulate(model, gm, 4.0, engine="python", tolerance=1e-8, tolerances=coarse).phi
+    assert np.array_equal(c, py) and not np.array_equal(c, base)
+    assert np.array_equal(simulate(model, gm, 4.0, engine="c", tolerance=1e-8).phi, base)
+
+    sim = Simulator(model, "event_driven", engine="c")
+    integ = sim.integrator
+    args, kwargs = integ._engine_args(), integ._engine_kwargs()
+    kwargs["tolerances"] = ns = types.SimpleNamespace(**dataclasses.asdict(DEFAULT_TOLERANCES))
+    _engine.Engine(*args, state=integ._start, **kwargs)
+    ns.gap = "not a number"
+    with pytest.raises(TypeError):
+        _engine.Engine(*args, state=integ._start, **kwargs)
