@@ -16,6 +16,14 @@
  * instead of an endless loop */
 #define LOCATE_MAX_ITER 10000
 
+/* a failed call of the event functions at t: the callback's own message if it wrote one, else a generic one */
+static rk_status callback_failed(rk_status st, double t, rk_error *err)
+{
+    if (err != NULL && err->status == st && err->message[0] != '\0')
+        return st;
+    return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
+}
+
 rk_status rk_event_eval(rk_event_ctx *c, double t, double *g, rk_error *err)
 {
     double y[RK_MAX_Y];
@@ -25,12 +33,7 @@ rk_status rk_event_eval(rk_event_ctx *c, double t, double *g, rk_error *err)
     if (st != RK_OK)
         return st;
     st = c->G(c->G_ctx, t, y, g);
-    if (st != RK_OK) {
-        if (err != NULL && err->status == st && err->message[0] != '\0')
-            return st;
-        return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
-    }
-    return RK_OK;
+    return st == RK_OK ? RK_OK : callback_failed(st, t, err);
 }
 
 /* function i of G on the dense output, shifted up by shift (G_one when it has that function alone: the same value
@@ -47,21 +50,15 @@ static rk_status eval_one(rk_event_ctx *c, int i, double shift, double t, double
         if (st != RK_OK)
             return st;
         st = c->G_one(c->G_ctx, i, t, y, &gi, &done);
-        if (st != RK_OK) {
-            if (err != NULL && err->status == st && err->message[0] != '\0')
-                return st;
-            return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
-        }
+        if (st != RK_OK)
+            return callback_failed(st, t, err);
         if (done) {
             *out = gi + shift;
             return RK_OK;
         }
         st = c->G(c->G_ctx, t, y, g);
-        if (st != RK_OK) {
-            if (err != NULL && err->status == st && err->message[0] != '\0')
-                return st;
-            return rk_fail(err, st, "events: the event functions failed (%s) at t = %.17g s", rk_status_name(st), t);
-        }
+        if (st != RK_OK)
+            return callback_failed(st, t, err);
         *out = g[i] + shift;
         return RK_OK;
     }
