@@ -836,6 +836,10 @@ def _wait_for_ready(ac) -> None:
     time.sleep(_POLL)
 
 
+#: [s] how long the run waits for the rows of a batch reported finished before it looks at the cluster again
+#: (the rows come in milliseconds from a live worker; from a dead one, only once Dask has run the batch again)
+RESULT_WAIT = 0.5
+
 #: [s] how long one question to the scheduler about its workers may take; an answer that does not come (a
 #: scheduler busy with dying workers) counts as a look at a cluster without workers
 WORKER_QUERY_TIMEOUT = 2.0
@@ -865,16 +869,27 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
     finished, or when a batch killed every worker that ran it."""
     from dask.distributed import KilledWorker, as_completed
 
+    from dask.distributed import TimeoutError as DaskTimeoutError
+
     ac = as_completed(futures)
     no_worker_since = None
     t_check = time.monotonic()
     alive: set = set()           # worker addresses seen at the last look
     deaths = 0                   # workers that left the cluster since the last finished batch
-    while not ac.is_empty():
-        ready = ac.next_batch(block=False)
+    # batches reported finished whose rows have not arrived: the worker that held them died after finishing,
+    # and Dask computes them again (a result() without a timeout would wait for that, with every worker being
+    # killed, for ever)
+    waiting: list = []
+    while waiting or not ac.is_empty():
+        ready = waiting + ac.next_batch(block=False)
+        waiting = []
+        got = False
         for fut in ready:
             try:
-                rows = fut.result()
+                rows = fut.result(timeout=RESULT_WAIT)
+            except (DaskTimeoutError, TimeoutError):
+                waiting.append(fut)
+                continue
             except KilledWorker as exc:
                 raise WorkersLost(f"every worker that ran a batch of cases died while running it (killed, e.g. "
                                   f"by the out-of-memory killer; Dask: {' '.join(str(exc).split())[:160]}); the "
@@ -882,7 +897,8 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
                                   "or --batch-size 1, need less memory)") from None
             take(rows)
             fut.release()
-        if ready:
+            got = True
+        if got:
             no_worker_since = None
             deaths = 0
             continue
@@ -895,7 +911,7 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
         alive = workers
         if deaths >= MAX_DEATHS_WITHOUT_PROGRESS:
             raise WorkersLost(f"{deaths} Dask workers died while no batch of cases finished (killed over and over, "
-                              f"e.g. by the out-of-memory killer); {ac.count()} task(s) of cases were left; the "
+                              f"e.g. by the out-of-memory killer); {ac.count() + len(waiting)} task(s) of cases were left; the "
                               f"finished cases are in {out}; run the same command to resume (fewer --workers, or "
                               "--batch-size 1, need less memory)")
         if workers:
@@ -904,7 +920,7 @@ def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> Non
             no_worker_since = t_check
         elif t_check - no_worker_since > no_workers_timeout:
             raise WorkersLost(f"the Dask cluster has had no worker for {no_workers_timeout:g} s (all died or "
-                              f"were killed, e.g. by the out-of-memory killer); {ac.count()} task(s) of cases "
+                              f"were killed, e.g. by the out-of-memory killer); {ac.count() + len(waiting)} task(s) of cases "
                               f"were left; the finished cases are in {out}; run the same command to resume "
                               "(fewer --workers, or --batch-size 1, need less memory)")
 

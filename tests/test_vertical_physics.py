@@ -566,7 +566,8 @@ def test_event_driven_chatter_closes_no_corner_below_the_ground(impact_law, u_0)
     Now such an entry is projected onto the ground (EventDriven._onto_ground, rk_ed.c the same): no corner below
     the ground at any of 300 samples."""
     model = FlexibleOscillator(b=0.3, e_N=0.5, impact_law=impact_law)
-    sim = Simulator(model, "event_driven", max_steps=None, phi_0=0.01, u_0=u_0, **PY)
+    # (a chatter meets impact LCPs whose least violation is some 1e-8: reported as inexact, not the subject here)
+    sim = Simulator(model, "event_driven", max_steps=None, phi_0=0.01, u_0=u_0, on_report="ignore", **PY)
     worst = 0.0
     for k in range(1, 301):
         sim.advance(0.005 * k, 0.0)
