@@ -56,10 +56,11 @@ def _pair(model, **kw):
             Simulator(model, "event_driven", engine="c", **kw))
 
 
-def _assert_same(py, c, where="", slack=1.0):
+def _assert_same(py, c, where="", slack=1.0, demand_rtol=None):
     """The same state: t, mode, impacts, n_steps (with slack == 1), painleve, friction_demand; phi to PHI_TOL
     and the other outputs to OUT_RTOL of their scale, the impact times to T_TOL, each tolerance times slack
-    (a scene whose contact solves differ by an ulp between numpy and C, which its dynamics amplify)."""
+    (a scene whose contact solves differ by an ulp between numpy and C, which its dynamics amplify); the friction
+    demand to demand_rtol when given (a ratio noted where the normal force is small amplifies that more)."""
     ip, ic = py.integrator, c.integrator
     assert ic.t == ip.t, where
     assert int(ic.mode) == int(ip.mode), (where, int(ip.mode), int(ic.mode))
@@ -74,7 +75,8 @@ def _assert_same(py, c, where="", slack=1.0):
     else:
         assert abs(ic.n_steps - ip.n_steps) <= 0.02 * ip.n_steps + 2, (where, ip.n_steps, ic.n_steps)
     assert ic.painleve == ip.painleve, where
-    assert ic.friction_demand == pytest.approx(ip.friction_demand, rel=1e-10 * slack, abs=1e-14), where
+    rel = 1e-10 * slack if demand_rtol is None else demand_rtol
+    assert ic.friction_demand == pytest.approx(ip.friction_demand, rel=rel, abs=1e-14), where
     op, oc = py.outputs(), c.outputs()
     assert set(op) == set(oc)
     assert abs(oc["phi"] - op["phi"]) <= PHI_TOL * slack, (where, op["phi"], oc["phi"])
@@ -86,14 +88,14 @@ def _assert_same(py, c, where="", slack=1.0):
     assert np.allclose(tc, tp, rtol=0.0, atol=T_TOL * slack), where
 
 
-def _run_steps(model, times, ag, slack=1.0, **kw):
+def _run_steps(model, times, ag, slack=1.0, demand_rtol=None, **kw):
     """Both engines through the same advances, compared after each; returns the pair."""
     py, c = _pair(model, **kw)
     _assert_same(py, c, "start")
     for t in times:
         py.advance(float(t), ag)
         c.advance(float(t), ag)
-        _assert_same(py, c, f"t = {t}", slack)
+        _assert_same(py, c, f"t = {t}", slack, demand_rtol)
     return py, c
 
 
@@ -629,6 +631,9 @@ def test_no_mode_starts_with_its_open_corner_below_the_ground(monkeypatch, kw, i
         elif base == Mode.FLIGHT:
             entries.append(float(min(self.model.gaps(self.state()[0]))) / self.model.length_scale)
     monkeypatch.setattr(ed.EventDriven, "_set_state", recorded)
-    py, c = _run_steps(FlexibleOscillator(**kw), times, 0.0, slack=100.0, max_steps=None, **init)
+    # the friction demand of the first scene peaks at an impact's left limit where the pivot carries 37.6 N (0.6 %
+    # of the weight) and varies fast: with the engines' impact times 2e-14 s apart it differs by 2e-8 (MAX_SINK_REFUSALS
+    # finds the landings inside the first steps after its bounces, 56 impacts to 0.5 s instead of 50)
+    py, c = _run_steps(FlexibleOscillator(**kw), times, 0.0, slack=100.0, demand_rtol=1e-7, max_steps=None, **init)
     assert len(entries) > 10 and py.integrator.impacts > 10
     assert min(entries) >= -py.integrator.event_tol, min(entries)

@@ -134,6 +134,25 @@ def dip_search(stepper, G: Callable, armed, g_prev: list, g_new: list, n: int):
     return neg, ta, tb, ga, gb, dense
 
 
+def sinks(dense: Callable, G: Callable, ids, t0: float, t1: float, n: int, level: float) -> bool:
+    """Whether one of the functions ``ids`` of G, which start the step at the ground (watched), goes below
+    -``level`` inside the step on its interpolant: at the ``n`` - 1 inner sub-samples and, where such a function
+    starts (its value then ~ t^2), at t0 + (t1 - t0) 4^-k down to round-off in time."""
+    d = t1 - t0
+    for j in range(1, n):
+        tj = t0 + d * j / float(n)
+        gj = G(tj, dense(tj))
+        if any(gj[i] < -level for i in ids):
+            return True
+    xtol = 4.0 * math.ulp(max(abs(t1), 1.0))
+    while d > xtol:
+        d *= 0.25
+        gt = G(t0 + d, dense(t0 + d))
+        if any(gt[i] < -level for i in ids):
+            return True
+    return False
+
+
 def bounce_search(dense: Callable, G: Callable, i: int, t0: float, t1: float, level: float):
     """(t, G(t)) of a time in (t0, t1) where function i is above ``level`` (> 0, above round-off), sampled
     at t0 + (t1 - t0) 4^-n down to round-off in time (it starts at zero with a positive slope), or None."""

@@ -29,6 +29,9 @@
 /** [1] event_driven.DEMAND_STEP_GATE: a step whose ends need less than this fraction of the largest demand so
  *  far is not searched */
 #define ED_DEMAND_STEP_GATE 0.5
+/** [1] event_driven.MAX_SINK_REFUSALS: steps a segment may refuse (each retried at half its length) because
+ *  their interpolant sinks an open corner that started the segment at the ground below -gap (rk_sinks) */
+#define ED_MAX_SINK_REFUSALS 8
 /** brent_max's max_iter (the Python's default) */
 #define ED_BRENT_MAX_ITER 60
 /** [1] check_times: an impact time may exceed t by this relative round-off */
@@ -1016,7 +1019,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
-    int mode = s->mode, k = s->k, kinds[RK_MAX_EVENTS], has_totals, peaks, first, i;
+    int mode = s->mode, k = s->k, kinds[RK_MAX_EVENTS], has_totals, peaks, first, refusals, i;
     ed_fn f;
     ed_ev ev;
     rk_event_ctx c;
@@ -1073,6 +1076,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         ev.has_start[i] = 0;
     }
     first = 1;
+    refusals = 0;
     while (s->stepper.t < t_stop) {
         double d_new = NAN, te;
         int found, idx;
@@ -1089,6 +1093,23 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, g_new, has_totals ? lam : NULL));
         if (has_totals)
             d_new = ed_ratio(s, lam);
+        if (refusals < ED_MAX_SINK_REFUSALS && s->stepper.t > s->stepper.t_old) {
+            /* `MAX_SINK_REFUSALS`: a step whose interpolant sinks a watched open corner is retried at half */
+            int ids[RK_MAX_EVENTS], n_ids = 0, sunk = 0;
+            for (i = 0; i < ev.n; i++)
+                if (ev.watch[i] && kinds[i] == ED_IMPACT && g_new[i] > -s->event_tol)
+                    ids[n_ids++] = i;
+            if (n_ids > 0)
+                ED_TRYF(&f, rk_sinks(&c, ids, n_ids, s->stepper.t_old, s->stepper.t,
+                                     e->options.tolerances.sub_samples, e->options.tolerances.gap, &sunk, err));
+            if (sunk) {
+                double h_half = 0.5 * (s->stepper.t - s->stepper.t_old);
+                refusals++;
+                ED_TRYF(&f, rk_stepper_restart(&s->stepper, ed_rhs, &f, s->stepper.t_old, s->stepper.y_old,
+                                               h_half, err));
+                continue;
+            }
+        }
         for (i = 0; i < ev.n; i++)
             ev.has_start[i] = 0;
         if (first) {

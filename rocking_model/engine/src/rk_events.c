@@ -263,6 +263,39 @@ static double py_ulp(double x)
     return up - x;
 }
 
+rk_status rk_sinks(rk_event_ctx *c, const int *ids, int n_ids, double t0, double t1, int n, double level,
+                   int *sunk, rk_error *err)
+{
+    double d = t1 - t0, a1 = fabs(t1), g[RK_MAX_EVENTS];
+    double xtol = 4.0 * py_ulp(1.0 > a1 ? 1.0 : a1);        /* max(abs(t1), 1.0) */
+    int j, k;
+    rk_status st;
+    rk_error_clear(err);
+    *sunk = 0;
+    for (j = 1; j < n; j++) {
+        st = rk_event_eval(c, t0 + d * j / (double)n, g, err);
+        if (st != RK_OK)
+            return st;
+        for (k = 0; k < n_ids; k++)
+            if (g[ids[k]] < -level) {
+                *sunk = 1;
+                return RK_OK;
+            }
+    }
+    while (d > xtol) {
+        d *= 0.25;
+        st = rk_event_eval(c, t0 + d, g, err);
+        if (st != RK_OK)
+            return st;
+        for (k = 0; k < n_ids; k++)
+            if (g[ids[k]] < -level) {
+                *sunk = 1;
+                return RK_OK;
+            }
+    }
+    return RK_OK;
+}
+
 rk_status rk_bounce_search(rk_event_ctx *c, int i, double t0, double t1, double level, int *found, double *t,
                            double *g, rk_error *err)
 {

@@ -128,6 +128,10 @@ int rk_may_dip(double g0, double gm, double g1);
 rk_status rk_dip_search(rk_event_ctx *c, const int *armed, const double *g_prev, const double *g_new, int n,
                         int *hits, int *n_hits, double *ta, double *tb, double *ga, double *gb, int *used_dense,
                         rk_error *err);
+/** events.sinks: *sunk 1 when one of the functions ids[n_ids] (watched: they start the step at the ground) is
+ *  below -level on the interpolant of the last step (n - 1 inner sub-samples, then t0 + (t1 - t0) 4^-k). */
+rk_status rk_sinks(rk_event_ctx *c, const int *ids, int n_ids, double t0, double t1, int n, double level,
+                   int *sunk, rk_error *err);
 /** events.bounce_search: *found 1 with (t, g[n_events]) where function i is above level. */
 rk_status rk_bounce_search(rk_event_ctx *c, int i, double t0, double t1, double level, int *found, double *t,
                            double *g, rk_error *err);
