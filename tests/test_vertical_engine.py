@@ -362,26 +362,13 @@ SCENE_PHI_TOL = 1e-6
 
 
 def _hypothesis_scene(model, scheme, phi0, gm, times):
-    import warnings
+    from test_engine_event_driven import advance_pair
+
     py = Simulator(model, scheme, engine="python", phi_0=phi0, on_report="ignore", max_steps=None)
     c = Simulator(model, scheme, engine="c", phi_0=phi0, on_report="ignore", max_steps=None)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for t in times:
-            try:
-                py.advance(t, gm)
-            except ValueError as exc:
-                # a documented limit of the model (the classical rule at a sliding pivot): the same refusal
-                with pytest.raises(ValueError) as ec:
-                    c.advance(t, gm)
-                assert str(ec.value) == str(exc)
-                return
-            c.advance(t, gm)
-            q, _ = c.integrator.state()
-            assert np.all(np.isfinite(q))
-    if bool(py.integrator.overturned) != bool(c.integrator.overturned):
-        pytest.skip("an overturning boundary (round-off decides)")
-    assert abs(c.outputs()["phi"] - py.outputs()["phi"]) <= SCENE_PHI_TOL, (py.outputs()["phi"], c.outputs()["phi"])
+    if advance_pair(py, c, gm, times):
+        assert abs(c.outputs()["phi"] - py.outputs()["phi"]) <= SCENE_PHI_TOL, (py.outputs()["phi"],
+                                                                                 c.outputs()["phi"])
 
 
 @settings(max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
