@@ -355,6 +355,7 @@ def test_the_pair_of_motions_equals_two_component_motion(case):
 # ---------------------------------------------------------------------------------------------- hypothesis
 from hypothesis import HealthCheck, given, settings          # noqa: E402
 from hypothesis import strategies as st                      # noqa: E402
+from test_engine_event_driven import advance_pair             # noqa: E402
 
 #: [rad] hypothesis scenes: the same motion to the scheme's tolerance (an error of order tol per step that
 #: impacts amplify; 1e-6 rad is 1e-5 of the rocking amplitudes), as tests/test_engine_event_driven.py
@@ -362,8 +363,6 @@ SCENE_PHI_TOL = 1e-6
 
 
 def _hypothesis_scene(model, scheme, phi0, gm, times):
-    from test_engine_event_driven import advance_pair
-
     py = Simulator(model, scheme, engine="python", phi_0=phi0, on_report="ignore", max_steps=None)
     c = Simulator(model, scheme, engine="c", phi_0=phi0, on_report="ignore", max_steps=None)
     if advance_pair(py, c, gm, times):
