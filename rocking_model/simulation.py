@@ -60,6 +60,21 @@ DT_MIN_REL = 1e-6
 #: the types of a number that `Simulator.advance` passes to the compiled engine as is (a non-finite numpy float
 #: takes the checked path: its message names it as the Python does, np.float64(nan))
 _NUMBERS = (float, int, np.float64)
+
+
+def _vertical_or_none(ag_v):
+    """``ag_v`` as given, None for a numeric zero (no vertical motion: today's code path, bit for bit)."""
+    return None if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0 else ag_v
+
+
+def _with_vertical(horizontal: GroundMotion, ag_v) -> TwoComponentMotion:
+    """The ground motion ``horizontal`` with the vertical ground acceleration ``ag_v``; ValueError naming ag_v
+    when ``horizontal`` already carries one (it is given once: in the ground motion or as ag_v)."""
+    if horizontal.vertical is not None:
+        raise ValueError("ag_v: the ground motion already has a vertical component (a TwoComponentMotion, a pair "
+                         "of callables or (t, ag, ag_v) arrays); give the vertical ground acceleration once, "
+                         "either in the ground motion or as ag_v, not both")
+    return TwoComponentMotion(horizontal, ag_v)
 #: the accepted values of ``Simulator(on_report=...)``
 _ON_REPORT = {"warn": "warn", "raise": "raise", "ignore": "ignore"}
 
@@ -193,12 +208,7 @@ class Simulator:
         last = self._motion
         if last is not None and last[0] is ag and last[1] is ag_v:
             return last[2]
-        horizontal = as_ground_motion(ag)
-        if horizontal.vertical is not None:
-            raise ValueError("ag_v: the ground motion ag already has a vertical component (a TwoComponentMotion, "
-                             "a pair of callables or (t, ag, ag_v) arrays); give the vertical ground acceleration "
-                             "once, either in ag or as ag_v, not both")
-        gm = checked_motion(TwoComponentMotion(horizontal, ag_v))
+        gm = checked_motion(_with_vertical(as_ground_motion(ag), ag_v))
         if not gm.constant:
             self._motion = (ag, ag_v, gm)
         return gm
@@ -217,8 +227,8 @@ class Simulator:
         Raises ValueError (bad t_end, ag or ag_v, or a motion that overflows: the message names the likely
         cause) or `WorkLimitError` (more than max_steps internal steps); either way the simulator is left
         exactly as before the call."""
-        if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
-            ag_v = None                       # no vertical motion: today's code path, bit for bit
+        if ag_v is not None:                  # (the per-step path without a vertical component stays a test)
+            ag_v = _vertical_or_none(ag_v)
         if self.engine == "c" and ag_v is None and type(ag) in _NUMBERS and type(t_end) in _NUMBERS \
                 and self.on_report != "raise" \
                 and (type(ag) is not np.float64 or math.isfinite(ag)) \
@@ -266,8 +276,8 @@ class Simulator:
         (contact codes, {output name: array}, impacts, overturned), arrays of len(times) + 1 that start with
         the current state. The same guarantees as `advance` (the work budget applies between consecutive
         times); the event-driven scheme reads its dense output, so the times do not shorten its steps."""
-        if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
-            ag_v = None                       # no vertical motion: today's code path
+        if ag_v is not None:                  # (the per-step path without a vertical component stays a test)
+            ag_v = _vertical_or_none(ag_v)
         integ = self.integrator
         if self.engine == "c" and isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1:
             # the compiled engine reads the array as is: checked at once (the first bad value named as below)
@@ -463,16 +473,9 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     Other keyword arguments go to `Simulator` (dt_max, tolerance, theta, zeno_tol, max_steps, t0, engine,
     phi_0, ...); the work budget max_steps applies to each output interval.
     """
-    if ag_v is not None and type(ag_v) in _NUMBERS and ag_v == 0.0:
-        ag_v = None                           # no vertical motion: today's code path
+    ag_v = _vertical_or_none(ag_v)
     gm = as_ground_motion(ground_motion)
-    if ag_v is not None:
-        if gm.vertical is not None:
-            raise ValueError("ag_v: the ground motion already has a vertical component (a TwoComponentMotion, a "
-                             "pair of callables or (t, ag, ag_v) arrays); give the vertical ground acceleration "
-                             "once, either in ground_motion or as ag_v, not both")
-        gm = TwoComponentMotion(gm, ag_v)
-    gm = checked_motion(gm)
+    gm = checked_motion(gm if ag_v is None else _with_vertical(gm, ag_v))
     vert = gm.vertical
     hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
     kwargs.setdefault("impact_log_size", None)
