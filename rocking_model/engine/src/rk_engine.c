@@ -724,22 +724,16 @@ rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk
 /** Integrator._row into row ``r`` of the sample arrays. */
 static void write_row(rk_engine *e, long long r, int *modes, double *values, long long *impacts, int *overturned)
 {
-    int n = e->model.ops->n_outputs, stride = n + 2, j;
-    long long cs = e->sample_cs;
-    if (cs > 1) {
-        /* the column layout (rk_engine_sample_columns) */
-        double row[RK_MAX_OUTPUTS];
-        rk_engine_outputs(e, row);
-        for (j = 0; j < n; j++)
-            values[j * cs + r] = row[j];
-        values[n * cs + r] = rk_engine_friction_demand(e);
-        values[(n + 1) * cs + r] = (double)rk_engine_painleve(e);
-    } else {
-        double *row = values + r * stride;
-        rk_engine_outputs(e, row);
-        row[n] = rk_engine_friction_demand(e);
-        row[n + 1] = (double)rk_engine_painleve(e);
-    }
+    int n = e->model.ops->n_outputs, j;
+    /* entry (r, j) at values[r * rs + j * js]: rows of n + 2 values, or the column layout of
+     * rk_engine_sample_columns (columns of sample_cs values) */
+    long long cs = e->sample_cs, rs = cs > 1 ? 1 : n + 2, js = cs > 1 ? cs : 1;
+    double row[RK_MAX_OUTPUTS + 2];
+    rk_engine_outputs(e, row);
+    row[n] = rk_engine_friction_demand(e);
+    row[n + 1] = (double)rk_engine_painleve(e);
+    for (j = 0; j < n + 2; j++)
+        values[r * rs + j * js] = row[j];
     modes[r] = rk_engine_contact_code(e);
     impacts[r] = rk_engine_impacts(e);
     overturned[r] = rk_engine_overturned(e);
