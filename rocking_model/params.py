@@ -42,6 +42,8 @@ class Param:
     def check(self, value):
         """``value`` checked against the declaration (ValueError naming it and the allowed range/values);
         a choice is returned as its code."""
+        if self.accepts_as_is(value):
+            return value
         if self.items:
             return check_choice(self.name, value, self._allowed)
         if self.inf_ok and isinstance(value, (int, float, str)) and not isinstance(value, bool):
@@ -57,6 +59,26 @@ class Param:
             if self.inf_ok and self.hi is None:          # the range includes +inf
                 raise ValueError(str(exc).replace(", inf)", ", inf]")) from None
             raise
+
+    @functools.cached_property
+    def accepts_as_is(self):
+        """A predicate true of the values that `check` returns unchanged (a float inside a real range, an int
+        code of a choice, +inf where it is allowed): the common case, tested without the checks' calls. A value
+        it rejects is not bad: `check` converts it or names it in its message."""
+        if self.items:
+            codes = frozenset(code for _, code, _ in self.items)
+            return lambda x: type(x) is int and x in codes
+        lo, hi = (-math.inf if self.lo is None else self.lo), (math.inf if self.hi is None else self.hi)
+        lo_open, hi_open = self.lo_open or self.lo is None, self.hi_open or self.hi is None
+        inf_ok = self.inf_ok
+
+        def accepts(x) -> bool:
+            if type(x) is not float:
+                return False
+            if inf_ok and x == math.inf:
+                return True
+            return (lo < x or (not lo_open and x == lo)) and (x < hi or (not hi_open and x == hi))
+        return accepts
 
     @functools.cached_property
     def _allowed(self) -> dict:
@@ -115,8 +137,18 @@ def declared_parameters(cls) -> tuple:
     return out
 
 
+#: class -> ((name, Param, its `Param.accepts_as_is`), ...) of its declared parameters
+_CHECKERS: dict = {}
+
+
 def check_parameters(obj) -> None:
     """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place."""
-    setattr_ = object.__setattr__
-    for p in declared_parameters(type(obj)):
-        setattr_(obj, p.name, p.check(getattr(obj, p.name)))
+    cls = type(obj)
+    checkers = _CHECKERS.get(cls)
+    if checkers is None:
+        checkers = _CHECKERS[cls] = tuple((p.name, p, p.accepts_as_is) for p in declared_parameters(cls))
+    d = obj.__dict__
+    for name, p, as_is in checkers:
+        value = d[name] if name in d else getattr(obj, name)
+        if not as_is(value):
+            object.__setattr__(obj, name, p.check(value))

@@ -85,15 +85,15 @@ def vertical_spec(gm: GroundMotion):
 
 
 def _sampled(names, modes, values, impacts, overturned) -> tuple:
-    """`Integrator.sample`'s (modes, outputs, impacts, overturned) from the rows the engine wrote (``values``: the
-    outputs, friction_demand, painleve, one row each: the engine wrote them in columns): one contiguous array per
-    output, as the Python scheme returns (rows of one block: a copy per column costs more than the run of a short
-    scene)."""
+    """`Integrator.sample`'s (modes, outputs, impacts, overturned) from the arrays the engine wrote (``values``: the
+    outputs, friction_demand, painleve, one row each: the engine wrote them in columns; ``modes`` int64 and
+    ``overturned`` bool, as the Python scheme returns them): one contiguous array per output (rows of one block: a
+    copy per column costs more than the run of a short scene)."""
     cols = values
     out = dict(zip(names, cols))
     out["friction_demand"] = cols[-2]
     out["painleve"] = cols[-1].astype(np.int64)
-    return modes.astype(np.int64), out, impacts, overturned.astype(bool)
+    return modes, out, impacts, overturned
 
 
 #: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
@@ -180,7 +180,7 @@ class CompiledIntegrator(Integrator):
         self._options = options
         self._t0 = float(t0)
         self._start = (int(mode), _floats(q), _floats(v))
-        self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
+        self._engine = self._new_engine(_engine)
         self._names = self._engine.output_names
         self._t_fail = None
         self.reports = []
@@ -235,6 +235,14 @@ class CompiledIntegrator(Integrator):
             values = [getattr(model, name) for name in names]
         return cls.__name__, [x if type(x) is float else float(x) for x in values]
 
+    def _new_engine(self, _engine):
+        """A new `Engine` at the start state: `_engine_args` and `_engine_kwargs` with the options passed by
+        position, in the extension's order (a keyword costs it a dictionary lookup each)."""
+        o = self._options
+        return _engine.Engine(*self._engine_args(), None, self._scheme_cls.code, self._t0, float(o.dt_max),
+                              float(o.tolerance), float(o.theta), float(o.zeno_tol), o.method, o.impact_log_size,
+                              tolerances=o.tolerances, state=self._start)
+
     def _engine_kwargs(self):
         o = self._options
         return dict(scheme=self._scheme_cls.code, t0=self._t0, dt_max=float(o.dt_max), tolerance=float(o.tolerance),
@@ -253,7 +261,7 @@ class CompiledIntegrator(Integrator):
 
         snap = state.pop("_engine")
         self.__dict__.update(state)
-        self._engine = _engine.Engine(*self._engine_args(), state=self._start, **self._engine_kwargs())
+        self._engine = self._new_engine(_engine)
         self._engine.restore(snap)
 
     # ------------------------------------------------------------------ attributes
@@ -377,10 +385,10 @@ class CompiledIntegrator(Integrator):
             times = np.ascontiguousarray(times, dtype=float)
         n = times.size + 1
         names = self._names
-        modes = np.empty(n, dtype=np.intc)
+        modes = np.empty(n, dtype=np.int64)
         values = np.empty((len(names) + 2, n), dtype=float)        # one row per output (columns=True)
         impacts = np.empty(n, dtype=np.int64)
-        overturned = np.empty(n, dtype=np.intc)
+        overturned = np.empty(n, dtype=bool)
         spec = motion_spec(ag)
         vspec = vertical_spec(ag)
         ident = self._identity(ag)

@@ -390,6 +390,9 @@ typedef struct EngineObject {
 
 static int read_options(PyObject *kw, rk_options *o);
 
+/* the model kinds whose output_dict() keys are kept (rk_model_kinds() lists 2 today) */
+#define RK_MAX_KINDS_CACHED 16
+
 static int engine_init(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
     static char *kwlist[] = {"kind", "params", "initial", "scheme", "t0", "dt_max", "tolerance", "theta",
@@ -403,7 +406,7 @@ static int engine_init(EngineObject *self, PyObject *args, PyObject *kwargs)
     rk_error err;
     rk_engine *e;
     rk_options_default(&o);
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sO|O$OdddddOOiOO", kwlist, &kind, &params_obj, &initial_obj,
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sO|OOdddddOOiOO", kwlist, &kind, &params_obj, &initial_obj,
                                      &scheme, &o.t0, &o.dt_max, &o.tolerance, &o.theta, &o.zeno_tol, &method,
                                      &log_size, &max_events, &tolerances, &state))
         return -1;
@@ -491,18 +494,38 @@ static int engine_init(EngineObject *self, PyObject *args, PyObject *kwargs)
     rk_engine_free(self->e);
     self->e = e;
     {
+        /* the keys of output_dict(), made once per model kind (an engine per run: interning 13 names each time
+         * cost about as much as the engine's creation) */
         static const char *const extra[] = {"contact", "impacts", "overturned", "friction_demand", "painleve"};
-        int n = rk_engine_n_outputs(e), i;
-        PyObject *keys = PyTuple_New(n + 5);
-        if (keys == NULL)
-            return -1;
-        for (i = 0; i < n + 5; i++) {
-            PyObject *k = PyUnicode_InternFromString(i < n ? rk_engine_output_name(e, i) : extra[i - n]);
-            if (k == NULL) {
-                Py_DECREF(keys);
-                return -1;
+        static const rk_model_ops *cached_ops[RK_MAX_KINDS_CACHED];
+        static PyObject *cached_keys[RK_MAX_KINDS_CACHED];
+        const rk_model_ops *ops = e->model.ops;
+        PyObject *keys = NULL;
+        int n = rk_engine_n_outputs(e), i, slot;
+        for (slot = 0; slot < RK_MAX_KINDS_CACHED && cached_ops[slot] != NULL; slot++)
+            if (cached_ops[slot] == ops) {
+                keys = cached_keys[slot];
+                break;
             }
-            PyTuple_SET_ITEM(keys, i, k);
+        if (keys == NULL) {
+            keys = PyTuple_New(n + 5);
+            if (keys == NULL)
+                return -1;
+            for (i = 0; i < n + 5; i++) {
+                PyObject *k = PyUnicode_InternFromString(i < n ? rk_engine_output_name(e, i) : extra[i - n]);
+                if (k == NULL) {
+                    Py_DECREF(keys);
+                    return -1;
+                }
+                PyTuple_SET_ITEM(keys, i, k);
+            }
+            if (slot < RK_MAX_KINDS_CACHED) {      /* kept for the life of the process (one per model kind) */
+                cached_ops[slot] = ops;
+                cached_keys[slot] = keys;
+                Py_INCREF(keys);
+            }
+        } else {
+            Py_INCREF(keys);
         }
         Py_XDECREF(self->keys);
         self->keys = keys;
@@ -790,6 +813,22 @@ static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssi
     return 0;
 }
 
+/** writable_buffer of int items: C int (int32), or ``wide`` bytes each (8: int64, 1: bool) */
+static int writable_int_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssize_t wide, Py_ssize_t n)
+{
+    if (PyObject_GetBuffer(obj, b, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s must be a writable contiguous array", name);
+        return -1;
+    }
+    if ((b->itemsize != (Py_ssize_t)sizeof(int) && b->itemsize != wide) || b->len != n * b->itemsize) {
+        PyBuffer_Release(b);
+        PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd or %zd bytes", name, n, (Py_ssize_t)sizeof(int),
+                     wide);
+        return -1;
+    }
+    return 0;
+}
+
 static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
     static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", "identity",
@@ -831,7 +870,7 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     }
     h.m[idx].identity = identity;
     stride = rk_engine_n_outputs(self->e) + 2;
-    if (writable_buffer(modes_obj, &bm, "modes", (Py_ssize_t)sizeof(int), n + 1) < 0) {
+    if (writable_int_buffer(modes_obj, &bm, "modes", 8, n + 1) < 0) {
         holder_release(&h);
         return NULL;
     }
@@ -846,30 +885,64 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
         holder_release(&h);
         return NULL;
     }
-    if (writable_buffer(over_obj, &bo, "overturned", (Py_ssize_t)sizeof(int), n + 1) < 0) {
+    if (writable_int_buffer(over_obj, &bo, "overturned", 1, n + 1) < 0) {
         PyBuffer_Release(&bm);
         PyBuffer_Release(&bv);
         PyBuffer_Release(&bi);
         holder_release(&h);
         return NULL;
     }
-    if (h.n_cbs > 0) {
-        saved = (rk_core *)PyMem_Malloc(sizeof(rk_core));
-        if (saved == NULL) {
-            st = RK_ERR_MEMORY;
-            rk_fail(&self->e->error, st, "out of memory");
-        } else {
-            rk_engine_save(self->e, saved);
-            st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
-                                                                         max_steps, (int *)bm.buf, (double *)bv.buf,
-                                                                         (long long *)bi.buf, (int *)bo.buf);
+    {
+        /* int64 modes and bool overturned (the arrays Integrator.sample returns) are written through int scratch
+         * rows and widened / narrowed after the run: the caller needs no converted copies */
+        int *modes = (int *)bm.buf, *over = (int *)bo.buf, *scratch = NULL;
+        if (bm.itemsize != (Py_ssize_t)sizeof(int) || bo.itemsize != (Py_ssize_t)sizeof(int)) {
+            scratch = (int *)PyMem_Malloc(2 * (size_t)(n + 1) * sizeof(int));
+            if (scratch == NULL) {
+                PyBuffer_Release(&bm);
+                PyBuffer_Release(&bv);
+                PyBuffer_Release(&bi);
+                PyBuffer_Release(&bo);
+                holder_release(&h);
+                return PyErr_NoMemory();
+            }
+            if (bm.itemsize != (Py_ssize_t)sizeof(int))
+                modes = scratch;
+            if (bo.itemsize != (Py_ssize_t)sizeof(int))
+                over = scratch + n + 1;
         }
-    } else {
-        Py_BEGIN_ALLOW_THREADS
-        st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
-                                                                     max_steps, (int *)bm.buf, (double *)bv.buf,
-                                                                     (long long *)bi.buf, (int *)bo.buf);
-        Py_END_ALLOW_THREADS
+        if (h.n_cbs > 0) {
+            saved = (rk_core *)PyMem_Malloc(sizeof(rk_core));
+            if (saved == NULL) {
+                st = RK_ERR_MEMORY;
+                rk_fail(&self->e->error, st, "out of memory");
+            } else {
+                rk_engine_save(self->e, saved);
+                st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times,
+                                                                             (long long)n, max_steps, modes,
+                                                                             (double *)bv.buf, (long long *)bi.buf,
+                                                                             over);
+            }
+        } else {
+            Py_BEGIN_ALLOW_THREADS
+            st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
+                                                                         max_steps, modes, (double *)bv.buf,
+                                                                         (long long *)bi.buf, over);
+            Py_END_ALLOW_THREADS
+        }
+        if (modes != (int *)bm.buf) {
+            long long *wide = (long long *)bm.buf;
+            Py_ssize_t i;
+            for (i = 0; i <= n; i++)
+                wide[i] = modes[i];
+        }
+        if (over != (int *)bo.buf) {
+            unsigned char *flags = (unsigned char *)bo.buf;
+            Py_ssize_t i;
+            for (i = 0; i <= n; i++)
+                flags[i] = over[i] != 0;
+        }
+        PyMem_Free(scratch);
     }
     PyBuffer_Release(&bm);
     PyBuffer_Release(&bv);
@@ -1393,8 +1466,9 @@ static PyMethodDef engine_methods[] = {
      "spec (vspec: the vertical component's, None: none)."},
     {"sample", (PyCFunction)(void (*)(void))engine_sample, METH_VARARGS | METH_KEYWORDS,
      "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None, columns=False): "
-     "Integrator.sample into the given arrays (int32 n+1, float64 (n+1) x (n_outputs+2), int64 n+1, int32 n+1; "
-     "columns=True: values (n_outputs+2) x (n+1), one row per output)."},
+     "Integrator.sample into the given arrays (modes: int32 or int64 n+1, values: float64 (n+1) x (n_outputs+2), "
+     "impacts: int64 n+1, overturned: int32 or bool n+1; columns=True: values (n_outputs+2) x (n+1), one row per "
+     "output)."},
     {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
     {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
      "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "
@@ -1443,18 +1517,11 @@ GETTER(impact_times, impact_times_list(self->e))
 
 static PyObject *get_output_names(EngineObject *self, void *closure)
 {
-    int i, n;
-    PyObject *t;
     (void)closure;
     if (!ready(self))
         return NULL;
-    n = rk_engine_n_outputs(self->e);
-    t = PyTuple_New(n);
-    if (t == NULL)
-        return NULL;
-    for (i = 0; i < n; i++)
-        PyTuple_SET_ITEM(t, i, PyUnicode_FromString(rk_engine_output_name(self->e, i)));
-    return t;
+    /* the first n keys of output_dict(): the same (interned) strings every time */
+    return PyTuple_GetSlice(self->keys, 0, rk_engine_n_outputs(self->e));
 }
 
 static PyGetSetDef engine_getset[] = {
@@ -1481,10 +1548,12 @@ static PyGetSetDef engine_getset[] = {
 
 static PyType_Slot engine_slots[] = {
     {Py_tp_dealloc, (void *)engine_dealloc},
-    {Py_tp_doc, (void *)"Engine(kind, params, initial=None, *, scheme=1, t0=0.0, dt_max=0.0, tolerance=1e-8, "
+    {Py_tp_doc, (void *)"Engine(kind, params, initial=None, scheme=1, t0=0.0, dt_max=0.0, tolerance=1e-8, "
                         "theta=0.5, zeno_tol=1e-6, method=0, impact_log_size=None, max_events=100000, "
                         "tolerances=None, state=None): one simulation in the C engine (rk_engine.h). state = "
-                        "(mode, q, v) starts there instead of at the initial values."},
+                        "(mode, q, v) starts there instead of at the initial values. Every argument may be "
+                        "passed by position, in this order (CompiledIntegrator does: keywords cost a lookup "
+                        "each)."},
     {Py_tp_methods, (void *)engine_methods},
     {Py_tp_getset, (void *)engine_getset},
     {Py_tp_init, (void *)engine_init},

@@ -355,7 +355,8 @@ class RigidBlock(RockingModel):
 
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, **extra):
         self.check_initial_names(extra)
-        phi_0, phi_dot_0 = (p.check(value) for p, value in zip(self.INITIAL, (phi_0, phi_dot_0)))
+        p_phi, p_phi_dot = self.INITIAL
+        phi_0, phi_dot_0 = p_phi.check(phi_0), p_phi_dot.check(phi_dot_0)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, np.zeros(0), np.zeros(0))

@@ -324,11 +324,6 @@ rk_set rk_two_corner_closed_of(const rk_model *m, int mode)
     }
 }
 
-int rk_pivot_sign(int mode)
-{
-    return (mode == RK_MODE_LEFT || mode == RK_MODE_LEFT_SLIDE_POS || mode == RK_MODE_LEFT_SLIDE_NEG) ? -1 : 1;
-}
-
 int rk_mode_of_initial_state(double phi_0, double phi_dot_0)
 {
     if (phi_0 > 0.0 || (phi_0 == 0.0 && phi_dot_0 > 0.0))

@@ -254,7 +254,11 @@ double rk_py_hypot(double a, double b);
 int rk_two_corner_mode_of(const rk_model *m, rk_set closed, int sigma);
 rk_set rk_two_corner_closed_of(const rk_model *m, int mode);
 int rk_two_corner_stick_of(const rk_model *m, int mode, int *sigma);
-int rk_pivot_sign(int mode);
+/* inline: the kernels call it in every rhs, monitor and output row */
+static inline int rk_pivot_sign(int mode)
+{
+    return (mode == RK_MODE_LEFT || mode == RK_MODE_LEFT_SLIDE_POS || mode == RK_MODE_LEFT_SLIDE_NEG) ? -1 : 1;
+}
 /** RockingModel.mode_of_initial_state. */
 int rk_mode_of_initial_state(double phi_0, double phi_dot_0);
 /** Small dense solves (n <= RK_MAX_Y; the kernels' and the contact problems'): Gaussian elimination with partial pivoting (np.linalg.solve;

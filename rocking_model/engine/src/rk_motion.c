@@ -167,7 +167,15 @@ static double sampled_eval(const rk_motion *m, double t, long long *i_last)
     if (!(tl[i] <= t && t < tl[i + 1])) {
         if (t < tl[0] || t > tl[n - 1])
             return 0.0;
-        i = bisect_right(tl, n, t) - 1;
+        /* the neighbouring intervals first: a step's stages and its end at a breakpoint move between adjacent
+         * intervals (bisect's answer, bisect_right - 1, is the one interval [t_j, t_j+1) that holds t, so a
+         * neighbour that holds it is that interval) */
+        if (i + 2 < n && tl[i + 1] <= t && t < tl[i + 2])
+            i = i + 1;
+        else if (i >= 1 && tl[i - 1] <= t && t < tl[i])
+            i = i - 1;
+        else
+            i = bisect_right(tl, n, t) - 1;
         if (i >= n - 1)
             return al[n - 1];
         *i_last = i;
