@@ -115,8 +115,10 @@ def test_free_rocking_mu_inf_same_steps_and_impacts():
 
 @needs_engine
 def test_free_rocking_one_advance_chatter():
-    """e_N = 0.9: 279 impacts in one advance of 4 s, rocking impacts and chatter in flight (DOP853)."""
-    py, c = _run_steps(RigidBlock(b=0.2, h=1.0, e_N=0.9), [4.0], 0.0, phi_0=0.12, tolerance=1e-9)
+    """e_N = 0.9: 279 impacts in one advance of 4 s, rocking impacts and chatter in flight (DOP853). Slack 100:
+    an ulp of the impact solve (numpy's LAPACK kernel differs by CPU: on an Intel Xeon the 49th impact time
+    already differs by 1e-12 s) is carried through 279 impacts (1.2e-11 s at the end there)."""
+    py, c = _run_steps(RigidBlock(b=0.2, h=1.0, e_N=0.9), [4.0], 0.0, slack=100.0, phi_0=0.12, tolerance=1e-9)
     assert py.integrator.impacts >= 200
 
 
@@ -347,8 +349,10 @@ def test_finite_mu_rocking_and_sliding():
 
 @needs_engine
 def test_zeno_accumulation():
-    """e_N = 0.5: the impacts accumulate (some 130 in 5 s, the Zeno rule ending each accumulation)."""
-    py, c = _run_steps(RigidBlock(b=0.2, h=1.0, e_N=0.5), [1.0, 2.0, 3.0, 5.0], 0.0, phi_0=0.05)
+    """e_N = 0.5: the impacts accumulate (some 130 in 5 s, the Zeno rule ending each accumulation). Slack 10: an
+    ulp of the impact solve (numpy's LAPACK kernel differs by CPU) carried through the accumulations moves the
+    last impact times by 1.03e-12 s on an Intel Xeon (within 1e-12 s on the AMD EPYC of earlier runs)."""
+    py, c = _run_steps(RigidBlock(b=0.2, h=1.0, e_N=0.5), [1.0, 2.0, 3.0, 5.0], 0.0, slack=10.0, phi_0=0.05)
     assert py.integrator.impacts > 50
 
 
