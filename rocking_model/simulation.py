@@ -298,6 +298,24 @@ class Simulator:
     def _sample(self, times, gm) -> tuple:
         """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``."""
         integ = self.integrator
+        if self.engine == "c" and self.on_report != "raise":
+            # the lean path, as advance's: the engine checkpoints, checks the outputs and restores itself on any
+            # error (rk_engine_sample); the same exceptions and reports as _guarded
+            try:
+                result = integ.sample(times, gm, max_steps=self.max_steps)
+            except BaseException as exc:
+                t_fail = integ.t
+                integ.forget_failure()
+                err = self._failure(exc, times[-1], gm, t_fail)
+                if err is exc:
+                    raise
+                raise err from exc
+            eng = integ._engine
+            if eng.report_count:
+                self._c_reports(eng)
+            else:
+                integ.reports, self.last_reports = [], []
+            return result
         return self._guarded(times[-1], gm, lambda: integ.sample(times, gm, max_steps=self.max_steps))
 
     def _guarded(self, t_end: float, gm, action):
@@ -315,22 +333,29 @@ class Simulator:
                 if bad:
                     raise FloatingPointError("non-finite outputs " + ", ".join(f"{k} = {v!r}"
                                                                               for k, v in bad.items()))
-        except (WorkLimitError, SolverFailure):
-            integ.rollback(snap)
-            raise
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        except BaseException as exc:
             t_fail = integ.t
             integ.rollback(snap)
-            msg = str(exc)
-            if isinstance(exc, ValueError) and (" = " in msg or msg.startswith("ag")):
-                raise                 # a checked input (ag of a callable, ...): the message names it
-            raise ValueError(self._diverged(exc, t_end, gm, t_fail)) from exc
-        except BaseException:
-            integ.rollback(snap)
-            raise
+            err = self._failure(exc, t_end, gm, t_fail)
+            if err is exc:
+                raise
+            raise err from exc
         integ.commit(snap)
         self._out = (getattr(integ, self._token), out)
         return result
+
+    def _failure(self, exc: BaseException, t_end: float, gm, t_fail: float) -> BaseException:
+        """What an advance (or sample) to ``t_end`` under ``gm`` that failed with ``exc`` at ``t_fail`` raises, the
+        state already restored: a work limit, a refused step, a checked input (its message names it: ag of a
+        callable, ...) or any other exception as it is; an arithmetic failure as a ValueError that says where and
+        the likely cause."""
+        if isinstance(exc, (WorkLimitError, SolverFailure)) or \
+                not isinstance(exc, (ArithmeticError, ValueError, np.linalg.LinAlgError)):
+            return exc
+        msg = str(exc)
+        if isinstance(exc, ValueError) and (" = " in msg or msg.startswith("ag")):
+            return exc
+        return ValueError(self._diverged(exc, t_end, gm, t_fail))
 
     def _check_reports(self, reports) -> None:
         """Act on the `Report`s of an advance as ``on_report`` says (see the class docstring)."""

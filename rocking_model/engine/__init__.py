@@ -341,6 +341,11 @@ class CompiledIntegrator(Integrator):
     def commit(self, snap) -> None:
         self._engine.commit()
 
+    def forget_failure(self) -> None:
+        """After a failed call, which the engine undid itself (every call is guarded in C: rk_engine.h): ``t``
+        reads the engine's time again (the failure time was kept for the caller's message)."""
+        self._t_fail = None
+
     # ------------------------------------------------------------------ stepping
     def _run(self, call):
         self._t_fail = None

@@ -25,14 +25,6 @@ rk_status rk_fail(rk_error *err, rk_status status, const char *fmt, ...)
     return status;
 }
 
-void rk_error_clear(rk_error *err)
-{
-    if (err != NULL) {
-        err->status = RK_OK;
-        err->message[0] = '\0';
-    }
-}
-
 const char *rk_status_name(rk_status status)
 {
     switch (status) {

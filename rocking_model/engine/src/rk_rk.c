@@ -457,7 +457,8 @@ void rk_hermite_mid(const rk_stepper *s, double *y_mid)
 
 /* rk._Compiled.dense + make_interpolant: the extra stages (DOP853), the coefficient rows h * sum_i D_i k_i,
  * and the end terms of the interpolant (DOP853: Q[n_dense..n_dense+2] = F0, F1, F2) */
-static rk_status build_dense(rk_stepper *s, rk_error *err)
+/* (not inlined: once per step, against one call of rk_dense_eval per output row and event sample) */
+static RK_NOINLINE rk_status build_dense(rk_stepper *s, rk_error *err)
 {
     const rk_tableau *tab = s->tab;
     double arg[RK_MAX_Y];
