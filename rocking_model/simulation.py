@@ -515,7 +515,8 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     times *= dt
     if t0:
         times += t0
-    np.minimum(times, t_end, out=times)
+    if times[n] > t_end:              # (the grid increases: only when its last time is past t_end is any)
+        np.minimum(times, t_end, out=times)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples

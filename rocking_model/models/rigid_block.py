@@ -55,10 +55,10 @@ class RigidBlock(RockingModel):
     def __post_init__(self):
         check_parameters(self)
         # derived parameters, computed once (the integrators read them in their inner loops)
+        # (a frozen dataclass: written into the instance's dict, as object.__setattr__ would, in one call)
         R = math.hypot(self.b, self.h)
-        for name, value in (("_R", R), ("_alpha", math.atan2(self.b, self.h)),
-                            ("_I_c", self.m * R ** 2 / 3.0), ("_p", math.sqrt(3.0 * self.g / (4.0 * R)))):
-            object.__setattr__(self, name, value)
+        self.__dict__.update(_R=R, _alpha=math.atan2(self.b, self.h), _I_c=self.m * R ** 2 / 3.0,
+                             _p=math.sqrt(3.0 * self.g / (4.0 * R)))
 
     # the mass matrix and its inverse, made on first use (the compiled engine never reads them)
     @functools.cached_property
@@ -359,9 +359,9 @@ class RigidBlock(RockingModel):
         phi_0, phi_dot_0 = p_phi.check(phi_0), p_phi_dot.check(phi_dot_0)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
-            q, v = self.embed(mode, np.zeros(0), np.zeros(0))
+            q, v = self.embed(mode, (), ())       # (full contact: no reduced coordinates)
         else:
-            q, v = self.embed(mode, np.array([phi_0]), np.array([phi_dot_0]))
+            q, v = self.embed(mode, (phi_0,), (phi_dot_0,))
         return mode, q, v
 
     def energy(self, q, v):
