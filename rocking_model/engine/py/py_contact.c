@@ -463,6 +463,7 @@ static int test_model(PyObject *data, rk_model_ops *ops, rk_model *m)
     ops->contact_jacobians = tm_jacobians;
     ops->contact_drift = tm_drift;
     m->ops = ops;
+    rk_model_tabulate_modes(m);
     m->e_N = e_N;
     m->e_T = e_T;
     m->mu = mu;

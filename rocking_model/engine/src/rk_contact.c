@@ -417,7 +417,7 @@ rk_status rk_mode_forces(const rk_model *m, int mode, const double *q, const dou
     int n = m->ops->n_contacts, nd = m->ops->n_dof, i;
     double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
     double a_N[RK_MAX_CONTACTS], a_T[RK_MAX_CONTACTS], f[RK_MAX_DOF], acc_free[RK_MAX_DOF];
-    rk_set closed = m->ops->closed_of(m, mode);
+    rk_set closed = rk_closed_of(m, mode);
     rk_lcp_problem p;
     rk_lcp_solution sol;
     rk_status st;

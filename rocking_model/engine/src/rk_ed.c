@@ -65,7 +65,7 @@ static int ed_popcount(rk_set s)
 static int ed_sliding(const rk_model *m, int mode)
 {
     int sigma = 0;
-    m->ops->stick_of(m, mode, &sigma);
+    rk_stick_of(m, mode, &sigma);
     return sigma != 0;
 }
 
@@ -268,7 +268,7 @@ static rk_status ed_pass(ed_fn *f, rk_status st, rk_error *err)
 /** `_kinds`: the meaning of each event function of mode; returns their number */
 static int ed_kinds(const rk_model *m, int mode, int *kinds)
 {
-    rk_set closed = m->ops->closed_of(m, mode);
+    rk_set closed = rk_closed_of(m, mode);
     int nc = m->ops->n_contacts, i, n = 0;
     for (i = 0; i < nc; i++)
         kinds[n++] = RK_IN(closed, i) ? ED_RELEASE : ED_IMPACT;
@@ -283,7 +283,7 @@ static int ed_kinds(const rk_model *m, int mode, int *kinds)
 /** whether the mode has force totals (the Python's totals is not None: closed contacts) */
 static int ed_has_totals(const rk_model *m, int mode)
 {
-    return m->ops->closed_of(m, mode) != 0;
+    return rk_closed_of(m, mode) != 0;
 }
 
 /** `_atol_of` */
@@ -310,7 +310,7 @@ static rk_status ed_onto_ground(rk_engine *e, int mode, const double *q, const d
 {
     const rk_model *m = &e->model;
     int nc = m->ops->n_contacts, n = m->ops->n_dof, i, lowers = 0;
-    rk_set closed = m->ops->closed_of(m, mode), sunk = 0;
+    rk_set closed = rk_closed_of(m, mode), sunk = 0;
     double g[RK_MAX_CONTACTS], y[2 * RK_MAX_DOF], q_in[RK_MAX_DOF], v_in[RK_MAX_DOF];
     double rnd = e->options.tolerances.grazing * ED(e)->gap_tol;     /* [m] round-off of a located gap */
     memcpy(q_out, q, (size_t)n * sizeof(double));
@@ -344,8 +344,8 @@ static rk_status ed_set_state(rk_engine *e, int mode, const double *q_given, con
     s->k = rk_reduce_any(m, mode, q, v, s->y);
     /* a sticking mode on the ground keeps the base's horizontal offset outside its reduced state: unchanged
      * from a sticking mode, read off the state after flight or sliding (below gap_tol: round-off) */
-    if (!ed_sliding(m, mode) && m->ops->closed_of(m, mode)) {
-        if (has_old && !ed_sliding(m, old) && m->ops->closed_of(m, old)) {
+    if (!ed_sliding(m, mode) && rk_closed_of(m, mode)) {
+        if (has_old && !ed_sliding(m, old) && rk_closed_of(m, old)) {
             shift = s->shift;
         } else {
             shift = rk_shift_of(m, mode, q);
@@ -694,7 +694,7 @@ static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, do
     for (i = 0; i < nc; i++)
         if (g[i] <= s->gap_tol)
             cand |= 1u << i;
-    closed_before = m->ops->closed_of(m, s->mode);
+    closed_before = rk_closed_of(m, s->mode);
     /* a corner found below the ground beyond round-off fired event_tol below it: a grazing landing, put back
      * onto the ground and closed plastically (the Zeno rule) */
     for (i = 0; i < nc; i++)
@@ -716,7 +716,7 @@ static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, do
     }
     ED_TRY(ed_impact_velocity(e, q, v, cand, grazing, ag_t, av_t, t, v_impact, err));
     ED_TRY(ed_decide(e, q, v_impact, ag_t, av_t, t, -1, &mode, v_plus, &changed, err));
-    if (grazing & ~m->ops->closed_of(m, mode)) {
+    if (grazing & ~rk_closed_of(m, mode)) {
         /* held closed, the corner is still sent into flight (the sticking LCP has no solution): not held */
         memcpy(q, q_in, (size_t)n * sizeof(double));
         ED_TRY(ed_impact_velocity(e, q, v, cand, 0, ag_t, av_t, t, v_impact, err));
@@ -1172,7 +1172,7 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
     int mode = s->mode, nc = m->ops->n_contacts, n_e, i, ok, new_mode, changed;
-    rk_set closed = m->ops->closed_of(m, mode), cc;
+    rk_set closed = rk_closed_of(m, mode), cc;
     double ev[RK_MAX_EVENTS], clear = e->options.tolerances.clearly_open, q[RK_MAX_DOF], v[RK_MAX_DOF];
     double v_new[RK_MAX_DOF], a, av;
     ed_fn f;
@@ -1266,7 +1266,7 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, 
             break;
         tb = rk_motion_pair_next_breakpoint(ag, ag_v, s->t);
         t_stop = t_end < tb ? t_end : tb;
-        if (m->ops->closed_of(m, s->mode) && !kink)
+        if (rk_closed_of(m, s->mode) && !kink)
             ED_TRY(ed_settle(e, s->t, ag, ag_v, err));
         ED_TRY(ed_segment(e, t_stop, ag, ag_v, o, &event, err));
         if (event) {
@@ -1355,7 +1355,7 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
     rk_embed_any(m, st->mode, st->y, q, v);
     if (!isfinite(st->shift))
         return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g is not finite", st->shift);
-    if (st->shift != 0.0 && (ed_sliding(m, st->mode) || !m->ops->closed_of(m, st->mode)))
+    if (st->shift != 0.0 && (ed_sliding(m, st->mode) || !rk_closed_of(m, st->mode)))
         return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g must be 0 in mode %d (its reduced state "
                        "holds the base's position)", st->shift, st->mode);
     if (!(isfinite(st->friction_demand) && st->friction_demand >= 0.0))

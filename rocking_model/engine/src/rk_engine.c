@@ -487,8 +487,8 @@ int rk_engine_contacts(const rk_engine *e, int *states)
 {
     const rk_model *m = &e->model;
     int mode = rk_engine_mode(e), sigma = 0, i, on;
-    rk_set closed = m->ops->closed_of(m, mode);
-    m->ops->stick_of(m, mode, &sigma);
+    rk_set closed = rk_closed_of(m, mode);
+    rk_stick_of(m, mode, &sigma);
     on = sigma == 0 ? RK_STICK : sigma > 0 ? RK_SLIDE_POS : RK_SLIDE_NEG;
     for (i = 0; i < m->ops->n_contacts; i++)
         states[i] = RK_IN(closed, i) ? on : RK_OPEN;

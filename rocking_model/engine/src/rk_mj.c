@@ -62,7 +62,7 @@ rk_status rk_mj_init(rk_engine *e, int mode, const double *q, const double *v, r
     s->n_steps = 0;
     s->friction_demand = 0.0;
     s->painleve = 0;
-    s->closed = m->ops->closed_of(m, mode);
+    s->closed = rk_closed_of(m, mode);
     return RK_OK;
 }
 
@@ -267,7 +267,7 @@ static rk_status mj_step(rk_engine *e, double t, double dt, rk_motion *ag, rk_mo
     ops->gaps(model, q, g);
     ops->contact_jacobians(model, q, W_N, W_T);
     tmatvec(n, nc, W_N, v, U);
-    closed_now = ops->closed_of(model, s->mode);
+    closed_now = rk_closed_of(model, s->mode);
     if (popcount(closed_now) == 1 && nc == 2) {
         int hitting = RK_IN(closed_now, 0) ? 1 : 0;      /* 1 - closed_now[0] */
         if (g[hitting] + dt * U[hitting] <= 0.0 && U[hitting] < 0.0 && ops->classical_impact_velocity != NULL) {
@@ -498,7 +498,7 @@ rk_status rk_mj_set_state(rk_engine *e, const rk_plain_state *st, const double *
                        st->mode, ops->n_modes - 1);
     if ((st->closed >> nc) != 0u)
         return rk_fail(err, RK_ERR_VALUE, "state field 'closed' must list corners in [0, %d]", nc - 1);
-    if (ops->closed_of(model, st->mode) != st->closed) {
+    if (rk_closed_of(model, st->mode) != st->closed) {
         char text[64];
         set_text(text, sizeof(text), st->closed, nc);
         return rk_fail(err, RK_ERR_VALUE, "state field 'mode' = %d does not match 'closed' = %s; expected one of "

@@ -55,7 +55,20 @@ rk_status rk_model_init(rk_model *m, const rk_model_ops *ops, const double *para
     /* RockingModel._rest_abscissae: the contacts' abscissae at rest (slip) */
     ops->rest_position(m, q);
     ops->contact_abscissae(m, q, m->rest_abscissae);
+    rk_model_tabulate_modes(m);
     return RK_OK;
+}
+
+void rk_model_tabulate_modes(rk_model *m)
+{
+    const rk_model_ops *ops = m->ops;
+    int mode;
+    for (mode = 0; mode < RK_MAX_MODES; mode++) {
+        int sigma = 0, stick = ops->stick_of != NULL ? ops->stick_of(m, mode, &sigma) : mode;
+        m->mode_closed[mode] = ops->closed_of != NULL ? ops->closed_of(m, mode) : 0u;
+        m->mode_stick[mode] = (signed char)stick;
+        m->mode_sigma[mode] = (signed char)sigma;
+    }
 }
 
 void rk_model_scale_tolerances(const rk_model *m, const rk_tolerances *tol, rk_model_tolerances *out)
@@ -502,7 +515,7 @@ void rk_model_inverse_mass(const rk_model *m, const double *q, double *Minv)
 static int is_sliding(const rk_model *m, int mode)
 {
     int sigma = 0;
-    m->ops->stick_of(m, mode, &sigma);
+    rk_stick_of(m, mode, &sigma);
     return sigma != 0;
 }
 
@@ -567,8 +580,8 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
     double tot[2] = {0.0, 0.0};
     if (is_sliding(m, mode)) {
         /* sliding.slide_functions' monitors and force_totals_of's slide_totals */
-        int sigma = 0, stick = m->ops->stick_of(m, mode, &sigma);
-        rk_set closed = m->ops->closed_of(m, stick);
+        int sigma = 0, stick = rk_stick_of(m, mode, &sigma);
+        rk_set closed = rk_closed_of(m, stick);
         int idx[RK_MAX_DOF], k = rk_slide_dofs(m, mode, idx), i, c = 0;
         double q[RK_MAX_DOF], v[RK_MAX_DOF], a[RK_MAX_DOF], tau[RK_MAX_CONTACTS], ys[RK_MAX_Y];
         double base[RK_MAX_EVENTS], F = m->force_scale, V = sqrt(m->g * m->length_scale), tau_sum = 0.0;
@@ -597,7 +610,7 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         return nc + 2;
     }
     {
-        rk_set closed = m->ops->closed_of(m, mode);
+        rk_set closed = rk_closed_of(m, mode);
         int cone = closed && !isinf(m->mu);
         /* the totals only where someone reads them: the caller, or the friction cone */
         stick_monitors(m, mode, y, ag, ag_v, g, closed && (totals != NULL || cone) ? tot : NULL);
@@ -622,7 +635,7 @@ int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, dou
     if (m->ops->mode_monitor_one == NULL || m->ops->mode_monitors == NULL || is_sliding(m, mode))
         return 0;
     /* rk_mode_monitors' layout: the contacts' functions, [the friction cone,] the overturning margin */
-    cone = m->ops->closed_of(m, mode) != 0u && !isinf(m->mu);
+    cone = rk_closed_of(m, mode) != 0u && !isinf(m->mu);
     if (i < nc)
         return m->ops->mode_monitor_one(m, mode, y, i, gi);
     if (i == nc + cone)
@@ -780,7 +793,7 @@ void rk_model_generic_monitors(const rk_model *m, int mode, const double *y, dou
                                double *totals)
 {
     int nc = m->ops->n_contacts, idx[RK_MAX_DOF], k, i;
-    rk_set closed = m->ops->closed_of(m, mode);
+    rk_set closed = rk_closed_of(m, mode);
     double q[RK_MAX_DOF], v[RK_MAX_DOF], lam[RK_MAX_CONTACTS], gap[RK_MAX_CONTACTS], phi;
     double F = m->force_scale, L = m->length_scale;
     k = m->ops->mode_dofs(m, mode, idx);

@@ -171,16 +171,41 @@ struct rk_model {
     double step_limit;              /**< [s] largest Moreau-Jean step (INFINITY: none) */
     double dof_scales[RK_MAX_DOF];  /**< RockingModel.dof_scales */
     double rest_abscissae[RK_MAX_CONTACTS];   /**< contact_abscissae(rest_position()) (slip) */
+    /* closed_of and stick_of, pure functions of the mode, tabulated by rk_model_init: the drivers ask them at
+     * every event function, rhs and output row (read through rk_closed_of / rk_stick_of) */
+    rk_set mode_closed[RK_MAX_MODES];
+    signed char mode_stick[RK_MAX_MODES];
+    signed char mode_sigma[RK_MAX_MODES];
 };
+
+/** ops->closed_of(m, mode) from the table (an indirect call for a mode beyond it). */
+static inline rk_set rk_closed_of(const rk_model *m, int mode)
+{
+    return (mode >= 0 && mode < RK_MAX_MODES) ? m->mode_closed[mode] : m->ops->closed_of(m, mode);
+}
+
+/** ops->stick_of(m, mode, sigma) from the table (sigma may be NULL). */
+static inline int rk_stick_of(const rk_model *m, int mode, int *sigma)
+{
+    if (mode >= 0 && mode < RK_MAX_MODES) {
+        if (sigma != NULL)
+            *sigma = m->mode_sigma[mode];
+        return m->mode_stick[mode];
+    }
+    return m->ops->stick_of(m, mode, sigma);
+}
 
 /* ------------------------------------------------------------------------------------------ registry */
 /** The kernels, NULL-terminated (rk_model.c). */
 const rk_model_ops *const *rk_model_kinds(void);
 /** The kernel of a kind name ("rigid", "flexible") or Python class name; NULL if none. */
 const rk_model_ops *rk_model_find(const char *kind);
-/** Build an instance: ops->init plus rest_abscissae. */
+/** Build an instance: ops->init plus rest_abscissae and the mode tables. */
 rk_status rk_model_init(rk_model *m, const rk_model_ops *ops, const double *params, int n_params,
                         rk_error *err);
+/** Fill the tables of rk_closed_of / rk_stick_of from m->ops (rk_model_init does; a model assembled by hand, as
+ *  the contact tests' ContactTestModel, calls it once its ops are set; a missing stick_of: every mode sticks). */
+void rk_model_tabulate_modes(rk_model *m);
 /** ContactTolerances.for_model. */
 void rk_model_scale_tolerances(const rk_model *m, const rk_tolerances *tol, rk_model_tolerances *out);
 

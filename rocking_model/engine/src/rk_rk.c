@@ -166,7 +166,8 @@ static double py_sum(const double *x, int n)
 rk_status rk_initial_step(rk_stepper *s, double *h, rk_error *err)
 {
     /* Hairer's heuristic (scipy.integrate._ivp.common.select_initial_step), as ExplicitRK._initial_step */
-    double scale[RK_MAX_Y], terms[RK_MAX_Y], y1[RK_MAX_Y], f1[RK_MAX_Y];
+    /* (y1 initialised: GCC does not see that n >= 1 below, -Wmaybe-uninitialized) */
+    double scale[RK_MAX_Y], terms[RK_MAX_Y], y1[RK_MAX_Y] = {0.0}, f1[RK_MAX_Y];
     double d0, d1, d2, h0, h1;
     int j, n = s->n;
     rk_status st;

@@ -17,7 +17,7 @@
 
 static int stick_mode(const rk_model *m, int mode, int *sigma)
 {
-    return m->ops->stick_of(m, mode, sigma);
+    return rk_stick_of(m, mode, sigma);
 }
 
 int rk_slide_dofs(const rk_model *m, int mode, int *idx)
@@ -64,7 +64,7 @@ rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const do
         rhs[RK_MAX_CONTACTS], inv_mu;
     rk_set cs;
     stick = stick_mode(m, mode, &sigma);
-    cs = m->ops->closed_of(m, stick);
+    cs = rk_closed_of(m, stick);
     for (i = 0; i < nc; i++)
         if (RK_IN(cs, i))
             closed[kc++] = i;
