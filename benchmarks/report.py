@@ -259,7 +259,10 @@ def write_report(res, docs: Path) -> Path:
     w(f"- Timing: as Python's `timeit`, the same way for every contender: the garbage collector off during each "
       f"timed run (no `gc.collect()` before it), runs repeated until they took {res.get('min_total', 0.5):g} s (at least "
       f"{res['repeats']}, no more once a setting's runs took {res['budget']:g} s; the count is in the tables), and the "
-      "minimum reported (the median too); single process, one contender at a time, `time.perf_counter` around the "
+      "minimum reported (the median too); single process, one contender at a time (on the rigid scenes the compiled "
+      "event-driven settings and the solve_ivp baseline are timed in a second pass after all others, the minimum "
+      "taken over both passes: a slow phase of the shared machine cannot decide a ratio of the speed target alone), "
+      "`time.perf_counter` around the "
       "whole public call (`simulate(...)` for the package, the model built inside, on the Python engine and on the "
       "compiled one with `engine=\"c\"`; the full restart loop for the baseline; the stepping loop incl. model set-up for Siconos; the "
       "stepping loop for the FMUs).")

@@ -136,7 +136,7 @@ def bench_scene(scene: S.Scene, args) -> dict:
             out["entries"].append(_entry("baseline", "solve_ivp DOP853", {"rtol": tol}, times, sol, ref, names,
                                          window))
         if scene.motion[0] == "sampled":
-            ms = float(scene.motion[1][1] - scene.motion[1][0])
+            ms = _record_step(scene)
             for tol in scene.base_tols:
                 sol, times = C.timed(lambda: C.run_baseline(scene, tol, max_step=ms), reps, budget)
                 out["entries"].append(_entry("baseline", f"solve_ivp DOP853, max_step={ms:g}", {"rtol": tol},
@@ -155,9 +155,41 @@ def bench_scene(scene: S.Scene, args) -> dict:
                     e["errors"].pop("impact3", None)
                     out["entries"].append(e)
             log(f"  siconos done ({time.perf_counter() - t0:.0f} s)")
+    if scene.kind == "rigid" and not args.quick:
+        _second_pass(scene, out["entries"], reps, budget)
+        log(f"  second pass done ({time.perf_counter() - t0:.0f} s)")
     out["equal_error"] = equal_error(out["entries"])
     out["wall"] = time.perf_counter() - t0
     return out
+
+
+def _record_step(scene: S.Scene) -> float:
+    """[s] the sampling interval of a sampled record (the baseline's max_step variant)."""
+    return float(scene.motion[1][1] - scene.motion[1][0])
+
+
+#: the contenders timed a second time, after all others (`_second_pass`): the two that the speed target compares
+SECOND_PASS = ("c_event_driven", "baseline")
+
+
+def _second_pass(scene: S.Scene, entries: list, reps: int, budget: float) -> None:
+    """Time the compiled event-driven settings and the solve_ivp baseline's again, after every other contender of
+    the scene, and keep the repeats of both passes (the minimum over both): each of the two is then sampled at two
+    times of the run, so that a slow phase of a shared machine (seen: another job halving the speed for some
+    seconds) does not decide the ratio of the speed target alone."""
+    for e in entries:
+        if e["contender"] not in SECOND_PASS:
+            continue
+        if e["contender"] == "c_event_driven":
+            tol = e["setting"]["tolerance"]
+            _, times = C.timed(lambda: C.package_result(scene, "event_driven", engine="c", tolerance=tol), reps,
+                               budget, post=C.outputs_of)
+        else:
+            rtol = e["setting"]["rtol"]
+            max_step = _record_step(scene) if "max_step" in e["label"] else math.inf
+            _, times = C.timed(lambda: C.run_baseline(scene, rtol, max_step=max_step), reps, budget)
+        e["times"] = list(e["times"]) + list(times)
+        e["time"], e["median"] = C.best(e["times"]), C.median(e["times"])
 
 
 def equal_error(entries, measure: str = "phi_max") -> dict:
