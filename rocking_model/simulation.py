@@ -162,8 +162,7 @@ class Simulator:
         if not isinstance(tolerances, ContactTolerances):
             raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
         self.on_report = check_choice("on_report", on_report, _ON_REPORT)
-        options = SolverOptions(dt_max=dt, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
-                                impact_log_size=impact_log_size, tolerances=tolerances)
+        options = SolverOptions.of(dt, tolerance, theta, zeno_tol, method, impact_log_size, tolerances)
         self.engine = check_choice("engine", engine, ENGINES)
         if self.engine == "c":
             self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)

@@ -9,6 +9,7 @@ FMUs run the C engine unchanged; `motion_spec` turns a `GroundMotion` into the p
 from __future__ import annotations
 
 import math
+import operator
 
 import numpy as np
 
@@ -113,8 +114,9 @@ def _checked_arguments(*args, **kwargs) -> tuple:
     return args, kwargs
 
 
-#: model class -> the names of its declared parameters in order (declared_parameters is slow to call per run)
-_PARAM_NAMES: dict = {}
+#: model class -> a getter of its declared parameters in order, as a tuple (declared_parameters is slow to call
+#: per run)
+_PARAM_GETTERS: dict = {}
 
 
 class _Log:
@@ -223,17 +225,16 @@ class CompiledIntegrator(Integrator):
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _engine_args(self):
-        model = self.model
-        cls = type(model)
-        names = _PARAM_NAMES.get(cls)
-        if names is None:
-            names = _PARAM_NAMES[cls] = tuple(p.name for p in cls.parameters())
-        d = model.__dict__
-        try:
-            values = [d[name] for name in names]      # the dataclass fields themselves (checked floats)
-        except KeyError:
-            values = [getattr(model, name) for name in names]
-        return cls.__name__, [x if type(x) is float else float(x) for x in values]
+        """(model class name, its declared parameters in order): the dataclass fields themselves (checked floats,
+        an int choice), read by one attrgetter; the extension converts each with PyFloat_AsDouble, as float()."""
+        cls = type(self.model)
+        getter = _PARAM_GETTERS.get(cls)
+        if getter is None:
+            names = tuple(p.name for p in cls.parameters())
+            # (a one-parameter attrgetter returns the value itself: a tuple either way)
+            getter = _PARAM_GETTERS[cls] = (operator.attrgetter(*names) if len(names) > 1
+                                            else lambda model, _n=names: tuple(getattr(model, n) for n in _n))
+        return cls.__name__, getter(self.model)
 
     def _new_engine(self, _engine):
         """A new `Engine` at the start state: `_engine_args` and `_engine_kwargs` with the options passed by

@@ -87,6 +87,16 @@ class SolverOptions:
     impact_log_size: int | None = None
     tolerances: ContactTolerances = field(default=DEFAULT_TOLERANCES)
 
+    @classmethod
+    def of(cls, dt_max, tolerance, theta, zeno_tol, method, impact_log_size, tolerances) -> "SolverOptions":
+        """``SolverOptions(...)`` with every field given, the fields written into the instance's dict at once
+        (the frozen dataclass's __init__ makes one object.__setattr__ call per field: a Simulator per run of an
+        ensemble made that a measurable part of its set-up). Equal to the instance __init__ makes."""
+        obj = object.__new__(cls)
+        obj.__dict__.update(dt_max=dt_max, tolerance=tolerance, theta=theta, zeno_tol=zeno_tol, method=method,
+                            impact_log_size=impact_log_size, tolerances=tolerances)
+        return obj
+
 
 class Integrator(Checkpointed):
     """Base class of the integration schemes: see the module docstring for the contract."""
