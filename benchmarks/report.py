@@ -485,7 +485,8 @@ def _compiled_section(res, w):
         r0 = ps["rows"][0]
         w(f"The first {r0['steps'] * r0['dt']:g} s of the synthetic record (`benchmarks.scenes.synthetic_record`) in "
           f"{r0['dt']:g} s communication steps ({r0['steps']} steps), `ag` held over each step, the outputs read after "
-          "each (`benchmarks/compiled_bench.py`; fastest of 5 runs, 3 in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
+          "each (`benchmarks/compiled_bench.py`; the fastest of 15 interleaved rounds, each round one run of every variant "
+          "below, 3 rounds in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
           "`Engine.output_row()` on `rocking_model._engine.Engine`; *Engine.sample*: one call over the record, the C loop "
           "over the communication steps (the record integrated as given, linear between samples, not held); *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
           "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
