@@ -799,31 +799,21 @@ static PyObject *engine_advance_motion(EngineObject *self, PyObject *args, PyObj
     }
 }
 
-static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssize_t itemsize, Py_ssize_t n)
+/** A writable C-contiguous buffer of n items of itemsize bytes, or of alt bytes when alt > 0 (Engine.sample's
+ *  modes: C int or int64, overturned: C int or bool) */
+static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssize_t itemsize, Py_ssize_t alt,
+                           Py_ssize_t n)
 {
     if (PyObject_GetBuffer(obj, b, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
         PyErr_Format(PyExc_TypeError, "%s must be a writable contiguous array", name);
         return -1;
     }
-    if (b->itemsize != itemsize || b->len != n * itemsize) {
+    if ((b->itemsize != itemsize && (alt <= 0 || b->itemsize != alt)) || b->len != n * b->itemsize) {
         PyBuffer_Release(b);
-        PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd bytes", name, n, itemsize);
-        return -1;
-    }
-    return 0;
-}
-
-/** writable_buffer of int items: C int (int32), or ``wide`` bytes each (8: int64, 1: bool) */
-static int writable_int_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssize_t wide, Py_ssize_t n)
-{
-    if (PyObject_GetBuffer(obj, b, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        PyErr_Format(PyExc_TypeError, "%s must be a writable contiguous array", name);
-        return -1;
-    }
-    if ((b->itemsize != (Py_ssize_t)sizeof(int) && b->itemsize != wide) || b->len != n * b->itemsize) {
-        PyBuffer_Release(b);
-        PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd or %zd bytes", name, n, (Py_ssize_t)sizeof(int),
-                     wide);
+        if (alt > 0)
+            PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd or %zd bytes", name, n, itemsize, alt);
+        else
+            PyErr_Format(PyExc_ValueError, "%s must hold %zd items of %zd bytes", name, n, itemsize);
         return -1;
     }
     return 0;
@@ -870,22 +860,22 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     }
     h.m[idx].identity = identity;
     stride = rk_engine_n_outputs(self->e) + 2;
-    if (writable_int_buffer(modes_obj, &bm, "modes", 8, n + 1) < 0) {
+    if (writable_buffer(modes_obj, &bm, "modes", (Py_ssize_t)sizeof(int), 8, n + 1) < 0) {
         holder_release(&h);
         return NULL;
     }
-    if (writable_buffer(values_obj, &bv, "values", (Py_ssize_t)sizeof(double), (n + 1) * stride) < 0) {
+    if (writable_buffer(values_obj, &bv, "values", (Py_ssize_t)sizeof(double), 0, (n + 1) * stride) < 0) {
         PyBuffer_Release(&bm);
         holder_release(&h);
         return NULL;
     }
-    if (writable_buffer(impacts_obj, &bi, "impacts", (Py_ssize_t)sizeof(long long), n + 1) < 0) {
+    if (writable_buffer(impacts_obj, &bi, "impacts", (Py_ssize_t)sizeof(long long), 0, n + 1) < 0) {
         PyBuffer_Release(&bm);
         PyBuffer_Release(&bv);
         holder_release(&h);
         return NULL;
     }
-    if (writable_int_buffer(over_obj, &bo, "overturned", 1, n + 1) < 0) {
+    if (writable_buffer(over_obj, &bo, "overturned", (Py_ssize_t)sizeof(int), 1, n + 1) < 0) {
         PyBuffer_Release(&bm);
         PyBuffer_Release(&bv);
         PyBuffer_Release(&bi);

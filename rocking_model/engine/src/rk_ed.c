@@ -62,13 +62,6 @@ static int ed_popcount(rk_set s)
     return n;
 }
 
-static int ed_sliding(const rk_model *m, int mode)
-{
-    int sigma = 0;
-    rk_stick_of(m, mode, &sigma);
-    return sigma != 0;
-}
-
 static const char *ed_mode_name(int mode, char *buf, size_t n)
 {
     static const char *const NAMES[] = {"FULL", "LEFT", "RIGHT", "FLIGHT", "FULL_SLIDE_POS", "FULL_SLIDE_NEG",
@@ -272,7 +265,7 @@ static int ed_kinds(const rk_model *m, int mode, int *kinds)
     int nc = m->ops->n_contacts, i, n = 0;
     for (i = 0; i < nc; i++)
         kinds[n++] = RK_IN(closed, i) ? ED_RELEASE : ED_IMPACT;
-    if (ed_sliding(m, mode))
+    if (rk_mode_sliding(m, mode))
         kinds[n++] = ED_SLIP;
     else if (closed && !isinf(m->mu))
         kinds[n++] = ED_CONE;
@@ -344,8 +337,8 @@ static rk_status ed_set_state(rk_engine *e, int mode, const double *q_given, con
     s->k = rk_reduce_any(m, mode, q, v, s->y);
     /* a sticking mode on the ground keeps the base's horizontal offset outside its reduced state: unchanged
      * from a sticking mode, read off the state after flight or sliding (below gap_tol: round-off) */
-    if (!ed_sliding(m, mode) && rk_closed_of(m, mode)) {
-        if (has_old && !ed_sliding(m, old) && rk_closed_of(m, old)) {
+    if (!rk_mode_sliding(m, mode) && rk_closed_of(m, mode)) {
+        if (has_old && !rk_mode_sliding(m, old) && rk_closed_of(m, old)) {
             shift = s->shift;
         } else {
             shift = rk_shift_of(m, mode, q);
@@ -1049,7 +1042,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     ev.n = ed_kinds(m, mode, kinds);
     /* the friction demand: at the segment's start, at step ends, at its peak inside a step, at the event
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
-    peaks = has_totals && !ed_sliding(m, mode);
+    peaks = has_totals && !rk_mode_sliding(m, mode);
     /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
     ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, g_prev, has_totals ? lam : NULL));
     if (has_totals) {
@@ -1355,7 +1348,7 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
     rk_embed_any(m, st->mode, st->y, q, v);
     if (!isfinite(st->shift))
         return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g is not finite", st->shift);
-    if (st->shift != 0.0 && (ed_sliding(m, st->mode) || !rk_closed_of(m, st->mode)))
+    if (st->shift != 0.0 && (rk_mode_sliding(m, st->mode) || !rk_closed_of(m, st->mode)))
         return rk_fail(err, RK_ERR_VALUE, "state field 'shift' = %.17g must be 0 in mode %d (its reduced state "
                        "holds the base's position)", st->shift, st->mode);
     if (!(isfinite(st->friction_demand) && st->friction_demand >= 0.0))

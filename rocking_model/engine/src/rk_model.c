@@ -512,23 +512,16 @@ void rk_model_inverse_mass(const rk_model *m, const double *q, double *Minv)
 }
 
 /* ------------------------------------------------------------------------------------------ any mode */
-static int is_sliding(const rk_model *m, int mode)
-{
-    int sigma = 0;
-    rk_stick_of(m, mode, &sigma);
-    return sigma != 0;
-}
-
 int rk_dofs_of(const rk_model *m, int mode, int *idx)
 {
-    return is_sliding(m, mode) ? rk_slide_dofs(m, mode, idx) : m->ops->mode_dofs(m, mode, idx);
+    return rk_mode_sliding(m, mode) ? rk_slide_dofs(m, mode, idx) : m->ops->mode_dofs(m, mode, idx);
 }
 
 void rk_embed_any(const rk_model *m, int mode, const double *y, double *q, double *v)
 {
     int idx[RK_MAX_DOF];
     int k = rk_dofs_of(m, mode, idx);
-    if (is_sliding(m, mode))
+    if (rk_mode_sliding(m, mode))
         rk_slide_embed(m, mode, y, y + k, q, v);
     else
         m->ops->embed(m, mode, y, y + k, q, v);
@@ -537,7 +530,7 @@ void rk_embed_any(const rk_model *m, int mode, const double *y, double *q, doubl
 int rk_reduce_any(const rk_model *m, int mode, const double *q, const double *v, double *y)
 {
     int idx[RK_MAX_DOF], k, i;
-    if (is_sliding(m, mode))
+    if (rk_mode_sliding(m, mode))
         return rk_slide_reduce(m, mode, q, v, y);
     k = m->ops->mode_dofs(m, mode, idx);
     for (i = 0; i < k; i++) {
@@ -550,7 +543,7 @@ int rk_reduce_any(const rk_model *m, int mode, const double *q, const double *v,
 rk_status rk_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
     int idx[RK_MAX_DOF], k, i;
-    if (is_sliding(m, mode)) {
+    if (rk_mode_sliding(m, mode)) {
         k = rk_slide_dofs(m, mode, idx);
         for (i = 0; i < k; i++)
             dy[i] = y[k + i];
@@ -578,7 +571,7 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
 {
     int nc = m->ops->n_contacts;
     double tot[2] = {0.0, 0.0};
-    if (is_sliding(m, mode)) {
+    if (rk_mode_sliding(m, mode)) {
         /* sliding.slide_functions' monitors and force_totals_of's slide_totals */
         int sigma = 0, stick = rk_stick_of(m, mode, &sigma);
         rk_set closed = rk_closed_of(m, stick);
@@ -632,7 +625,7 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
 int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, double *gi)
 {
     int nc = m->ops->n_contacts, cone;
-    if (m->ops->mode_monitor_one == NULL || m->ops->mode_monitors == NULL || is_sliding(m, mode))
+    if (m->ops->mode_monitor_one == NULL || m->ops->mode_monitors == NULL || rk_mode_sliding(m, mode))
         return 0;
     /* rk_mode_monitors' layout: the contacts' functions, [the friction cone,] the overturning margin */
     cone = rk_closed_of(m, mode) != 0u && !isinf(m->mu);
@@ -647,7 +640,7 @@ void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, d
 {
     double q[RK_MAX_DOF], v[RK_MAX_DOF];
     int i;
-    if (is_sliding(m, mode)) {
+    if (rk_mode_sliding(m, mode)) {
         rk_embed_any(m, mode, y, q, v);
         m->ops->outputs(m, q, v, out);
         return;

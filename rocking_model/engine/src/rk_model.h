@@ -195,6 +195,14 @@ static inline int rk_stick_of(const rk_model *m, int mode, int *sigma)
     return m->ops->stick_of(m, mode, sigma);
 }
 
+/** Whether mode is a sliding mode (stick_of's sigma != 0). */
+static inline int rk_mode_sliding(const rk_model *m, int mode)
+{
+    int sigma = 0;
+    rk_stick_of(m, mode, &sigma);
+    return sigma != 0;
+}
+
 /* ------------------------------------------------------------------------------------------ registry */
 /** The kernels, NULL-terminated (rk_model.c). */
 const rk_model_ops *const *rk_model_kinds(void);

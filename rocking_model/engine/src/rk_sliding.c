@@ -15,14 +15,9 @@
 #include <math.h>
 #include <string.h>
 
-static int stick_mode(const rk_model *m, int mode, int *sigma)
-{
-    return rk_stick_of(m, mode, sigma);
-}
-
 int rk_slide_dofs(const rk_model *m, int mode, int *idx)
 {
-    int k = m->ops->mode_dofs(m, stick_mode(m, mode, NULL), idx);
+    int k = m->ops->mode_dofs(m, rk_stick_of(m, mode, NULL), idx);
     idx[k] = m->ops->slide_index;
     return k + 1;
 }
@@ -30,14 +25,14 @@ int rk_slide_dofs(const rk_model *m, int mode, int *idx)
 void rk_slide_embed(const rk_model *m, int mode, const double *r, const double *r_dot, double *q, double *v)
 {
     int idx[RK_MAX_DOF], k = rk_slide_dofs(m, mode, idx), i = m->ops->slide_index;
-    m->ops->embed(m, stick_mode(m, mode, NULL), r, r_dot, q, v);
+    m->ops->embed(m, rk_stick_of(m, mode, NULL), r, r_dot, q, v);
     q[i] += r[k - 1];
     v[i] += r_dot[k - 1];
 }
 
 int rk_slide_reduce(const rk_model *m, int mode, const double *q, const double *v, double *y)
 {
-    int stick = stick_mode(m, mode, NULL), idx[RK_MAX_DOF], k0, j, i = m->ops->slide_index;
+    int stick = rk_stick_of(m, mode, NULL), idx[RK_MAX_DOF], k0, j, i = m->ops->slide_index;
     double r[RK_MAX_DOF], rd[RK_MAX_DOF], q0[RK_MAX_DOF], v0[RK_MAX_DOF];
     k0 = m->ops->mode_dofs(m, stick, idx);
     for (j = 0; j < k0; j++) {
@@ -63,7 +58,7 @@ rk_status rk_slide_motion(const rk_model *m, int mode, const double *q, const do
         a_free[RK_MAX_DOF], MC[RK_MAX_DOF * RK_MAX_CONTACTS], A[RK_MAX_CONTACTS * RK_MAX_CONTACTS],
         rhs[RK_MAX_CONTACTS], inv_mu;
     rk_set cs;
-    stick = stick_mode(m, mode, &sigma);
+    stick = rk_stick_of(m, mode, &sigma);
     cs = rk_closed_of(m, stick);
     for (i = 0; i < nc; i++)
         if (RK_IN(cs, i))
@@ -118,7 +113,7 @@ void rk_slide_jacobian(const rk_model *m, int mode, const double *r, const doubl
 {
     int n = m->ops->n_dof, idx[RK_MAX_DOF], k = rk_slide_dofs(m, mode, idx), i, j;
     double Js[RK_MAX_DOF * RK_MAX_DOF];
-    m->ops->mode_jacobian(m, stick_mode(m, mode, NULL), r, r_dot, Js, jd);
+    m->ops->mode_jacobian(m, rk_stick_of(m, mode, NULL), r, r_dot, Js, jd);
     for (i = 0; i < n; i++) {
         for (j = 0; j < k - 1; j++)
             J[i * k + j] = Js[i * (k - 1) + j];
