@@ -10,6 +10,7 @@ later run (e.g. after an optimization) can be compared number by number.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -124,23 +125,29 @@ def bench_scene(scene: S.Scene, args) -> dict:
                              budget, post=C.outputs_of)
         out["entries"].append(_entry("c_moreau_jean", "compiled Moreau-Jean", {"dt_max": dt}, times, sol, ref,
                                      names, window))
+    again = []               # (entry, its run): timed once more by _second_pass
     for tol in scene.ed_tols:
-        sol, times = C.timed(lambda: C.package_result(scene, "event_driven", engine="c", tolerance=tol), reps,
-                             budget, post=C.outputs_of)
+        run = functools.partial(C.package_result, scene, "event_driven", engine="c", tolerance=tol)
+        sol, times = C.timed(run, reps, budget, post=C.outputs_of)
         out["entries"].append(_entry("c_event_driven", "compiled event-driven", {"tolerance": tol}, times, sol,
                                      ref, names, window))
+        again.append((out["entries"][-1], run))
     log(f"  compiled sweeps done ({time.perf_counter() - t0:.0f} s)")
     if scene.kind == "rigid":
         for tol in scene.base_tols:
-            sol, times = C.timed(lambda: C.run_baseline(scene, tol), reps, budget)
+            run = functools.partial(C.run_baseline, scene, tol)
+            sol, times = C.timed(run, reps, budget)
             out["entries"].append(_entry("baseline", "solve_ivp DOP853", {"rtol": tol}, times, sol, ref, names,
                                          window))
+            again.append((out["entries"][-1], run))
         if scene.motion[0] == "sampled":
-            ms = _record_step(scene)
+            ms = float(scene.motion[1][1] - scene.motion[1][0])
             for tol in scene.base_tols:
-                sol, times = C.timed(lambda: C.run_baseline(scene, tol, max_step=ms), reps, budget)
+                run = functools.partial(C.run_baseline, scene, tol, max_step=ms)
+                sol, times = C.timed(run, reps, budget)
                 out["entries"].append(_entry("baseline", f"solve_ivp DOP853, max_step={ms:g}", {"rtol": tol},
                                              times, sol, ref, names, window))
+                again.append((out["entries"][-1], run))
         log(f"  baseline done ({time.perf_counter() - t0:.0f} s)")
         if args.siconos_ok:
             sic = C.run_siconos(scene, scene.sic_dts, reps, budget=min(budget, 3.0))
@@ -156,38 +163,21 @@ def bench_scene(scene: S.Scene, args) -> dict:
                     out["entries"].append(e)
             log(f"  siconos done ({time.perf_counter() - t0:.0f} s)")
     if scene.kind == "rigid" and not args.quick:
-        _second_pass(scene, out["entries"], reps, budget)
+        _second_pass(again, reps, budget)
         log(f"  second pass done ({time.perf_counter() - t0:.0f} s)")
     out["equal_error"] = equal_error(out["entries"])
     out["wall"] = time.perf_counter() - t0
     return out
 
 
-def _record_step(scene: S.Scene) -> float:
-    """[s] the sampling interval of a sampled record (the baseline's max_step variant)."""
-    return float(scene.motion[1][1] - scene.motion[1][0])
-
-
-#: the contenders timed a second time, after all others (`_second_pass`): the two that the speed target compares
-SECOND_PASS = ("c_event_driven", "baseline")
-
-
-def _second_pass(scene: S.Scene, entries: list, reps: int, budget: float) -> None:
-    """Time the compiled event-driven settings and the solve_ivp baseline's again, after every other contender of
-    the scene, and keep the repeats of both passes (the minimum over both): each of the two is then sampled at two
-    times of the run, so that a slow phase of a shared machine (seen: another job halving the speed for some
-    seconds) does not decide the ratio of the speed target alone."""
-    for e in entries:
-        if e["contender"] not in SECOND_PASS:
-            continue
-        if e["contender"] == "c_event_driven":
-            tol = e["setting"]["tolerance"]
-            _, times = C.timed(lambda: C.package_result(scene, "event_driven", engine="c", tolerance=tol), reps,
-                               budget, post=C.outputs_of)
-        else:
-            rtol = e["setting"]["rtol"]
-            max_step = _record_step(scene) if "max_step" in e["label"] else math.inf
-            _, times = C.timed(lambda: C.run_baseline(scene, rtol, max_step=max_step), reps, budget)
+def _second_pass(again: list, reps: int, budget: float) -> None:
+    """Time each (entry, run) of ``again`` (the compiled event-driven settings and the solve_ivp baseline's, the two
+    that the speed target compares) once more, after every other contender of the scene, and keep the repeats of
+    both passes (the minimum over both): each is then sampled at two times of the run, so that a slow phase of a
+    shared machine (seen: another job halving the speed for some seconds) does not decide a ratio alone."""
+    for e, run in again:
+        post = C.outputs_of if e["contender"] == "c_event_driven" else None
+        _, times = C.timed(run, reps, budget, post=post)
         e["times"] = list(e["times"]) + list(times)
         e["time"], e["median"] = C.best(e["times"]), C.median(e["times"])
 

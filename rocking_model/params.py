@@ -137,18 +137,12 @@ def declared_parameters(cls) -> tuple:
     return out
 
 
-#: class -> ((name, Param, its `Param.accepts_as_is`), ...) of its declared parameters
-_CHECKERS: dict = {}
-
-
 def check_parameters(obj) -> None:
-    """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place."""
-    cls = type(obj)
-    checkers = _CHECKERS.get(cls)
-    if checkers is None:
-        checkers = _CHECKERS[cls] = tuple((p.name, p, p.accepts_as_is) for p in declared_parameters(cls))
+    """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place (a value that
+    `Param.accepts_as_is` is left as it is, without the call into the checks)."""
     d = obj.__dict__
-    for name, p, as_is in checkers:
+    for p in declared_parameters(type(obj)):
+        name = p.name
         value = d[name] if name in d else getattr(obj, name)
-        if not as_is(value):
+        if not p.accepts_as_is(value):
             object.__setattr__(obj, name, p.check(value))
