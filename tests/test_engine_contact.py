@@ -8,7 +8,9 @@ What is asserted, and why so:
 - a different choice is accepted only where several active sets solve the problem to round-off (both
   violations below TIE, a problem that is not a P-matrix problem): which one wins the "least violation" ranking
   is then decided by the last bits of the Delassus matrix. The Python itself must accept the C's choice (it
-  takes it as a hint and keeps it), and such ties must stay rare (TIE_SHARE);
+  takes it as a hint and keeps it), and such ties must stay rare (TIE_SHARE). With parallel tangential rows
+  (a singular Delassus matrix) a problem may have no exact solution and several sets of the same least
+  violation: those count as ties too (seen under generic BLAS kernels, tests/roundoff.py:kernel_env);
 - the random problems are well posed where a decision depends on a linear solve (m >= 2n: every principal
   block of the Delassus matrix is regular), except the pivoting and descent cases, built so that their
   systems stay small enough to be regular, and the parallel tangential rows of the merged sticking case.
@@ -101,11 +103,17 @@ def check_sticking(rng, n, m, n_max_forced=None, parallel=False, narrow=False, a
                                   narrow=narrow)
     assert c["states"] == () and c["n_solutions"] == -1 and not c["painleve"]
     if tuple(py.active) != c["active"]:
-        # a tie of exact solutions: the Python keeps the C's set when it is given as a hint
-        assert py.violation <= TIE and c["violation"] <= TIE, (py.active, c["active"], py.violation, c["violation"])
+        # a tie: both sets solve the problem to round-off, or (a singular problem without exact solution, the
+        # parallel rows) both reach the same least violation to round-off. Which wins is decided by the last
+        # bits of the Delassus matrix (CPU-dependent BLAS kernels); the Python keeps the C's set when it is
+        # given as a hint with the C's violation as its tolerance
+        same_least = abs(py.violation - c["violation"]) <= TIE * max(1.0, py.violation)
+        assert (py.violation <= TIE and c["violation"] <= TIE) or (parallel and same_least), \
+            (py.active, c["active"], py.violation, c["violation"])
         again = lcp.solve_contact_lcp(Minv, W_N, W_T, v, b_N, b_T, cand, forced, rtol=RTOL, hint=c["active"],
-                                      hint_tol=TIE)
+                                      hint_tol=max(TIE, c["violation"] * (1.0 + TIE)))
         assert tuple(again.active) == c["active"]
+        assert abs(again.violation - c["violation"]) <= TIE * max(1.0, c["violation"])
         return 1
     assert py.exact == c["exact"]
     kappa = condition(Minv, W_N, W_T) if not parallel else 1e3
