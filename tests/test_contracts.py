@@ -241,6 +241,33 @@ def test_event_functions_are_pure():
     assert neg == [0] and ta < 0.7 <= tb and gb[0] <= 0.0 < ga[0]
 
 
+def _one_step_of_sine(t_end=1.5):
+    """A DOP853 step of y = (sin t, cos t) from 0 to t_end (loose tolerance: one step)."""
+    from rocking_model.integrators.dop853 import DOP853
+    st = DOP853(lambda t, y: [y[1], -y[0]], 0.0, [0.0, 1.0], 1e-3, [1e-3, 1e-3], first_step=t_end)
+    st.step(t_end)
+    assert st.t == t_end
+    return st
+
+
+@pytest.mark.parametrize("depth, found", [(0.01, True), (-0.01, False)])
+def test_find_event_sees_another_function_dip_before_the_event(depth, found):
+    """An impact found at the end of a step (0.9 - sin t: t = asin 0.9); another armed function, positive at t0
+    and at the impact, dips below zero in between ((sin t - 1/2)^2 - depth: t in asin(1/2 -+ 0.1)): that dip
+    is the first event (its midpoint shows it, `may_dip`); without the dip the impact stays the event (roots on
+    the interpolant of a long step: 1e-4 of the exact ones)."""
+    st = _one_step_of_sine()
+    G = lambda t, y: [0.9 - y[0], (y[0] - 0.5) ** 2 - depth, 1.0]          # noqa: E731
+    ed = Simulator(RigidBlock(), "event_driven", engine="python").integrator
+    g_prev, g_new = G(st.t_old, st.y_old), G(st.t, st.y)
+    assert g_new[0] < 0.0 < min(g_prev[1], g_new[1])
+    te, i, _ = ed._find_event(st, G, [True, True, False], [False] * 3, {}, g_prev, g_new)
+    if found:
+        assert i == 1 and abs(te - math.asin(0.4)) < 1e-4
+    else:
+        assert i == 0 and abs(te - math.asin(0.9)) < 1e-4
+
+
 def test_contact_states_per_corner():
     model = RigidBlock()
     sim = Simulator(model, "event_driven", phi_0=0.05)

@@ -59,7 +59,7 @@ from ..validation import WorkLimitError, check_choice, check_real, state_bool, s
 from .base import Integrator, SolverOptions, register_scheme
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
-from .events import bounce_search, brent_max, dip_search, earliest_root, first_negative, parabola_peak, sinks
+from .events import bounce_search, brent_max, dip_search, earliest_root, first_negative, may_dip, parabola_peak, sinks
 from .moreau_jean import inexact_message
 from .state import check_configuration, check_times
 
@@ -642,8 +642,9 @@ class EventDriven(Integrator):
         An armed function fires at zero, a disarmed one (watched) at -event_tol; without a sign change at
         the ends, a dip inside the step is looked for (`dip_search`). Before the event found, another armed
         contact function may dip below zero and come back (the pivot force of a block that lifts off just
-        before it overturns): the step up to it is sub-sampled for that (`first_negative`), the event's time
-        included."""
+        before it overturns): the step up to it is sub-sampled for that (`first_negative`) where the function
+        is below zero at the event's time or may dip in between (`may_dip` on the midpoint: one evaluation
+        instead of sub_samples on the common impact, where no other function comes near zero)."""
         tol = self.event_tol
         n_sub = self.tolerances.sub_samples
         t0, t_hit = stepper.t_old, stepper.t
@@ -661,15 +662,22 @@ class EventDriven(Integrator):
         te, i = earliest_root(G, dense, hits, shifts, rose, t0, g_a, t_hit, g_b, xtol)
         others = [j for j in range(len(g_new) - 1) if armed[j] and j not in hits]
         if others and te > t0:
-            found = first_negative(G, dense, t0, g_a, te, others, n_sub)
-            if found is None:
-                # te itself: a corner that crosses inside the last sub-interval (not sampled) would be found below
-                # the ground at the impact and could start the next mode there, beyond the watch margin
-                g_te = G(te, dense(te))
-                neg = [j for j in others if g_te[j] <= 0.0]
-                if neg:
+            g_te = G(te, dense(te))
+            neg = [j for j in others if g_te[j] <= 0.0]
+            if neg:
+                found = first_negative(G, dense, t0, g_a, te, others, n_sub)
+                if found is None:
+                    # te itself: a corner that crosses inside the last sub-interval (not sampled) would be found
+                    # below the ground at the impact and could start the next mode there, beyond the watch margin
                     ta = t0 + (te - t0) * (n_sub - 1) / float(n_sub)
                     found = neg, ta, G(ta, dense(ta)), te, g_te
+            else:
+                # above the ground at both ends: sub-sampled only where the midpoint says that it may dip in
+                # between (`may_dip`, the test a step without events passes, here on the exact interpolant)
+                tm = 0.5 * (t0 + te)
+                g_m = G(tm, dense(tm))
+                dip = [j for j in others if may_dip(g_a[j], g_m[j], g_te[j])]
+                found = first_negative(G, dense, t0, g_a, te, dip, n_sub) if dip else None
             if found is not None:
                 neg, ta, ga, tn, gn = found
                 te, i = earliest_root(G, dense, neg, shifts, rose, ta, ga, tn, gn, xtol)

@@ -908,22 +908,38 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
             others[n_others++] = i;
     }
     if (n_others && *te > t0) {
-        int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0;
-        double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS];
-        ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga, &tn,
-                                     gn, err));
-        if (!fn) {
-            /* te itself: a corner that crosses inside the last sub-interval (not sampled) */
-            ED_TRYF(f, rk_event_eval(c, *te, gn, err));
-            for (i = 0; i < n_others; i++)
-                if (gn[others[i]] <= 0.0)
-                    neg[n_neg++] = others[i];
-            if (n_neg) {
+        int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0, dip[RK_MAX_EVENTS], n_dip = 0;
+        double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS], gm[RK_MAX_EVENTS];
+        ED_TRYF(f, rk_event_eval(c, *te, gn, err));
+        for (i = 0; i < n_others; i++)
+            if (gn[others[i]] <= 0.0)
+                neg[n_neg++] = others[i];
+        if (n_neg) {
+            /* below the ground at te: the first sub-interval where one of them is */
+            ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga,
+                                         &tn, gm, err));
+            if (fn) {
+                memcpy(gn, gm, sizeof gm);
+            } else {
+                /* te itself: a corner that crosses inside the last sub-interval (not sampled) */
+                for (i = 0, n_neg = 0; i < n_others; i++)
+                    if (gn[others[i]] <= 0.0)
+                        neg[n_neg++] = others[i];
                 fn = 1;
                 tn = *te;
                 ta = t0 + (*te - t0) * (n_sub - 1) / (double)n_sub;
                 ED_TRYF(f, rk_event_eval(c, ta, ga, err));
             }
+        } else {
+            /* above it at both ends: sub-sampled only where the midpoint says it may dip in between */
+            double tm = 0.5 * (t0 + *te);
+            ED_TRYF(f, rk_event_eval(c, tm, gm, err));
+            for (i = 0; i < n_others; i++)
+                if (rk_may_dip(g_a[others[i]], gm[others[i]], gn[others[i]]))
+                    dip[n_dip++] = others[i];
+            if (n_dip)
+                ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, dip, n_dip, n_sub, &fn, neg, &n_neg, &ta, ga, &tn,
+                                             gn, err));
         }
         if (fn)
             ED_TRYF(f, rk_earliest_root(c, neg, n_neg, shifts, ev->has_start, ev->start_t, ev->start_g, ta, ga,
