@@ -152,21 +152,32 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     rk_error_clear(&f->err);
 }
 
-/** (ag(t), ag_v(t)) as the Python reads them: (a0, v0) for a constant input */
-static rk_status ed_ag(ed_fn *f, double t, double *a, double *av)
+/** ed_ag through a callback: its failure and message kept */
+static RK_NOINLINE rk_status ed_ag_callback(ed_fn *f, double t, double *a, double *av)
 {
     int failed = 0;
     char msg[RK_MSG_LEN];
-    if (f->constant) {
-        *a = f->a0;
-        *av = f->v0;
-        return RK_OK;
-    }
     msg[0] = '\0';
     *a = rk_motion_eval(f->ag, t, &failed, msg);
     *av = f->ag_v != NULL && !failed ? rk_motion_eval(f->ag_v, t, &failed, msg) : 0.0;
     if (failed)
         return rk_fail(&f->err, RK_ERR_VALUE, "%s", msg);
+    return RK_OK;
+}
+
+/** (ag(t), ag_v(t)) as the Python reads them: (a0, v0) for a constant input */
+static rk_status ed_ag(ed_fn *f, double t, double *a, double *av)
+{
+    if (f->constant) {
+        *a = f->a0;
+        *av = f->v0;
+        return RK_OK;
+    }
+    if (!f->pure)
+        return ed_ag_callback(f, t, a, av);
+    /* a motion without callback neither fails nor writes a message (every rhs stage reads it) */
+    *a = rk_motion_eval(f->ag, t, NULL, NULL);
+    *av = f->ag_v != NULL ? rk_motion_eval(f->ag_v, t, NULL, NULL) : 0.0;
     return RK_OK;
 }
 
