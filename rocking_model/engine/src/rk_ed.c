@@ -244,17 +244,41 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
     return RK_OK;
 }
 
-/** G(t, y) and, when lam is not NULL, the totals at the same (t, y) in one kernel call */
-static rk_status ed_G_totals(ed_fn *f, double t, const double *y, double *g, double *lam)
+/** G(t, y) and, when lam is not NULL, the totals at the same (t, y) in one kernel call; n_y: the size of y.
+ *  A step's end and the segment that starts there ask for the same values: the engine's g_memo keeps them */
+static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, double *g, double *lam)
 {
     double a, av;
-    int has = 0;
+    int has = 0, n;
+    rk_engine *e = f->e;
     rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
+    if (e->g_memo.valid && e->g_memo.mode == f->mode && e->g_memo.n_y == n_y && (lam == NULL || e->g_memo.has_lam)
+        && memcmp(&a, &e->g_memo.a, sizeof a) == 0 && memcmp(&av, &e->g_memo.av, sizeof av) == 0
+        && memcmp(y, e->g_memo.y, sizeof(double) * (size_t)n_y) == 0) {
+        memcpy(g, e->g_memo.g, sizeof e->g_memo.g);
+        if (lam != NULL) {
+            lam[0] = e->g_memo.lam[0];
+            lam[1] = e->g_memo.lam[1];
+        }
+        return RK_OK;
+    }
     if (lam != NULL)
         lam[0] = lam[1] = NAN;
-    rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, lam, lam != NULL ? &has : NULL);
+    n = rk_mode_monitors(&e->model, f->mode, y, a, av, g, lam, lam != NULL ? &has : NULL);
+    e->g_memo.valid = 1;
+    e->g_memo.mode = f->mode;
+    e->g_memo.n_y = n_y;
+    e->g_memo.has_lam = lam != NULL;
+    e->g_memo.a = a;
+    e->g_memo.av = av;
+    memcpy(e->g_memo.y, y, sizeof(double) * (size_t)n_y);
+    memcpy(e->g_memo.g, g, sizeof(double) * (size_t)n);
+    if (lam != NULL) {
+        e->g_memo.lam[0] = lam[0];
+        e->g_memo.lam[1] = lam[1];
+    }
     return RK_OK;
 }
 
@@ -1071,7 +1095,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
     peaks = has_totals && !rk_mode_sliding(m, mode);
     /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
-    ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, g_prev, has_totals ? lam : NULL));
+    ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 2 * k, g_prev, has_totals ? lam : NULL));
     if (has_totals) {
         d_prev = ed_ratio(s, lam);
         ed_note_ratio(e, d_prev);
@@ -1110,7 +1134,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
             return ed_work_limit(e, err);
         /* G and the demand at the step's end, from one evaluation (the kernels share their work between the
          * two, as the Python's closures do; part A pins the event functions with totals to those without) */
-        ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, g_new, has_totals ? lam : NULL));
+        ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, 2 * k, g_new, has_totals ? lam : NULL));
         if (has_totals)
             d_new = ed_ratio(s, lam);
         if (refusals < ED_MAX_SINK_REFUSALS && s->stepper.t > s->stepper.t_old) {

@@ -129,6 +129,14 @@ struct rk_engine {
     double fail_t;                      /**< [s] the time the scheme had reached when the last call failed
                                              (Simulator._diverged's "at t = ..."), before the restore */
     unsigned long long motion_calls;    /**< advance / sample calls with a non-constant motion so far */
+    /** (event-driven) the last step end's event functions and force totals: rk_mode_monitors is a pure
+     *  function of (mode, y, ag, ag_v) for the model, which never changes, so the next segment, which starts
+     *  there, reads them back (outside the checkpointed core: a value for the same inputs is right after any
+     *  restore) */
+    struct {
+        int valid, mode, n_y, has_lam;
+        double a, av, y[RK_MAX_Y], g[RK_MAX_EVENTS], lam[2];
+    } g_memo;
 };
 
 /* ------------------------------------------------------------------------------------------ shared helpers (E)

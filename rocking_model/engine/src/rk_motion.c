@@ -240,8 +240,16 @@ double rk_motion_next_breakpoint(rk_motion *m, double t)
     case RK_MOTION_LINEAR:
         return INFINITY;
     case RK_MOTION_SAMPLED: {
-        long long i = bisect_right(m->t, m->n, t);
-        return i < m->n ? m->t[i] : INFINITY;
+        /* bisect_right's answer is j + 1 where t[j] <= t < t[j + 1]: the interval of the last evaluation (or the
+         * next one) holds t at every communication step of a record; else the bisection */
+        long long i = m->i_last, j;
+        if (i + 1 < m->n && m->t[i] <= t && t < m->t[i + 1])
+            j = i + 1;
+        else if (i + 2 < m->n && m->t[i + 1] <= t && t < m->t[i + 2])
+            j = i + 2;
+        else
+            j = bisect_right(m->t, m->n, t);
+        return j < m->n ? m->t[j] : INFINITY;
     }
     case RK_MOTION_SINE:
         if (m->t0 > t)

@@ -437,11 +437,8 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
     s->t = t_new;
     memcpy(s->y, y_new, sizeof(double) * (size_t)n);
     memcpy(s->f, K[tab->n_stages - 1], sizeof(double) * (size_t)n);
-    {
-        int st_i;
-        for (st_i = 0; st_i < tab->n_stages; st_i++)
-            memcpy(s->K[st_i], K[st_i], sizeof(double) * (size_t)n);
-    }
+    /* the stage rows in one block copy (their unused tails included): one call instead of one per stage */
+    memcpy(s->K, K, sizeof K[0] * (size_t)tab->n_stages);
     s->n_K = tab->n_stages;
     s->dense_ready = 0;
     s->n_steps += 1;
