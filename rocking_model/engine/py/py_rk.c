@@ -525,6 +525,8 @@ static test_setup *event_setup(PyObject *setup, rk_event_ctx *c)
     c->G_ctx = &ts->ev;
     c->n_events = ts->ev.n_events;
     c->G_one = NULL;
+    c->G_one_mask = NULL;
+    c->one_known = 0;
     return ts;
 }
 

@@ -231,6 +231,19 @@ static rk_status ed_G_one(void *ctx, int i, double t, const double *y, double *g
     return RK_OK;
 }
 
+/** the functions of G that ed_G_one has in the segment's mode (rk_mode_monitor_one: a property of the mode) */
+static unsigned ed_G_one_mask(void *ctx)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    unsigned mask = 0u;
+    int i;
+    double gi;
+    for (i = 0; i < RK_MAX_EVENTS; i++)
+        if (rk_mode_monitor_one(&f->e->model, f->mode, ED(f->e)->y, i, &gi))
+            mask |= 1u << i;
+    return mask;
+}
+
 /** totals(t, y): (sum lambda_N, sum lambda_T) [N]; *has 0 in flight (the Python's totals is None) */
 static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
 {
@@ -945,6 +958,15 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
     if (n_others && *te > t0) {
         int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0, dip[RK_MAX_EVENTS], n_dip = 0;
         double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS], gm[RK_MAX_EVENTS];
+        for (i = 0; i < n_others; i++)
+            if (isnan(g_a[others[i]]))
+                break;
+        if (i < n_others) {
+            /* dip_search's sub-samples hold the dipping functions alone (rk_first_negative): all of G at t0, the
+             * values the Python's sub-sample holds */
+            ED_TRYF(f, rk_event_eval(c, t0, ga_buf, err));
+            g_a = ga_buf;
+        }
         ED_TRYF(f, rk_event_eval(c, *te, gn, err));
         for (i = 0; i < n_others; i++)
             if (gn[others[i]] <= 0.0)
@@ -1114,6 +1136,8 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     c.G_ctx = &f;
     c.n_events = ev.n;
     c.G_one = ed_G_one;
+    c.G_one_mask = ed_G_one_mask;
+    c.one_known = 0;
     for (i = 0; i < ev.n; i++) {
         ev.armed[i] = g_prev[i] > 0.0;
         ev.watch[i] = !ev.armed[i] && g_prev[i] > -s->event_tol;

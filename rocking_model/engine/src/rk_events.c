@@ -164,6 +164,42 @@ rk_status rk_earliest_root(rk_event_ctx *c, const int *ids, int n_ids, const dou
     return RK_OK;
 }
 
+/* the functions ids of G on the dense output at t: through G_one alone where it has them all (the same values
+ * as G's, without the pivot force's trigonometry and ag), the other entries of g NAN; else all of G */
+static rk_status eval_ids(rk_event_ctx *c, double t, const int *ids, int n_ids, double *g, rk_error *err)
+{
+    double y[RK_MAX_Y];
+    int k;
+    rk_status st;
+    if (c->G_one == NULL || c->G_one_mask == NULL)
+        return rk_event_eval(c, t, g, err);
+    if (!c->one_known) {
+        c->one_mask = c->G_one_mask(c->G_ctx);
+        c->one_known = 1;
+    }
+    for (k = 0; k < n_ids; k++)
+        if (!(c->one_mask >> ids[k] & 1u))
+            return rk_event_eval(c, t, g, err);
+    rk_error_clear(err);
+    st = rk_dense_eval(c->stepper, t, y, err);
+    if (st != RK_OK)
+        return st;
+    for (k = 0; k < c->n_events; k++)
+        g[k] = NAN;
+    for (k = 0; k < n_ids; k++) {
+        int done = 0;
+        st = c->G_one(c->G_ctx, ids[k], t, y, &g[ids[k]], &done);
+        if (st != RK_OK)
+            return callback_failed(st, t, err);
+        if (!done) {
+            /* (a mask that promised too much: all of G, the same values) */
+            st = c->G(c->G_ctx, t, y, g);
+            return st == RK_OK ? RK_OK : callback_failed(st, t, err);
+        }
+    }
+    return RK_OK;
+}
+
 rk_status rk_first_negative(rk_event_ctx *c, double t0, const double *g0, double t1, const int *ids, int n_ids,
                             int n, int *found, int *neg, int *n_neg, double *ta, double *ga, double *tb,
                             double *gb, rk_error *err)
@@ -177,7 +213,7 @@ rk_status rk_first_negative(rk_event_ctx *c, double t0, const double *g0, double
     for (j = 1; j < n; j++) {
         double tj = t0 + (t1 - t0) * j / (double)n;
         int m = 0;
-        rk_status st = rk_event_eval(c, tj, gj, err);
+        rk_status st = eval_ids(c, tj, ids, n_ids, gj, err);
         if (st != RK_OK)
             return st;
         for (k = 0; k < n_ids; k++)
@@ -273,7 +309,7 @@ rk_status rk_sinks(rk_event_ctx *c, const int *ids, int n_ids, double t0, double
     rk_error_clear(err);
     *sunk = 0;
     for (j = 1; j < n; j++) {
-        st = rk_event_eval(c, t0 + d * j / (double)n, g, err);
+        st = eval_ids(c, t0 + d * j / (double)n, ids, n_ids, g, err);
         if (st != RK_OK)
             return st;
         for (k = 0; k < n_ids; k++)
@@ -284,7 +320,7 @@ rk_status rk_sinks(rk_event_ctx *c, const int *ids, int n_ids, double t0, double
     }
     while (d > xtol) {
         d *= 0.25;
-        st = rk_event_eval(c, t0 + d, g, err);
+        st = eval_ids(c, t0 + d, ids, n_ids, g, err);
         if (st != RK_OK)
             return st;
         for (k = 0; k < n_ids; k++)

@@ -99,6 +99,12 @@ typedef struct rk_event_ctx {
     void *G_ctx;
     int n_events;
     rk_event_one_fn G_one;      /**< optional (NULL: none): one function of G, for locate's iterations */
+    /** optional (NULL: none): the functions G_one has (bit i: function i; they depend on the mode only), asked
+     *  once per context by the sub-sampling (first_negative, sinks), which then evaluates those functions alone
+     *  when they are all it reads */
+    unsigned (*G_one_mask)(void *ctx);
+    int one_known;              /**< 0: one_mask not asked yet (set 0 with the context) */
+    unsigned one_mask;
 } rk_event_ctx;
 
 /** G(t, dense(t)) into g. */
@@ -117,7 +123,8 @@ rk_status rk_earliest_root(rk_event_ctx *c, const int *ids, int n_ids, const dou
                            const double *ga, double tb, const double *gb, double xtol, double *t_out, int *i_out,
                            rk_error *err);
 /** events.first_negative: *found 0 (None) or 1 with the functions at or below zero (neg, n_neg) and the
- *  sub-interval (ta, ga[n_events], tb, gb[n_events]). */
+ *  sub-interval (ta, ga[n_events], tb, gb[n_events]). Where G_one has all the functions ids, the sub-samples
+ *  hold those alone (the others NAN): ga and gb are exact for ids, and ga for all when ta = t0 (g0). */
 rk_status rk_first_negative(rk_event_ctx *c, double t0, const double *g0, double t1, const int *ids, int n_ids,
                             int n, int *found, int *neg, int *n_neg, double *ta, double *ga, double *tb,
                             double *gb, rk_error *err);
