@@ -529,9 +529,38 @@ static rk_status ed_record_samples(rk_engine *e, ed_out *o, int mode, double t_l
     double y[RK_MAX_Y];
 #define ED_BEFORE(t) (inclusive ? (t) <= t_last : (t) < t_last)
     if (ed_pending(o) && ED_BEFORE(o->times[o->next])) {
-        while (ed_pending(o) && ED_BEFORE(o->times[o->next])) {
-            ED_TRYF(f, rk_dense_eval(&s->stepper, o->times[o->next], y, err));
-            ed_row(e, o, mode, y, 0);
+        /* rk_ed_row's writes (overturned 0) with what does not change from row to row read once: a sampled run
+         * spends most of its time here (a pulse: a third of it) */
+        const rk_model *m = &e->model;
+        int n_out = m->ops->n_outputs, j;
+        long long cs = e->sample_cs, rs = cs > 1 ? 1 : n_out + 2;
+        int direct = !rk_mode_sliding(m, mode) && m->ops->mode_outputs != NULL && s->shift == 0.0;
+        double demand = s->friction_demand, painleve = (double)s->painleve;
+        long long impacts = s->impacts;
+        while (o->next < o->n && ED_BEFORE(o->times[o->next])) {
+            long long r = o->row++;
+            double *values = o->values + r * rs, row[RK_MAX_OUTPUTS];
+            ED_TRYF(f, rk_dense_eval(&s->stepper, o->times[o->next++], y, err));
+            if (cs > 1) {
+                if (direct)
+                    m->ops->mode_outputs(m, mode, y, row);
+                else
+                    rk_outputs_of(m, mode, y, s->shift, row);
+                for (j = 0; j < n_out; j++)
+                    values[j * cs] = row[j];
+                values[n_out * cs] = demand;
+                values[(n_out + 1) * cs] = painleve;
+            } else {
+                if (direct)
+                    m->ops->mode_outputs(m, mode, y, values);
+                else
+                    rk_outputs_of(m, mode, y, s->shift, values);
+                values[n_out] = demand;
+                values[n_out + 1] = painleve;
+            }
+            o->modes[r] = mode;
+            o->impacts[r] = impacts;
+            o->overturned[r] = 0;
         }
         if (s->max_work >= 0)
             s->work_end = (double)s->n_steps + (double)s->max_work;     /* the budget applies per sample */
