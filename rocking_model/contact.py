@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._ordered import matmul, matvec
+
 from .lcp import OPEN, SLIDE_NEG, SLIDE_POS, SLIDE_SIGN, STICK, ContactSolution, solve_contact_lcp, solve_friction_lcp
 from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 
@@ -127,8 +129,8 @@ def project_to_ground(model: "RockingModel", q: np.ndarray, corners) -> np.ndarr
     corners = sorted(corners)
     g = model.gaps(q)[corners]
     W_N = model.contact_jacobians(q)[0][:, corners]
-    MW = inverse_mass(model, q) @ W_N
-    A = W_N.T @ MW
+    MW = matmul(inverse_mass(model, q), W_N)
+    A = matmul(W_N.T, MW)
     if len(corners) == 1:
         mu = -g / A[0, 0]
     elif len(corners) > 2:
@@ -139,7 +141,7 @@ def project_to_ground(model: "RockingModel", q: np.ndarray, corners) -> np.ndarr
             mu = np.array([A[1, 1] * -g[0] - A[0, 1] * -g[1], A[0, 0] * -g[1] - A[1, 0] * -g[0]]) / det
         else:
             mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
-    return q + MW @ mu
+    return q + matvec(MW, mu)
 
 
 def closed_candidates(model: "RockingModel", q: np.ndarray, v: np.ndarray, gap_tol: float,

@@ -41,6 +41,8 @@ from itertools import combinations, product
 
 import numpy as np
 
+from ._ordered import matmul, matvec
+
 #: [contacts] largest number of candidate contacts solved by enumeration (2^n active sets)
 ENUMERATE_MAX = 6
 #: [pivots] most active-set changes of the pivoting method before it gives up (reported inexact)
@@ -266,10 +268,10 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
     n = W_N.shape[1]
     cand = sorted(set(candidates) | set(forced))
     G = np.concatenate([W_N, W_T], axis=1)          # columns N_0..N_{n-1}, T_0..T_{n-1}
-    MG = Minv @ G
+    MG = matmul(Minv, G)                            # (index-order sums, as the C's: rocking_model/_ordered.py)
     GT = G.T
-    D = (GT @ MG).tolist()
-    w0 = (GT @ v_free + np.concatenate([b_N, b_T])).tolist()   # residuals without percussions
+    D = matmul(GT, MG).tolist()
+    w0 = (matvec(GT, v_free) + np.concatenate([b_N, b_T])).tolist()   # residuals without percussions
     prob = _Problem(D, w0, n, cand, tuple(forced))
     if hint is not None:
         hint = tuple(sorted(hint))
@@ -281,7 +283,7 @@ def solve_contact_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_free
     else:
         start = [i for i in (hint or ()) if i in cand]
         viol, S, P, w = _pivot(prob, start, rtol)
-    v = v_free + MG @ np.array(P)
+    v = v_free + matvec(MG, P)
     w_out = np.full(n, np.nan)
     for i in cand:
         w_out[i] = w[i]
@@ -357,9 +359,9 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
     cand = sorted(set(candidates) | set(forced))
     sliding = sliding or {}
     G = np.concatenate([W_N, W_T], axis=1)
-    MG = Minv @ G
-    D = G.T @ MG
-    w0 = G.T @ v_free + np.concatenate([b_N, b_T])
+    MG = matmul(Minv, G)                            # (index-order sums, as the C's: rocking_model/_ordered.py)
+    D = matmul(G.T, MG)
+    w0 = matvec(G.T, v_free) + np.concatenate([b_N, b_T])
     scale_v = max([abs(w0[i]) for i in cand] + [abs(w0[n + i]) for i in cand] + [1e-300])
     forced = set(forced)
     inv_mu = 0.0 if math.isinf(mu) else 1.0 / mu
@@ -391,7 +393,7 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
                 elif s != OPEN:
                     P[i], P[n + i] = inv_mu * x[k], -SLIDE_SIGN[s] * x[k]
                     k += 1
-        w = w0 + D @ P
+        w = w0 + matvec(D, P)
         scale_P = max(float(np.max(np.abs(P))), 1e-300)
         viol = 0.0
         for i, s in zip(cand, states):
@@ -431,7 +433,7 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
         for states in combos:
             res = trial(states)
             if count and res[0] <= rtol:
-                v = v_free + MG @ res[2]
+                v = v_free + matvec(MG, res[2])
                 scale = max(float(np.max(np.abs(v))), float(np.max(np.abs(v_free))), 1e-300)
                 if not any(np.max(np.abs(v - u)) <= rtol * scale for u in motions):
                     motions.append(v)
@@ -458,7 +460,7 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
                         best, improved = res, True
         n_exact = int(best[0] <= rtol)
     viol, states, P, w = best
-    v = v_free + MG @ P
+    v = v_free + matvec(MG, P)
     w_N = np.full(n, np.nan)
     w_T = np.full(n, np.nan)
     full = [OPEN] * n

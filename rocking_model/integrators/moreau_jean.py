@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from .._ordered import lu_inverse, matvec
 from ..contact import inverse_mass, project_to_ground, solution_sigma, solve_with_friction
 from ..modes import BoundedLog, bounded_log
 from ..tolerances import DEFAULT_TOLERANCES, ContactTolerances
@@ -131,12 +132,12 @@ class MoreauJean(Integrator):
             Winv = inverse_mass(model, q)
         else:
             K, C = kc
-            rhs = rhs - dt * dt * theta * (K @ v)
-            Winv = np.linalg.inv(M + dt * theta * C + dt * dt * theta * theta * K)
-        v_free = v + Winv @ rhs
+            rhs = rhs - dt * dt * theta * matvec(K, v)
+            Winv = lu_inverse(M + dt * theta * C + dt * dt * theta * theta * K)
+        v_free = v + matvec(Winv, rhs)
         g = model.gaps(q)
         W_N, W_T = model.contact_jacobians(q)
-        U = W_N.T @ v
+        U = matvec(W_N.T, v)
         rule_impact = False
         closed_now = model.closed_of(self.mode)
         if len(closed_now) == 1 and model.n_contacts == 2:
@@ -149,20 +150,20 @@ class MoreauJean(Integrator):
                 if v_rule is not None:
                     v = v_rule
                     v_free = v + (v_free - self.v)
-                    U = W_N.T @ v
+                    U = matvec(W_N.T, v)
                     rule_impact = True
         # a corner enters the LCP if it closes by the classical prediction g + dt/2 U (with a round-off margin
         # for corners just projected onto the ground) or if the free motion would close it within the step;
         # a needless candidate only gets a zero percussion from the LCP
         g_half = g + 0.5 * dt * U
-        g_free = g + dt * ((1.0 - theta) * U + theta * (W_N.T @ v_free))
+        g_free = g + dt * ((1.0 - theta) * U + theta * matvec(W_N.T, v_free))
         margin = self.gap_margin
         active = [i for i in range(model.n_contacts) if g_half[i] <= margin or g_free[i] <= 0.0]
         if active:
             b_N = model.e_N * np.minimum(U, 0.0)
             # tangential law: the paper's sticking (b_T = 0), or restitution e_T = e_N of the pre-step tangential
             # velocity on the closing contacts (the same coefficient as in the normal direction, per contact)
-            b_T = np.where(U < 0.0, model.e_T * (W_T.T @ v), 0.0) if model.e_T else np.zeros(model.n_contacts)
+            b_T = np.where(U < 0.0, model.e_T * matvec(W_T.T, v), 0.0) if model.e_T else np.zeros(model.n_contacts)
             # the friction law picks the LCP: sticking (the paper's), its mu -> inf limit where sticking has no
             # solution, or Coulomb; the last step's closed contacts are tried first
             sol = solve_with_friction(model, Winv, W_N, W_T, v_free, b_N, b_T, active,
@@ -187,7 +188,7 @@ class MoreauJean(Integrator):
         q_new = q + dt * ((1.0 - theta) * v + theta * v_new)
         if closed:
             q_new = self._project(q_new, sorted(closed))
-        if len(closed) == model.n_contacts and np.all(np.abs(W_N.T @ v_new) <= v_scale):
+        if len(closed) == model.n_contacts and np.all(np.abs(matvec(W_N.T, v_new)) <= v_scale):
             # all corners stuck and at rest in the normal direction: the state is on the full-contact
             # manifold up to round-off; put it there exactly so that phi stays 0 at rest (no drift)
             full = model.mode_of(closed)

@@ -65,6 +65,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from .._ordered import inverse
+
 from ..contact import mode_forces
 from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, SLIDING, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
@@ -271,8 +273,9 @@ class RockingModel(ABC):
         the effective gravity g + ag_v on every mass)."""
 
     def inverse_mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q)^-1, shape (n, n); override with a closed form where there is one."""
-        return np.linalg.inv(self.mass_matrix(q))
+        """M(q)^-1, shape (n, n); override with a closed form where there is one. (Gauss-Jordan in the C
+        engine's operation order: rocking_model/_ordered.py.)"""
+        return inverse(self.mass_matrix(q))
 
     def stiff_jacobians(self, q: np.ndarray, v: np.ndarray):
         """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f, treated implicitly by the time-stepper.

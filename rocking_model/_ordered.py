@@ -1,0 +1,109 @@
+"""Small matrix products summed in index order, as the C engine's loops sum them (rocking_model/engine/src:
+``acc = 0.0; for k: acc += a[k] * b[k]``), for the Python reference's contact paths.
+
+Why not ``@``: numpy hands even a 3 x 3 product to its BLAS, whose kernels are chosen per CPU and may fuse
+``a * b + c`` into one rounding (FMA) or reorder the sum. A chaotic record amplifies that last bit: the rigid
+block's Moreau-Jean run over the benchmark's 30 s record drifted 2.2e-4 rad from the C engine on an Intel Xeon
+(bit for bit the same under OpenBLAS's generic kernels). Python floats never fuse, so these sums round as the
+C's do on every machine."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def matvec(A: np.ndarray, x) -> np.ndarray:
+    """A @ x for a 2-D A and a 1-D x, each row summed from 0.0 in index order."""
+    xs = x.tolist() if isinstance(x, np.ndarray) else list(x)
+    out = []
+    for row in A.tolist():
+        acc = 0.0
+        for a, b in zip(row, xs):
+            acc += a * b
+        out.append(acc)
+    return np.array(out, dtype=float)
+
+
+def matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A @ B for 2-D A and B, each entry summed from 0.0 in index order."""
+    cols = B.T.tolist()
+    out = []
+    for row in A.tolist():
+        line = []
+        for col in cols:
+            acc = 0.0
+            for a, b in zip(row, col):
+                acc += a * b
+            line.append(acc)
+        out.append(line)
+    return np.array(out, dtype=float).reshape(A.shape[0], B.shape[1])
+
+
+def inverse(A: np.ndarray) -> np.ndarray:
+    """A^-1 by Gauss-Jordan elimination with partial pivoting, operation for operation as the C engine's
+    rk_model_inverse_mass (np.linalg.inv's LAPACK rounds per CPU)."""
+    n = A.shape[0]
+    a = A.tolist()
+    inv = [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(a[i][k]) > abs(a[p][k]):
+                p = i
+        if p != k:
+            a[k], a[p] = a[p], a[k]
+            inv[k], inv[p] = inv[p], inv[k]
+        piv = a[k][k]
+        if piv == 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        a[k] = [x / piv for x in a[k]]
+        inv[k] = [x / piv for x in inv[k]]
+        for i in range(n):
+            if i == k:
+                continue
+            f = a[i][k]
+            ak, ik = a[k], inv[k]
+            a[i] = [x - f * y for x, y in zip(a[i], ak)]
+            inv[i] = [x - f * y for x, y in zip(inv[i], ik)]
+    return np.array(inv, dtype=float)
+
+
+def lu_inverse(A: np.ndarray) -> np.ndarray:
+    """A^-1 by LU with partial pivoting (the first largest |entry|, as LAPACK's getrf) and the columns of the
+    identity solved, operation for operation as the C engine's Moreau-Jean (rk_mj.c's invert)."""
+    n = A.shape[0]
+    lu = A.tolist()
+    piv = list(range(n))
+    for k in range(n):
+        p, big = k, abs(lu[k][k])
+        for i in range(k + 1, n):
+            if abs(lu[i][k]) > big:
+                big, p = abs(lu[i][k]), i
+        if big == 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        if p != k:
+            piv[k], piv[p] = piv[p], piv[k]
+            lu[k], lu[p] = lu[p], lu[k]
+        for i in range(k + 1, n):
+            row_i, row_k = lu[i], lu[k]
+            l = row_i[k] / row_k[k]
+            row_i[k] = l
+            for j in range(k + 1, n):
+                row_i[j] -= l * row_k[j]
+    inv = [[0.0] * n for _ in range(n)]
+    for j in range(n):
+        x = [0.0] * n
+        for i in range(n):
+            s = 1.0 if piv[i] == j else 0.0
+            row = lu[i]
+            for k in range(i):
+                s -= row[k] * x[k]
+            x[i] = s
+        for i in range(n - 1, -1, -1):
+            s = x[i]
+            row = lu[i]
+            for k in range(i + 1, n):
+                s -= row[k] * x[k]
+            x[i] = s / row[i]
+        for i in range(n):
+            inv[i][j] = x[i]
+    return np.array(inv, dtype=float)
