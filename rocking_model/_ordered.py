@@ -11,30 +11,24 @@ from __future__ import annotations
 import numpy as np
 
 
+def _dot(row, col) -> float:
+    """sum(row[k] * col[k]) from 0.0 in index order (Python floats: each product and sum rounded apart)."""
+    acc = 0.0
+    for a, b in zip(row, col):
+        acc += a * b
+    return acc
+
+
 def matvec(A: np.ndarray, x) -> np.ndarray:
     """A @ x for a 2-D A and a 1-D x, each row summed from 0.0 in index order."""
     xs = x.tolist() if isinstance(x, np.ndarray) else list(x)
-    out = []
-    for row in A.tolist():
-        acc = 0.0
-        for a, b in zip(row, xs):
-            acc += a * b
-        out.append(acc)
-    return np.array(out, dtype=float)
+    return np.array([_dot(row, xs) for row in A.tolist()], dtype=float)
 
 
 def matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A @ B for 2-D A and B, each entry summed from 0.0 in index order."""
     cols = B.T.tolist()
-    out = []
-    for row in A.tolist():
-        line = []
-        for col in cols:
-            acc = 0.0
-            for a, b in zip(row, col):
-                acc += a * b
-            line.append(acc)
-        out.append(line)
+    out = [[_dot(row, col) for col in cols] for row in A.tolist()]
     return np.array(out, dtype=float).reshape(A.shape[0], B.shape[1])
 
 

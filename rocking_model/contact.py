@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._ordered import matmul, matvec
-
 from .lcp import OPEN, SLIDE_NEG, SLIDE_POS, SLIDE_SIGN, STICK, ContactSolution, solve_contact_lcp, solve_friction_lcp
 from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 

@@ -152,16 +152,17 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     rk_error_clear(&f->err);
 }
 
-/** ed_ag through a callback: its failure and message kept */
-static RK_NOINLINE rk_status ed_ag_callback(ed_fn *f, double t, double *a, double *av)
+/** (ag(t), ag_v(t)) called directly (the Python's ag(t) at an event; a callback's failure and message kept);
+ *  ag_v NULL: 0. Not inlined: ed_ag's common path keeps no message buffer */
+static RK_NOINLINE rk_status ed_ag_call(rk_motion *ag, rk_motion *ag_v, double t, double *a, double *av, rk_error *err)
 {
     int failed = 0;
     char msg[RK_MSG_LEN];
     msg[0] = '\0';
-    *a = rk_motion_eval(f->ag, t, &failed, msg);
-    *av = f->ag_v != NULL && !failed ? rk_motion_eval(f->ag_v, t, &failed, msg) : 0.0;
+    *a = rk_motion_eval(ag, t, &failed, msg);
+    *av = ag_v != NULL && !failed ? rk_motion_eval(ag_v, t, &failed, msg) : 0.0;
     if (failed)
-        return rk_fail(&f->err, RK_ERR_VALUE, "%s", msg);
+        return rk_fail(err, RK_ERR_VALUE, "%s", msg);
     return RK_OK;
 }
 
@@ -174,23 +175,10 @@ static rk_status ed_ag(ed_fn *f, double t, double *a, double *av)
         return RK_OK;
     }
     if (!f->pure)
-        return ed_ag_callback(f, t, a, av);
+        return ed_ag_call(f->ag, f->ag_v, t, a, av, &f->err);
     /* a motion without callback neither fails nor writes a message (every rhs stage reads it) */
     *a = rk_motion_eval(f->ag, t, NULL, NULL);
     *av = f->ag_v != NULL ? rk_motion_eval(f->ag_v, t, NULL, NULL) : 0.0;
-    return RK_OK;
-}
-
-/** (ag(t), ag_v(t)) called directly (the Python's ag(t) at an event); ag_v NULL: 0 */
-static rk_status ed_ag_call(rk_motion *ag, rk_motion *ag_v, double t, double *a, double *av, rk_error *err)
-{
-    int failed = 0;
-    char msg[RK_MSG_LEN];
-    msg[0] = '\0';
-    *a = rk_motion_eval(ag, t, &failed, msg);
-    *av = ag_v != NULL && !failed ? rk_motion_eval(ag_v, t, &failed, msg) : 0.0;
-    if (failed)
-        return rk_fail(err, RK_ERR_VALUE, "%s", msg);
     return RK_OK;
 }
 
@@ -486,35 +474,47 @@ static int ed_pending(const ed_out *o)
     return o != NULL && o->next < o->n;
 }
 
+/** One row's values (the outputs, friction_demand, painleve) into values, one column every cs (cs <= 1: in a
+ *  row) */
+static inline void ed_row_values(const rk_model *m, int mode, const double *y, double shift, long long cs, double demand,
+                                 double painleve, double *values)
+{
+    int n_out = m->ops->n_outputs, j;
+    if (cs > 1) {
+        /* the column layout (rk_engine_sample_columns): one value per column, rows count apart */
+        double row[RK_MAX_OUTPUTS];
+        rk_outputs_of(m, mode, y, shift, row);
+        for (j = 0; j < n_out; j++)
+            values[j * cs] = row[j];
+        values[n_out * cs] = demand;
+        values[(n_out + 1) * cs] = painleve;
+    } else {
+        rk_outputs_of(m, mode, y, shift, values);
+        values[n_out] = demand;
+        values[n_out + 1] = painleve;
+    }
+}
+
 void rk_ed_row(rk_engine *e, int mode, const double *y, int overturned, int *modes, double *values,
                long long *impacts, int *over)
 {
     const rk_ed_state *s = ED(e);
-    int n_out = e->model.ops->n_outputs;
-    long long cs = e->sample_cs;
-    if (cs > 1) {
-        /* the column layout (rk_engine_sample_columns): one value per column, rows count apart */
-        double row[RK_MAX_OUTPUTS];
-        int j;
-        rk_outputs_of(&e->model, mode, y, s->shift, row);
-        for (j = 0; j < n_out; j++)
-            values[j * cs] = row[j];
-        values[n_out * cs] = s->friction_demand;
-        values[(n_out + 1) * cs] = (double)s->painleve;
-    } else {
-        rk_outputs_of(&e->model, mode, y, s->shift, values);
-        values[n_out] = s->friction_demand;
-        values[n_out + 1] = (double)s->painleve;
-    }
+    ed_row_values(&e->model, mode, y, s->shift, e->sample_cs, s->friction_demand, (double)s->painleve, values);
     *modes = overturned ? 10 : mode;        /* modes.OVERTURNED */
     *impacts = s->impacts;
     *over = overturned;
 }
 
+/** the distance from one row's values to the next's: 1 in the column layout, else a row's length */
+static long long ed_row_stride(const rk_engine *e)
+{
+    return e->sample_cs > 1 ? 1 : e->model.ops->n_outputs + 2;
+}
+
 /** `_sample_row` appended to out; overturned < 0: the current flag (the Python's None) */
 static void ed_row(rk_engine *e, ed_out *o, int mode, const double *y, int overturned)
 {
-    long long rs = e->sample_cs > 1 ? 1 : e->model.ops->n_outputs + 2;      /* from one row to the next */
+    long long rs = ed_row_stride(e);
     long long r = o->row++;
     o->next++;
     rk_ed_row(e, mode, y, overturned < 0 ? ED(e)->overturned : overturned, o->modes + r,
@@ -529,35 +529,15 @@ static rk_status ed_record_samples(rk_engine *e, ed_out *o, int mode, double t_l
     double y[RK_MAX_Y];
 #define ED_BEFORE(t) (inclusive ? (t) <= t_last : (t) < t_last)
     if (ed_pending(o) && ED_BEFORE(o->times[o->next])) {
-        /* rk_ed_row's writes (overturned 0) with what does not change from row to row read once: a sampled run
-         * spends most of its time here (a pulse: a third of it) */
+        /* rk_ed_row's writes (overturned 0), what does not change from row to row read once: a sampled run
+         * spends much of its time here (a pulse: a third of it) */
         const rk_model *m = &e->model;
-        int n_out = m->ops->n_outputs, j;
-        long long cs = e->sample_cs, rs = cs > 1 ? 1 : n_out + 2;
-        int direct = !rk_mode_sliding(m, mode) && m->ops->mode_outputs != NULL && s->shift == 0.0;
-        double demand = s->friction_demand, painleve = (double)s->painleve;
-        long long impacts = s->impacts;
+        long long rs = ed_row_stride(e), cs = e->sample_cs, impacts = s->impacts;
+        double shift = s->shift, demand = s->friction_demand, painleve = (double)s->painleve;
         while (o->next < o->n && ED_BEFORE(o->times[o->next])) {
             long long r = o->row++;
-            double *values = o->values + r * rs, row[RK_MAX_OUTPUTS];
             ED_TRYF(f, rk_dense_eval(&s->stepper, o->times[o->next++], y, err));
-            if (cs > 1) {
-                if (direct)
-                    m->ops->mode_outputs(m, mode, y, row);
-                else
-                    rk_outputs_of(m, mode, y, s->shift, row);
-                for (j = 0; j < n_out; j++)
-                    values[j * cs] = row[j];
-                values[n_out * cs] = demand;
-                values[(n_out + 1) * cs] = painleve;
-            } else {
-                if (direct)
-                    m->ops->mode_outputs(m, mode, y, values);
-                else
-                    rk_outputs_of(m, mode, y, s->shift, values);
-                values[n_out] = demand;
-                values[n_out + 1] = painleve;
-            }
+            ed_row_values(m, mode, y, shift, cs, demand, painleve, o->values + r * rs);
             o->modes[r] = mode;
             o->impacts[r] = impacts;
             o->overturned[r] = 0;
@@ -985,7 +965,7 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
             others[n_others++] = i;
     }
     if (n_others && *te > t0) {
-        int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0, dip[RK_MAX_EVENTS], n_dip = 0;
+        int fn = 0, neg[RK_MAX_EVENTS], n_neg = 0, neg_te[RK_MAX_EVENTS], n_neg_te = 0, dip[RK_MAX_EVENTS], n_dip = 0;
         double ta, tn, ga[RK_MAX_EVENTS], gn[RK_MAX_EVENTS], gm[RK_MAX_EVENTS];
         for (i = 0; i < n_others; i++)
             if (isnan(g_a[others[i]]))
@@ -999,8 +979,8 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
         ED_TRYF(f, rk_event_eval(c, *te, gn, err));
         for (i = 0; i < n_others; i++)
             if (gn[others[i]] <= 0.0)
-                neg[n_neg++] = others[i];
-        if (n_neg) {
+                neg_te[n_neg_te++] = others[i];
+        if (n_neg_te) {
             /* below the ground at te: the first sub-interval where one of them is */
             ED_TRYF(f, rk_first_negative(c, t0, g_a, *te, others, n_others, n_sub, &fn, neg, &n_neg, &ta, ga,
                                          &tn, gm, err));
@@ -1008,9 +988,8 @@ static rk_status ed_find_event(rk_engine *e, rk_event_ctx *c, ed_ev *ev, const d
                 memcpy(gn, gm, sizeof gm);
             } else {
                 /* te itself: a corner that crosses inside the last sub-interval (not sampled) */
-                for (i = 0, n_neg = 0; i < n_others; i++)
-                    if (gn[others[i]] <= 0.0)
-                        neg[n_neg++] = others[i];
+                memcpy(neg, neg_te, sizeof neg_te);
+                n_neg = n_neg_te;
                 fn = 1;
                 tn = *te;
                 ta = t0 + (*te - t0) * (n_sub - 1) / (double)n_sub;

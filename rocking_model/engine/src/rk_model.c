@@ -636,7 +636,7 @@ int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, dou
     return 0;
 }
 
-void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out)
+void rk_outputs_of_general(const rk_model *m, int mode, const double *y, double shift, double *out)
 {
     double q[RK_MAX_DOF], v[RK_MAX_DOF];
     int i;

@@ -242,8 +242,17 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
  *  returns 1 with *gi set (the same value bit for bit), 0 otherwise (sliding modes, the friction event, the
  *  contact force monitors). */
 int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, double *gi);
-/** outputs_of(mode, y, shift): out in the order of ops->output_decls; shift [m] added to the SHIFTED outputs. */
-void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out);
+/** outputs_of(mode, y, shift): out in the order of ops->output_decls; shift [m] added to the SHIFTED outputs.
+ *  (rk_outputs_of: the common case, a mode's own kernel without offset, inline, as every output row of a sampled
+ *  run asks it; rk_outputs_of_general: all cases.) */
+void rk_outputs_of_general(const rk_model *m, int mode, const double *y, double shift, double *out);
+static inline void rk_outputs_of(const rk_model *m, int mode, const double *y, double shift, double *out)
+{
+    if (shift == 0.0 && m->ops->mode_outputs != NULL && !rk_mode_sliding(m, mode))
+        m->ops->mode_outputs(m, mode, y, out);
+    else
+        rk_outputs_of_general(m, mode, y, shift, out);
+}
 /** RockingModel.slip(q) [m]. */
 double rk_model_slip(const rk_model *m, const double *q);
 /** sliding.shift_of: horizontal offset of a full state on the closed contacts of a sticking mode [m]. */
