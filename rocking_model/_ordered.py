@@ -1,5 +1,6 @@
 """Small matrix products summed in index order, as the C engine's loops sum them (rocking_model/engine/src:
-``acc = 0.0; for k: acc += a[k] * b[k]``), for the Python reference's contact paths.
+``acc = 0.0; for k: acc += a[k] * b[k]``), and the C's inverses and dense solves operation for operation, for
+the Python reference's contact paths.
 
 Why not ``@``: numpy hands even a 3 x 3 product to its BLAS, whose kernels are chosen per CPU and may fuse
 ``a * b + c`` into one rounding (FMA) or reorder the sum. A chaotic record amplifies that last bit: the rigid
@@ -7,6 +8,8 @@ block's Moreau-Jean run over the benchmark's 30 s record drifted 2.2e-4 rad from
 (bit for bit the same under OpenBLAS's generic kernels). Python floats never fuse, so these sums round as the
 C's do on every machine."""
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -101,3 +104,100 @@ def lu_inverse(A: np.ndarray) -> np.ndarray:
         for i in range(n):
             inv[i][j] = x[i]
     return np.array(inv, dtype=float)
+
+
+def solve(A: np.ndarray, b) -> np.ndarray:
+    """np.linalg.solve(A, b) for a square A and a 1-D b: LU with partial pivoting (the first largest |entry|),
+    failing only on an exactly zero pivot as LAPACK's gesv (LinAlgError "Singular matrix"), operation for
+    operation as the C engine's rk_la_solve (rk_model.c)."""
+    lu = np.asarray(A, dtype=float).tolist()
+    y = [float(a) for a in b]
+    n = len(y)
+    x = [0.0] * n
+    for k in range(n):
+        p, best = k, abs(lu[k][k])
+        for i in range(k + 1, n):
+            if abs(lu[i][k]) > best:
+                best, p = abs(lu[i][k]), i
+        if p != k:
+            lu[k], lu[p] = lu[p], lu[k]
+            y[k], y[p] = y[p], y[k]
+        row_k = lu[k]
+        if row_k[k] == 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        for i in range(k + 1, n):
+            row_i = lu[i]
+            l = row_i[k] / row_k[k]
+            row_i[k] = l
+            for j in range(k + 1, n):
+                row_i[j] -= l * row_k[j]
+            y[i] -= l * y[k]
+    for i in range(n - 1, -1, -1):
+        s = y[i]
+        row = lu[i]
+        for j in range(i + 1, n):
+            s -= row[j] * x[j]
+        x[i] = s / row[i]
+    return np.array(x, dtype=float)
+
+
+#: [1] machine epsilon of a double (C's DBL_EPSILON)
+_EPS = 2.220446049250313e-16
+
+
+def lstsq(A: np.ndarray, b, rcond: float | None) -> np.ndarray:
+    """np.linalg.lstsq(A, b, rcond)[0] for a 2-D A and a 1-D b: the minimum-norm least-squares solution, the
+    singular values at most rcond * s_max dropped (rcond None: eps * max(rows, cols), numpy's default), from a
+    one-sided Jacobi SVD, operation for operation as the C engine's rk_la_lstsq (rk_model.c). numpy's gelsd
+    agrees to round-off only, and rounds per CPU."""
+    U = np.asarray(A, dtype=float).tolist()
+    rows, cols = len(U), len(U[0]) if U else 0
+    if rcond is None or rcond < 0.0:
+        rcond = _EPS * max(rows, cols)
+    V = [[1.0 if i == j else 0.0 for j in range(cols)] for i in range(cols)]
+    sqrt = math.sqrt
+    for _sweep in range(60):
+        rotated = False
+        for j in range(cols - 1):
+            for k in range(j + 1, cols):
+                alpha = beta = gamma = 0.0
+                for row in U:
+                    alpha += row[j] * row[j]
+                    beta += row[k] * row[k]
+                    gamma += row[j] * row[k]
+                if gamma == 0.0 or abs(gamma) <= _EPS * sqrt(alpha * beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + sqrt(1.0 + zeta * zeta))
+                c = 1.0 / sqrt(1.0 + t * t)
+                sn = c * t
+                for row in U:
+                    u1, u2 = row[j], row[k]
+                    row[j] = c * u1 - sn * u2
+                    row[k] = sn * u1 + c * u2
+                for row in V:
+                    v1, v2 = row[j], row[k]
+                    row[j] = c * v1 - sn * v2
+                    row[k] = sn * v1 + c * v2
+        if not rotated:
+            break
+    s = []
+    for j in range(cols):
+        nrm = 0.0
+        for row in U:
+            nrm += row[j] * row[j]
+        s.append(sqrt(nrm))
+    smax = max([0.0] + s)
+    bs = [float(a) for a in b]
+    x = [0.0] * cols
+    for j in range(cols):
+        if not (s[j] > rcond * smax) or s[j] == 0.0:
+            continue
+        ub = 0.0
+        for row, bi in zip(U, bs):
+            ub += row[j] * bi
+        ub /= s[j] * s[j]               # U's column j is s_j times the unit singular vector
+        for i in range(cols):
+            x[i] += V[i][j] * ub
+    return np.array(x, dtype=float)

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._ordered import matmul, matvec
+from ._ordered import lstsq, matmul, matvec
 from .lcp import OPEN, SLIDE_NEG, SLIDE_POS, SLIDE_SIGN, STICK, ContactSolution, solve_contact_lcp, solve_friction_lcp
 from .tolerances import DEFAULT_TOLERANCES, ContactTolerances
 
@@ -133,13 +133,13 @@ def project_to_ground(model: "RockingModel", q: np.ndarray, corners) -> np.ndarr
     if len(corners) == 1:
         mu = -g / A[0, 0]
     elif len(corners) > 2:
-        mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
+        mu = lstsq(A, -g, rcond=1e-12)
     else:
         det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
         if abs(det) > 1e-12 * abs(A[0, 0] * A[1, 1]):
             mu = np.array([A[1, 1] * -g[0] - A[0, 1] * -g[1], A[0, 0] * -g[1] - A[1, 0] * -g[0]]) / det
         else:
-            mu = np.linalg.lstsq(A, -g, rcond=1e-12)[0]
+            mu = lstsq(A, -g, rcond=1e-12)
     return q + matvec(MW, mu)
 
 

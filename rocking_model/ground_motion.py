@@ -416,7 +416,8 @@ class RickerPulse(GroundMotion):
         self.support = (self.t_c - 2.0 * T_p, self.t_c + 2.0 * T_p)
 
     def __call__(self, t):
-        x = 0.25 * (self.omega_p * (t - self.t_c)) ** 2
+        w = self.omega_p * (t - self.t_c)
+        x = 0.25 * (w * w)
         return self.A * (1.0 - 2.0 * x) * math.exp(-x)
 
     @property

@@ -41,7 +41,7 @@ from itertools import combinations, product
 
 import numpy as np
 
-from ._ordered import matmul, matvec
+from ._ordered import lstsq, matmul, matvec, solve
 
 #: [contacts] largest number of candidate contacts solved by enumeration (2^n active sets)
 ENUMERATE_MAX = 6
@@ -163,7 +163,7 @@ class _Problem:
                     A[r][2] = 0.5 * (D[rows[r]][t0] + D[rows[r]][t1])
             x = _solve_small(A, rhs)
             if x is None:
-                x = np.linalg.lstsq(np.array(A), np.array(rhs), rcond=1e-12)[0].tolist()
+                x = lstsq(A, rhs, rcond=1e-12).tolist()
             for r, xr in zip(rows, x):
                 P[r] = xr
             if merged:
@@ -382,9 +382,9 @@ def solve_friction_lcp(Minv: np.ndarray, W_N: np.ndarray, W_T: np.ndarray, v_fre
             A = np.stack(cols, axis=1)[rows]
             rhs = -w0[rows]
             try:
-                x = np.linalg.solve(A, rhs)
+                x = solve(A, rhs)
             except np.linalg.LinAlgError:
-                x = np.linalg.lstsq(A, rhs, rcond=1e-12)[0]
+                x = lstsq(A, rhs, rcond=1e-12)
             k = 0
             for i, s in zip(cand, states):
                 if s == STICK:

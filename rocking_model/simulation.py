@@ -470,6 +470,10 @@ class Result:
     def __getitem__(self, name: str) -> np.ndarray:
         return self.t if name == "t" else self.values[name]
 
+    def __contains__(self, name) -> bool:
+        # (without it, ``in`` would iterate through __getitem__ with integer keys)
+        return name == "t" or name in self.values
+
     def __getattr__(self, name):
         values = self.__dict__.get("values", {})
         if name in values:

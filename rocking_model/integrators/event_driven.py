@@ -816,8 +816,8 @@ class EventDriven(Integrator):
                 a_N = W_N.T @ acc + model.contact_drift(q, sol.v)[0]
                 falling = [i for i in cand if a_N[i] < 0.0]
                 if falling:
-                    i = min(falling, key=lambda j: U_plus[j] ** 2 / -a_N[j])
-                    if U_plus[i] ** 2 < -2.0 * a_N[i] * self.gap_tol:
+                    i = min(falling, key=lambda j: U_plus[j] * U_plus[j] / -a_N[j])
+                    if U_plus[i] * U_plus[i] < -2.0 * a_N[i] * self.gap_tol:
                         new = [i]
             if not new:
                 break

@@ -172,11 +172,11 @@ class ExplicitRK:
             return self.max_step if math.isfinite(self.max_step) else 1.0
         y, f, n = self.y, self.f, self.n
         scale = [a + abs(v) * self.rtol for a, v in zip(self.atol, y)]
-        d0 = math.sqrt(sum((v / s) ** 2 for v, s in zip(y, scale)) / n)
-        d1 = math.sqrt(sum((v / s) ** 2 for v, s in zip(f, scale)) / n)
+        d0 = math.sqrt(sum((v / s) * (v / s) for v, s in zip(y, scale)) / n)
+        d1 = math.sqrt(sum((v / s) * (v / s) for v, s in zip(f, scale)) / n)
         h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
         f1 = self.fun(self.t + h0, [v + h0 * fv for v, fv in zip(y, f)])
-        d2 = math.sqrt(sum(((a - b) / s) ** 2 for a, b, s in zip(f1, f, scale)) / n) / h0
+        d2 = math.sqrt(sum(((a - b) / s) * ((a - b) / s) for a, b, s in zip(f1, f, scale)) / n) / h0
         if d1 <= 1e-15 and d2 <= 1e-15:
             h1 = max(1e-6, h0 * 1e-3)
         else:

@@ -117,7 +117,7 @@ class FlexibleOscillator(RockingModel):
 
     def __post_init__(self):
         check_parameters(self)
-        if self.m_c == 0.0 and self.m_b * self.rho ** 2 == 0.0:
+        if self.m_c == 0.0 and self.m_b * (self.rho * self.rho) == 0.0:
             bad = "m_b" if self.m_b == 0.0 else "rho"  # rho > 0 can still give m_b*rho^2 = 0 (underflow)
             raise ValueError(
                 f"{bad} = {getattr(self, bad):g} is out of range when m_c = 0: the mass matrix is singular unless m_c > 0 or "
@@ -130,14 +130,14 @@ class FlexibleOscillator(RockingModel):
             D=m + 3.0 / 8.0 * m_c,
             A_h=(m + 0.5 * m_c) * h,
             C=(m + 11.0 / 40.0 * m_c) * h,
-            I_mb=self.m_b * self.rho ** 2,
+            I_mb=self.m_b * (self.rho * self.rho),
         )
-        d["J0"] = d["I_mb"] + m * h ** 2 + m_c * h ** 2 / 3.0
-        d["J_eff"] = d["J0"] - d["C"] ** 2 / d["m_tilde"]
+        d["J0"] = d["I_mb"] + m * (h * h) + m_c * (h * h) / 3.0
+        d["J_eff"] = d["J0"] - d["C"] * d["C"] / d["m_tilde"]
         d["c"] = 2.0 * self.zeta * math.sqrt(d["m_tilde"] * d["k_tilde"])
         omega = math.sqrt(d["k_tilde"] / d["m_tilde"])
         if omega > OMEGA_MAX:
-            EI_max = OMEGA_MAX ** 2 * d["m_tilde"] * h ** 3 / 3.0
+            EI_max = OMEGA_MAX * OMEGA_MAX * d["m_tilde"] * h ** 3 / 3.0
             raise ValueError(
                 f"EI = {self.EI:g} is out of range for m = {m:g}, m_c = {m_c:g}, h = {h:g}; allowed range "
                 f"(0, {EI_max:.6g}] N m2: the column's circular frequency omega = sqrt(3 EI/(h^3 m_tilde)) = "
@@ -185,7 +185,7 @@ class FlexibleOscillator(RockingModel):
     @property
     def I_O(self) -> float:
         """Moment of inertia of the undeformed structure about a base corner J0 + M_t b^2 [kg m2]."""
-        return self.J0 + self.M_t * self.b ** 2
+        return self.J0 + self.M_t * (self.b * self.b)
 
     @property
     def p(self) -> float:
@@ -324,7 +324,7 @@ class FlexibleOscillator(RockingModel):
         sp, cp = math.sin(phi), math.cos(phi)
         mt, C, D, g = self.m_tilde, self.C, self.D, self.g + ag_v
         sbM = s * self.b * self.M_t
-        K = self.J0 + mt * u * u + self.M_t * self.b ** 2 - 2.0 * s * self.b * D * u
+        K = self.J0 + mt * u * u + self.M_t * (self.b * self.b) - 2.0 * s * self.b * D * u
         E = mt * u - s * self.b * D
         f_u = -self.c * ud - self.k_tilde * u - g * D * sp - D * cp * ag + E * w * w
         f_p = (-2.0 * E * ud * w - g * (D * u - sbM) * cp + g * self.A_h * sp

@@ -57,7 +57,7 @@ class RigidBlock(RockingModel):
         # derived parameters, computed once (the integrators read them in their inner loops)
         # (a frozen dataclass: written into the instance's dict, as object.__setattr__ would, in one call)
         R = math.hypot(self.b, self.h)
-        self.__dict__.update(_R=R, _alpha=math.atan2(self.b, self.h), _I_c=self.m * R ** 2 / 3.0,
+        self.__dict__.update(_R=R, _alpha=math.atan2(self.b, self.h), _I_c=self.m * (R * R) / 3.0,
                              _p=math.sqrt(3.0 * self.g / (4.0 * R)))
 
     # the mass matrix and its inverse, made on first use (the compiled engine never reads them)
@@ -198,7 +198,7 @@ class RigidBlock(RockingModel):
         upward: the effective gravity g + ag_v scales the restoring moment)."""
         a = self._alpha + s * phi
         # ((g + ag_v) / g) is exactly 1 for ag_v = 0: the same result as without the vertical component
-        return self._p ** 2 * ((ag / self.g) * math.cos(a) + ((self.g + ag_v) / self.g) * s * math.sin(a))
+        return self._p * self._p * ((ag / self.g) * math.cos(a) + ((self.g + ag_v) / self.g) * s * math.sin(a))
 
     def reduced_acceleration(self, mode, r, r_dot, ag, ag_v=0.0):
         if mode == Mode.FULL:
@@ -277,7 +277,7 @@ class RigidBlock(RockingModel):
                 return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
             return rhs, monitors, None
         s = pivot_sign(mode)
-        p2, al = self._p ** 2, self._alpha
+        p2, al = self._p * self._p, self._alpha
         pivot_first = s < 0
         gr0 = ge0 / g                     # g_e / g: the restoring moment's factor 1 + ag_v / g
         sr0 = gr0 * s
@@ -365,7 +365,7 @@ class RigidBlock(RockingModel):
         return mode, q, v
 
     def energy(self, q, v):
-        kin = 0.5 * (self.m * (v[0] ** 2 + v[1] ** 2) + self.I_c * v[2] ** 2)
+        kin = 0.5 * (self.m * (v[0] * v[0] + v[1] * v[1]) + self.I_c * (v[2] * v[2]))
         return kin + self.m * self.g * (q[1] - self.h)
 
     def outputs(self, q, v):

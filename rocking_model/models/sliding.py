@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._ordered import lstsq, matmul, matvec, solve
 from ..modes import SLIDING, stick_mode
 
 if TYPE_CHECKING:
@@ -78,15 +79,16 @@ def slide_motion(model: "RockingModel", mode, q, v, ag: float, ag_v: float = 0.0
     Minv = model.inverse_mass_matrix(q)
     inv_mu = 0.0 if math.isinf(model.mu) else 1.0 / model.mu
     C = inv_mu * W_N[:, closed] - sigma * W_T[:, closed]
-    a_free = Minv @ model.forces(q, v, ag, ag_v)
-    MC = Minv @ C
-    A = W_N[:, closed].T @ MC
-    rhs = -(W_N[:, closed].T @ a_free + a_N[closed])
+    # index-order sums, as the C's (rocking_model/_ordered.py)
+    a_free = matvec(Minv, model.forces(q, v, ag, ag_v))
+    MC = matmul(Minv, C)
+    A = matmul(W_N[:, closed].T, MC)
+    rhs = -(matvec(W_N[:, closed].T, a_free) + a_N[closed])
     try:
-        tau = np.linalg.solve(A, rhs)
+        tau = solve(A, rhs)
     except np.linalg.LinAlgError:
-        tau = np.linalg.lstsq(A, rhs, rcond=1e-12)[0]
-    return a_free + MC @ tau, tau
+        tau = lstsq(A, rhs, rcond=1e-12)
+    return a_free + matvec(MC, tau), tau
 
 
 def slide_acceleration(model: "RockingModel", mode, r, r_dot, ag: float, ag_v: float = 0.0) -> np.ndarray:
@@ -94,7 +96,7 @@ def slide_acceleration(model: "RockingModel", mode, r, r_dot, ag: float, ag_v: f
     q, v = slide_embed(model, mode, r, r_dot)
     a, _ = slide_motion(model, mode, q, v, ag, ag_v)
     J, jd = slide_jacobian(model, mode, r, r_dot)
-    return np.linalg.lstsq(J, a - jd, rcond=None)[0]
+    return lstsq(J, a - jd, rcond=None)
 
 
 def slide_jacobian(model: "RockingModel", mode, r, r_dot) -> tuple[np.ndarray, np.ndarray]:

@@ -80,7 +80,7 @@ static rk_status flexible_init(rk_model *m, const double *params, rk_error *err)
         if (rk_param_check(&PARAMS[i], params[i], &m->p[i], err) != RK_OK)
             return RK_ERR_VALUE;
     }
-    if (m->p[P_MC] == 0.0 && m->p[P_MB] * pow(m->p[P_RHO], 2.0) == 0.0) {
+    if (m->p[P_MC] == 0.0 && m->p[P_MB] * (m->p[P_RHO] * m->p[P_RHO]) == 0.0) {
         int bad = m->p[P_MB] == 0.0 ? P_MB : P_RHO;   /* rho > 0 can still give m_b*rho^2 = 0 (underflow) */
         return rk_fail(err, RK_ERR_VALUE, "%s = %g is out of range when m_c = 0: the mass matrix is singular unless "
                        "m_c > 0 or m_b*rho^2 > 0; allowed range with m_c = 0: m_b in (0, 1e+12] and rho in (0, 1000]",
@@ -95,13 +95,13 @@ static rk_status flexible_init(rk_model *m, const double *params, rk_error *err)
     m->d[D_D] = mm + 3.0 / 8.0 * m_c;
     m->d[D_AH] = (mm + 0.5 * m_c) * h;
     m->d[D_C] = (mm + 11.0 / 40.0 * m_c) * h;
-    m->d[D_IMB] = m->p[P_MB] * pow(m->p[P_RHO], 2.0);
-    m->d[D_J0] = m->d[D_IMB] + mm * pow(h, 2.0) + m_c * pow(h, 2.0) / 3.0;
-    m->d[D_JEFF] = m->d[D_J0] - pow(m->d[D_C], 2.0) / m->d[D_MT];
+    m->d[D_IMB] = m->p[P_MB] * (m->p[P_RHO] * m->p[P_RHO]);
+    m->d[D_J0] = m->d[D_IMB] + mm * (h * h) + m_c * (h * h) / 3.0;
+    m->d[D_JEFF] = m->d[D_J0] - m->d[D_C] * m->d[D_C] / m->d[D_MT];
     m->d[D_CD] = 2.0 * m->p[P_ZETA] * sqrt(m->d[D_MT] * m->d[D_KT]);
     omega = sqrt(m->d[D_KT] / m->d[D_MT]);
     if (omega > OMEGA_MAX) {
-        double EI_max = pow(OMEGA_MAX, 2.0) * m->d[D_MT] * pow(h, 3.0) / 3.0;
+        double EI_max = OMEGA_MAX * OMEGA_MAX * m->d[D_MT] * pow(h, 3.0) / 3.0;
         return rk_fail(err, RK_ERR_VALUE, "EI = %g is out of range for m = %g, m_c = %g, h = %g; allowed range "
                        "(0, %.6g] N m2: the column's circular frequency omega = sqrt(3 EI/(h^3 m_tilde)) = %.4g rad/s "
                        "exceeds OMEGA_MAX = %g rad/s; a column this stiff rocks as a rigid body: use RigidBlock",
@@ -111,7 +111,7 @@ static rk_status flexible_init(rk_model *m, const double *params, rk_error *err)
     m->d[D_HCG] = m->d[D_AH] / m->d[D_MTOT];
     m->d[D_R] = rk_py_hypot(B, m->d[D_HCG]);
     m->d[D_ALPHA] = atan2(B, m->d[D_HCG]);
-    m->d[D_IO] = m->d[D_J0] + m->d[D_MTOT] * pow(B, 2.0);
+    m->d[D_IO] = m->d[D_J0] + m->d[D_MTOT] * (B * B);
     m->d[D_P] = sqrt(m->d[D_MTOT] * G * m->d[D_R] / m->d[D_IO]);
     m->d[D_A11] = m->d[D_MT] - m->d[D_D] * m->d[D_D] / m->d[D_MTOT];       /* mode_closures' flight a11 */
     m->d[D_K0] = m->d[D_J0] + m->d[D_MTOT] * B * B;                         /* mode_closures' rocking K0 */
@@ -444,7 +444,7 @@ static void reduced_acceleration(const rk_model *m, int mode, const double *r, c
         double u = r[0], phi = r[1], ud = r_dot[0], w = r_dot[1], sp = sin(phi), cp = cos(phi);
         double mt = MT, C = CC, D = DD, g = G + ag_v;
         double sbM = s * B * MTOT;
-        double K = J0 + mt * u * u + MTOT * pow(B, 2.0) - 2.0 * s * B * D * u;
+        double K = J0 + mt * u * u + MTOT * (B * B) - 2.0 * s * B * D * u;
         double E = mt * u - s * B * D;
         double f_u = -CD * ud - KT * u - g * D * sp - D * cp * ag + E * w * w;
         double f_p = (-2.0 * E * ud * w - g * (D * u - sbM) * cp + g * AH * sp + ag * (AH * cp + (D * u - sbM) * sp));

@@ -207,10 +207,9 @@ static double eval_const(const rk_motion *m, double t, long long *cache, int *fa
     case RK_MOTION_RECT:
         return (m->t0 < t && t <= m->t1) ? m->A : 0.0;
     case RK_MOTION_RICKER: {
-        /* 0.25 * (omega_p * (t - t_c)) ** 2: Python's float ** calls libm's pow, which is not always y * y
-         * rounded; the exponent is read through a volatile so that the compiler cannot turn pow(y, 2) into y * y */
-        volatile double two = 2.0;
-        double x = 0.25 * pow(m->omega_p * (t - m->t0), two);
+        /* 0.25 * (w * w) as RickerPulse.__call__ (a product, not pow: the same rounding on every CPU) */
+        double w = m->omega_p * (t - m->t0);
+        double x = 0.25 * (w * w);
         return m->A * (1.0 - 2.0 * x) * exp(-x);
     }
     case RK_MOTION_SCALED: {

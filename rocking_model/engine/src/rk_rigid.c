@@ -7,8 +7,9 @@
  * at body coordinates (s_i b, -h), s = (-1, +1).
  *
  * Every expression keeps the Python's operation order (DESIGN.md section 7): the results agree bit for bit
- * (tests/test_engine_model.py). ``x ** 2`` of the Python is pow(x, 2.0) here (the same libm call), and
- * math.hypot is rk_py_hypot (CPython's own algorithm). */
+ * (tests/test_engine_model.py). A square is a product on both sides (``x * x``: Python's ``x ** 2`` calls libm's
+ * pow, not always x * x rounded, and compilers turn pow(x, 2.0) into x * x), and math.hypot is rk_py_hypot
+ * (CPython's own algorithm). */
 #include "rk_model.h"
 
 #include <math.h>
@@ -66,9 +67,9 @@ static rk_status rigid_init(rk_model *m, const double *params, rk_error *err)
     R = rk_py_hypot(B, H);
     m->d[D_R] = R;
     m->d[D_ALPHA] = atan2(B, H);
-    m->d[D_IC] = MASS * pow(R, 2.0) / 3.0;
+    m->d[D_IC] = MASS * (R * R) / 3.0;
     m->d[D_P] = sqrt(3.0 * G / (4.0 * R));
-    m->d[D_P2] = pow(m->d[D_P], 2.0);      /* self._p ** 2 of mode_closures and rocking_acceleration */
+    m->d[D_P2] = m->d[D_P] * m->d[D_P];    /* self._p * self._p of mode_closures and rocking_acceleration */
     m->e_N = m->p[P_EN];
     m->impact_law = (int)m->p[P_LAW];
     m->e_T = m->impact_law == 1 ? m->e_N : 0.0;
@@ -381,7 +382,7 @@ static void rigid_rest_position(const rk_model *m, double *q)
 
 static double rigid_energy(const rk_model *m, const double *q, const double *v)
 {
-    double kin = 0.5 * (MASS * (pow(v[0], 2.0) + pow(v[1], 2.0)) + m->d[D_IC] * pow(v[2], 2.0));
+    double kin = 0.5 * (MASS * (v[0] * v[0] + v[1] * v[1]) + m->d[D_IC] * (v[2] * v[2]));
     return kin + MASS * G * (q[1] - H);
 }
 

@@ -179,10 +179,10 @@ rk_status rk_initial_step(rk_stepper *s, double *h, rk_error *err)
     for (j = 0; j < n; j++)
         scale[j] = s->atol[j] + fabs(s->y[j]) * s->rtol;
     for (j = 0; j < n; j++)
-        terms[j] = pow(s->y[j] / scale[j], 2.0);
+        terms[j] = (s->y[j] / scale[j]) * (s->y[j] / scale[j]);
     d0 = sqrt(py_sum(terms, n) / n);
     for (j = 0; j < n; j++)
-        terms[j] = pow(s->f[j] / scale[j], 2.0);
+        terms[j] = (s->f[j] / scale[j]) * (s->f[j] / scale[j]);
     d1 = sqrt(py_sum(terms, n) / n);
     h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
     for (j = 0; j < n; j++)
@@ -191,7 +191,7 @@ rk_status rk_initial_step(rk_stepper *s, double *h, rk_error *err)
     if (st != RK_OK)
         return st;
     for (j = 0; j < n; j++)
-        terms[j] = pow((f1[j] - s->f[j]) / scale[j], 2.0);
+        terms[j] = ((f1[j] - s->f[j]) / scale[j]) * ((f1[j] - s->f[j]) / scale[j]);
     d2 = sqrt(py_sum(terms, n) / n) / h0;
     if (d1 <= 1e-15 && d2 <= 1e-15)
         h1 = py_max(1e-6, h0 * 1e-3);
