@@ -127,6 +127,8 @@ typedef struct ed_fn {
     double a0;                  /**< ag.value of a constant input */
     double v0;                  /**< ag.vertical.value of a constant input (0 without vertical component) */
     int pure;                   /**< ag(t) (and ag_v(t)) calls no callback: evaluating it or not changes nothing */
+    /** the model's own rhs of a non-sliding mode (what rk_mode_rhs calls there; NULL: through rk_mode_rhs) */
+    void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
 } ed_fn;
 
@@ -149,6 +151,7 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     f->a0 = f->constant ? rk_motion_eval(ag, 0.0, NULL, NULL) : 0.0;
     f->v0 = f->constant && ag_v != NULL ? rk_motion_eval(ag_v, 0.0, NULL, NULL) : 0.0;
     f->pure = f->constant || (ed_motion_pure(ag) && (ag_v == NULL || ed_motion_pure(ag_v)));
+    f->mode_rhs = rk_mode_sliding(&e->model, mode) ? NULL : e->model.ops->mode_rhs;
     rk_error_clear(&f->err);
 }
 
@@ -177,7 +180,8 @@ static rk_status ed_ag(ed_fn *f, double t, double *a, double *av)
     if (!f->pure)
         return ed_ag_call(f->ag, f->ag_v, t, a, av, &f->err);
     /* a motion without callback neither fails nor writes a message (every rhs stage reads it) */
-    *a = rk_motion_eval(f->ag, t, NULL, NULL);
+    if (!rk_motion_sampled_cached(f->ag, t, a))
+        *a = rk_motion_eval(f->ag, t, NULL, NULL);
     *av = f->ag_v != NULL ? rk_motion_eval(f->ag_v, t, NULL, NULL) : 0.0;
     return RK_OK;
 }
@@ -189,6 +193,11 @@ static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
     rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
+    if (f->mode_rhs != NULL) {
+        /* every stage: the model's rhs called directly (rk_mode_rhs's own path for such a mode) */
+        f->mode_rhs(&f->e->model, f->mode, y, a, av, dy);
+        return RK_OK;
+    }
     st = rk_mode_rhs(&f->e->model, f->mode, y, a, av, dy);
     if (st != RK_OK)
         return rk_fail(&f->err, st, "the acceleration of mode %d has no solution at t = %.17g s", f->mode, t);

@@ -71,6 +71,19 @@ rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk
 rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
 rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
 
+/** ag(t) of a SAMPLED motion whose cached interval holds t (a step's stages, between two samples): 1 with
+ *  *out the value rk_motion_eval gives (the same expression), 0 for any other motion or t (then call
+ *  rk_motion_eval). Inline: every Runge-Kutta stage reads ag. */
+static inline int rk_motion_sampled_cached(const rk_motion *m, double t, double *out)
+{
+    const double *tl = m->t, *al = m->ag;
+    long long i = m->i_last;
+    if (m->kind != RK_MOTION_SAMPLED || !(tl[i] <= t && t < tl[i + 1]))
+        return 0;
+    *out = al[i] + (al[i + 1] - al[i]) * (t - tl[i]) / (tl[i + 1] - tl[i]);
+    return 1;
+}
+
 /** ag(t) [m/s2]; a CALLBACK failure sets *failed (may be NULL for the others) and msg. */
 double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
 /** GroundMotion.next_breakpoint: the first breakpoint strictly after t (INFINITY: none). */

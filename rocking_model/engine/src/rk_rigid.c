@@ -235,9 +235,10 @@ static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double 
     {
         double s = (double)rk_pivot_sign(mode);
         double x = m->d[D_ALPHA] + s * y[0];
+        /* (g + ag_v) / g is 1.0 exactly when ag_v = 0 (the division skipped there: the same bits) */
+        double gr = ag_v == 0.0 ? 1.0 : (G + ag_v) / G;
         dy[0] = y[1];
-        /* (g + ag_v) / g == 1.0 exactly when ag_v = 0: the old operations */
-        dy[1] = m->d[D_P2] * (ag / G * cos(x) + s * ((G + ag_v) / G) * sin(x));
+        dy[1] = m->d[D_P2] * (ag / G * cos(x) + s * gr * sin(x));
     }
 }
 
@@ -272,10 +273,11 @@ static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, do
         double s = (double)rk_pivot_sign(mode);
         double phi = y[0], w = y[1];
         double x = m->d[D_ALPHA] + s * phi;
-        double acc = m->d[D_P2] * (ag / grav * cos(x) + s * (ge / grav) * sin(x));
+        double gr = ag_v == 0.0 ? 1.0 : ge / grav;         /* (exactly ge / grav: see rigid_mode_rhs) */
+        double acc = m->d[D_P2] * (ag / grav * cos(x) + s * gr * sin(x));
         double sp = sin(phi), cp = cos(phi);
         /* vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + (g + ag_v) / g */
-        double lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / grav + ge / grav;
+        double lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / grav + gr;
         double margin = RK_HALF_PI - fabs(phi);
         if (s < 0) {
             g[0] = lam; g[1] = -s * phi;
