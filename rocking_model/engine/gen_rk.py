@@ -166,37 +166,6 @@ def _c_lincomb(coefs, indent) -> str:
     return f"{{{len(idx)}, {{{idx_s}}},\n{pad}  {{{val_s}}}}}"
 
 
-def _c_comb_function(tab) -> list[str]:
-    """A function computing any combination of the tableau with its coefficients as literals, one
-    straight-line sum per combination (``which``: RK_COMB_A + s for A[s], RK_COMB_B, RK_COMB_E + m,
-    RK_COMB_D + r): the same terms added in the same order as `lincomb` over the data, without its index
-    indirection and loop (a third of a DOP853 step's instructions in the C engine)."""
-    n_all = len(tab["A"])
-    combs = [(f"A[{s}]", list(tab["A"][s])[:s]) for s in range(n_all)] + [("B", tab["B"])]
-    combs += [(f"E[{m}]", e) for m, e in enumerate(tab["errors"])]
-    combs += [(f"D[{r}]", d) for r, d in enumerate(tab["dense"])]
-    starts = {"A": 0, "B": MAX_STAGES, "E": MAX_STAGES + 1, "D": MAX_STAGES + 1 + MAX_ERRORS}
-    out = [f"/* {tab['name']}: out[j] = sum_i c_i K[i][j] of combination ``which`` (see rk_comb_fn) */",
-           f"static void RK_COMB_{tab['name']}(int which, int n, double K[][RK_MAX_Y], double *out)",
-           "{", "    int j;", "    switch (which) {"]
-    for label, coefs in combs:
-        kind, k = label[0], int(label[2:-1]) if "[" in label else 0
-        idx, val = nonzero(coefs)
-        expr = " + ".join(f"{float(c).hex()} * K[{i}][j]" for i, c in zip(idx, val)) or "0.0"
-        out.append(f"    case {starts[kind] + k}:    /* {label} */")
-        out.append("        if (n == 2) {       /* (a rocking mode's phi, phi_dot: the common case, unrolled) */")
-        out.append(f"            out[0] = {expr.replace('][j]', '][0]')};")
-        out.append(f"            out[1] = {expr.replace('][j]', '][1]')};")
-        out.append("            return;")
-        out.append("        }")
-        out.append(f"        for (j = 0; j < n; j++)")
-        out.append(f"            out[j] = {expr};")
-        out.append("        return;")
-    out += ["    default:", "        for (j = 0; j < n; j++)", "            out[j] = 0.0;", "        return;",
-            "    }", "}", ""]
-    return out
-
-
 def check(tab):
     ns, n_all = tab["n_stages"], len(tab["A"])
     if not (2 <= ns <= n_all <= MAX_STAGES) or len(tab["C"]) < n_all:
@@ -238,11 +207,6 @@ def render(tableaux, compensated_sum: bool) -> str:
            "/** sum_i c[i] k_{idx[i]}: the nonzero terms of a combination, in the Python's order */",
            "typedef struct rk_lincomb {", "    int n;", f"    int idx[{MAX_STAGES}];", f"    double c[{MAX_STAGES}];",
            "} rk_lincomb;", "",
-           "/** which combination rk_comb_fn computes: RK_COMB_A + s (A[s]), RK_COMB_B, RK_COMB_E + m, RK_COMB_D + r */",
-           "#define RK_COMB_A 0", f"#define RK_COMB_B {MAX_STAGES}", f"#define RK_COMB_E {MAX_STAGES + 1}",
-           f"#define RK_COMB_D {MAX_STAGES + 1 + MAX_ERRORS}",
-           "/** out[j] = sum_i c_i K[i][j], j < n, of one combination of a tableau (the nonzero terms in index order) */",
-           "typedef void (*rk_comb_fn)(int which, int n, double K[][RK_MAX_Y], double *out);", "",
            "struct rk_tableau {",
            "    const char *name;",
            "    int style;          /**< RK_STYLE_*: error norm and interpolant form */",
@@ -257,12 +221,9 @@ def render(tableaux, compensated_sum: bool) -> str:
            f"    rk_lincomb E[{MAX_ERRORS}];",
            "    int n_dense;        /**< dense-output coefficient rows (dense_sources) */",
            f"    rk_lincomb D[{MAX_DENSE}];",
-           "    rk_comb_fn comb;    /**< the combinations above with literal coefficients (RK_COMB_*) */",
            "};", ""]
     out += ["/* the data: in rk_rk.c only (which defines RK_TABLEAUX_DEFINE_DATA); the test entry points read the",
             " * layout through rk_tableau_of */", "#ifdef RK_TABLEAUX_DEFINE_DATA", ""]
-    for tab, _ in tableaux:
-        out += _c_comb_function(tab)
     for tab, style in tableaux:
         n_all = len(tab["A"])
         C = list(tab["C"])[:MAX_STAGES] + [0.0] * (MAX_STAGES - min(len(tab["C"]), MAX_STAGES))
@@ -281,8 +242,7 @@ def render(tableaux, compensated_sum: bool) -> str:
         out.append("    {" + (",\n     ").join(errs) + "},")
         dense = [_c_lincomb(d, 6) for d in tab["dense"]] + ["{0, {0}, {0.0}}"] * (MAX_DENSE - len(tab["dense"]))
         out.append(f"    {len(tab['dense'])},")
-        out.append("    {" + (",\n     ").join(dense) + "},")
-        out.append(f"    RK_COMB_{tab['name']}")
+        out.append("    {" + (",\n     ").join(dense) + "}")
         out.append("};")
         out.append("")
     out.append("#endif /* RK_TABLEAUX_DEFINE_DATA */")

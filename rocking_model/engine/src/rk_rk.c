@@ -55,6 +55,19 @@ static rk_status call_rhs(const rk_stepper *s, double t, const double *y, double
     return RK_OK;
 }
 
+/* sum_i c_i K[idx_i][j] over the nonzero terms, left to right (rk._lincomb); 0.0 when there are none */
+static double lincomb(const rk_lincomb *lc, double K[][RK_MAX_Y], int j)
+{
+    double acc;
+    int i;
+    if (lc->n == 0)
+        return 0.0;
+    acc = lc->c[0] * K[lc->idx[0]][j];
+    for (i = 1; i < lc->n; i++)
+        acc = acc + lc->c[i] * K[lc->idx[i]][j];
+    return acc;
+}
+
 /* Python's repr of a float (the shortest string that reads back to x, repr's fixed / exponent rule), for the
  * FloatingPointError message, which shows the state as a list. */
 static int py_repr(double x, char *buf, size_t cap)
@@ -295,21 +308,20 @@ static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, 
     rk_status st;
     memcpy(K[0], s->f, sizeof(double) * (size_t)n);
     for (st_i = 1; st_i < ns - 1; st_i++) {
-        tab->comb(RK_COMB_A + st_i, n, K, arg);
         for (j = 0; j < n; j++)
-            arg[j] = y[j] + h * arg[j];
+            arg[j] = y[j] + h * lincomb(&tab->A[st_i], K, j);
         st = call_rhs(s, t + tab->C[st_i] * h, arg, K[st_i], errp);
         if (st != RK_OK)
             return st;
     }
-    tab->comb(RK_COMB_B, n, K, y_new);
     for (j = 0; j < n; j++)
-        y_new[j] = y[j] + h * y_new[j];
+        y_new[j] = y[j] + h * lincomb(&tab->B, K, j);
     st = call_rhs(s, t_new, y_new, K[ns - 1], errp);
     if (st != RK_OK)
         return st;
     for (m = 0; m < tab->n_errors; m++)
-        tab->comb(RK_COMB_E + m, n, K, er[m]);
+        for (j = 0; j < n; j++)
+            er[m][j] = lincomb(&tab->E[m], K, j);
     /* mixed error scale atol_j + rtol max(|y_j|, |y_new_j|) */
     for (j = 0; j < n; j++)
         sc[j] = s->atol[j] + py_max(fabs(y[j]), fabs(y_new[j])) * s->rtol;
@@ -455,19 +467,16 @@ static RK_NOINLINE rk_status build_dense(rk_stepper *s, rk_error *err)
         return rk_fail(err, RK_ERR_INTERNAL, "%s: dense output requested before a step (no stages to interpolate)",
                        tab->name);
     for (st_i = s->n_K; st_i < tab->n_all; st_i++) {
-        tab->comb(RK_COMB_A + st_i, n, s->K, arg);
         for (j = 0; j < n; j++)
-            arg[j] = s->y_old[j] + h * arg[j];
+            arg[j] = s->y_old[j] + h * lincomb(&tab->A[st_i], s->K, j);
         st = call_rhs(s, s->t_old + tab->C[st_i] * h, arg, s->K[st_i], err);
         if (st != RK_OK)
             return st;
         s->n_K = st_i + 1;
     }
-    for (r = 0; r < tab->n_dense; r++) {
-        tab->comb(RK_COMB_D + r, n, s->K, s->Q[r]);
+    for (r = 0; r < tab->n_dense; r++)
         for (j = 0; j < n; j++)
-            s->Q[r][j] = h * s->Q[r][j];
-    }
+            s->Q[r][j] = h * lincomb(&tab->D[r], s->K, j);
     if (tab->style == RK_STYLE_DOP853) {
         for (j = 0; j < n; j++) {
             double y0 = s->y_old[j];
