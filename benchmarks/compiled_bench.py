@@ -20,6 +20,10 @@ Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flex
 record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
 and Moreau-Jean (dt_max 1e-3: ten time steps per communication step; its cost is also given per time step).
 
+A record shaped like the issue's prototype record (`PROTOTYPE_RECORD`: 40 s of 5 ms samples, about 400 impacts):
+the rigid block's C loop (`Engine.sample`) and raw loop per communication step, the figures the issue's target
+(at most 1 us per communication step on such a record, 3x the prototype's C loop) compares with.
+
 Cold start: in a fresh interpreter (median of several), to the end of the first 0.01 s step of the record
 scene's rigid block, through
 
@@ -216,8 +220,60 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
     return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}
 
 
+#: a record shaped like issue 21's prototype record (a 40 s far-field record, 7991 samples of 5 ms, about 400
+#: impacts of the rigid block): the synthetic record's generator at 5 ms over 40 s, a longer strong phase and
+#: slower decay, a seed and PGA that give about 400 impacts of the record block without overturning
+PROTOTYPE_RECORD = dict(duration=40.0, dt=0.005, pga_g=0.35, t_strong=30.0, decay=0.5, seed=11)
+
+
+def prototype_shaped(repeats: int = 3, duration: float = 40.0) -> dict:
+    """The rigid block (event-driven, tolerance 1e-8) on `PROTOTYPE_RECORD`: the C loop (`Engine.sample`, the
+    record linear between samples) and the raw loop (`Engine.advance` + `output_row`, ag held) per
+    communication step, interleaved rounds as `per_step`."""
+    from rocking_model import RigidBlock, SampledMotion, Simulator
+    from rocking_model.engine import motion_spec
+    from rocking_model.records import synthetic_record
+
+    kw = dict(PROTOTYPE_RECORD, duration=duration)
+    t, a = synthetic_record(**kw)
+    n = len(t) - 1
+    grid = t[1:]
+    spec = motion_spec(SampledMotion(t, a))
+    times, ag = grid.tolist(), a[:n].tolist()
+
+    def new():
+        return Simulator(RigidBlock(**S.RECORD_BLOCK), "event_driven", engine="c", tolerance=1e-8)
+
+    def sampled():
+        sim = new()
+        eng = sim.integrator._engine
+        rows = (np.empty(n + 1, np.intc), np.empty((n + 1, eng.n_outputs + 2)), np.empty(n + 1, np.int64),
+                np.empty(n + 1, np.intc))
+        eng.sample(grid, spec, 100000, *rows, 0)
+        return sim
+
+    def raw():
+        sim = new()
+        eng = sim.integrator._engine
+        adv, row = eng.advance, eng.output_row
+        for tk, ak in zip(times, ag):
+            adv(tk, ak, 0.0, 100000)
+            row()
+        return sim
+
+    best = _interleaved({"sampled": sampled, "raw": raw}, repeats)
+    (sim_s, t_s), (sim_r, t_r) = best["sampled"], best["raw"]
+    out = {"record": kw, "steps": n, "dt": kw["dt"], "sample_us": t_s / n * 1e6, "raw_us": t_r / n * 1e6,
+           "sample_impacts": int(sim_s.outputs()["impacts"]), "raw_impacts": int(sim_r.outputs()["impacts"]),
+           "overturned": bool(sim_s.outputs()["overturned"])}
+    print(f"[compiled] prototype-shaped record: Engine.sample {out['sample_us']:.2f} us/step "
+          f"({out['sample_impacts']} impacts), raw {out['raw_us']:.2f} ({out['raw_impacts']} impacts)", flush=True)
+    return out
+
+
 def main(quick: bool = False) -> dict:
     return {"per_step": per_step(3 if quick else 15, 8.0 if quick else 30.0),
+            "prototype": prototype_shaped(3 if quick else 15, 10.0 if quick else 40.0),
             "cold": cold_start(2 if quick else 7)}
 
 
