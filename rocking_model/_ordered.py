@@ -64,6 +64,17 @@ def inverse(A: np.ndarray) -> np.ndarray:
     return np.array(inv, dtype=float)
 
 
+def _back_substitute(lu: list, y: list, x: list) -> None:
+    """x = U^-1 y for the upper triangle U of ``lu`` (lists), from the last row up, each row's sum in index
+    order (rk_mj.c's invert, rk_la_solve); y may be x itself (its entry i is read before x[i] is written)."""
+    for i in range(len(lu) - 1, -1, -1):
+        s = y[i]
+        row = lu[i]
+        for j in range(i + 1, len(lu)):
+            s -= row[j] * x[j]
+        x[i] = s / row[i]
+
+
 def lu_inverse(A: np.ndarray) -> np.ndarray:
     """A^-1 by LU with partial pivoting (the first largest |entry|, as LAPACK's getrf) and the columns of the
     identity solved, operation for operation as the C engine's Moreau-Jean (rk_mj.c's invert)."""
@@ -95,12 +106,7 @@ def lu_inverse(A: np.ndarray) -> np.ndarray:
             for k in range(i):
                 s -= row[k] * x[k]
             x[i] = s
-        for i in range(n - 1, -1, -1):
-            s = x[i]
-            row = lu[i]
-            for k in range(i + 1, n):
-                s -= row[k] * x[k]
-            x[i] = s / row[i]
+        _back_substitute(lu, x, x)
         for i in range(n):
             inv[i][j] = x[i]
     return np.array(inv, dtype=float)
@@ -132,12 +138,7 @@ def solve(A: np.ndarray, b) -> np.ndarray:
             for j in range(k + 1, n):
                 row_i[j] -= l * row_k[j]
             y[i] -= l * y[k]
-    for i in range(n - 1, -1, -1):
-        s = y[i]
-        row = lu[i]
-        for j in range(i + 1, n):
-            s -= row[j] * x[j]
-        x[i] = s / row[i]
+    _back_substitute(lu, y, x)
     return np.array(x, dtype=float)
 
 
