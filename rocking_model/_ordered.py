@@ -151,21 +151,25 @@ def lstsq(A: np.ndarray, b, rcond: float | None) -> np.ndarray:
     singular values at most rcond * s_max dropped (rcond None: eps * max(rows, cols), numpy's default), from a
     one-sided Jacobi SVD, operation for operation as the C engine's rk_la_lstsq (rk_model.c). numpy's gelsd
     agrees to round-off only, and rounds per CPU."""
-    U = np.asarray(A, dtype=float).tolist()
-    rows, cols = len(U), len(U[0]) if U else 0
+    A_rows = np.asarray(A, dtype=float).tolist()
+    rows, cols = len(A_rows), len(A_rows[0]) if A_rows else 0
     if rcond is None or rcond < 0.0:
         rcond = _EPS * max(rows, cols)
-    V = [[1.0 if i == j else 0.0 for j in range(cols)] for i in range(cols)]
+    # columns as lists (the rotations act on pairs of columns of U and V): the same operations as the C's
+    # row-major loops, each column's sums in row order
+    U = [list(col) for col in zip(*A_rows)] if rows else [[] for _ in range(cols)]
+    V = [[1.0 if i == j else 0.0 for i in range(cols)] for j in range(cols)]       # V[j]: column j
     sqrt = math.sqrt
     for _sweep in range(60):
         rotated = False
         for j in range(cols - 1):
             for k in range(j + 1, cols):
+                uj, uk = U[j], U[k]
                 alpha = beta = gamma = 0.0
-                for row in U:
-                    alpha += row[j] * row[j]
-                    beta += row[k] * row[k]
-                    gamma += row[j] * row[k]
+                for p, q in zip(uj, uk):
+                    alpha += p * p
+                    beta += q * q
+                    gamma += p * q
                 if gamma == 0.0 or abs(gamma) <= _EPS * sqrt(alpha * beta):
                     continue
                 rotated = True
@@ -173,21 +177,18 @@ def lstsq(A: np.ndarray, b, rcond: float | None) -> np.ndarray:
                 t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + sqrt(1.0 + zeta * zeta))
                 c = 1.0 / sqrt(1.0 + t * t)
                 sn = c * t
-                for row in U:
-                    u1, u2 = row[j], row[k]
-                    row[j] = c * u1 - sn * u2
-                    row[k] = sn * u1 + c * u2
-                for row in V:
-                    v1, v2 = row[j], row[k]
-                    row[j] = c * v1 - sn * v2
-                    row[k] = sn * v1 + c * v2
+                U[j] = [c * u1 - sn * u2 for u1, u2 in zip(uj, uk)]
+                U[k] = [sn * u1 + c * u2 for u1, u2 in zip(uj, uk)]
+                vj, vk = V[j], V[k]
+                V[j] = [c * v1 - sn * v2 for v1, v2 in zip(vj, vk)]
+                V[k] = [sn * v1 + c * v2 for v1, v2 in zip(vj, vk)]
         if not rotated:
             break
     s = []
-    for j in range(cols):
+    for col in U:
         nrm = 0.0
-        for row in U:
-            nrm += row[j] * row[j]
+        for p in col:
+            nrm += p * p
         s.append(sqrt(nrm))
     smax = max([0.0] + s)
     bs = [float(a) for a in b]
@@ -196,9 +197,10 @@ def lstsq(A: np.ndarray, b, rcond: float | None) -> np.ndarray:
         if not (s[j] > rcond * smax) or s[j] == 0.0:
             continue
         ub = 0.0
-        for row, bi in zip(U, bs):
-            ub += row[j] * bi
+        for u, bi in zip(U[j], bs):
+            ub += u * bi
         ub /= s[j] * s[j]               # U's column j is s_j times the unit singular vector
+        vj = V[j]
         for i in range(cols):
-            x[i] += V[i][j] * ub
+            x[i] += vj[i] * ub
     return np.array(x, dtype=float)

@@ -133,6 +133,9 @@ class _Problem:
 
     def __init__(self, D, w0, n, cand, forced):
         self.D, self.w0, self.n, self.cand, self.forced = D, w0, n, cand, forced
+        # trial(S) by S: the pivoting and its descent come back to the same sets many times (on 7 and 8
+        # contacts some 25 trials per distinct set), each a least-squares solve when the set is singular
+        self._trials: dict = {}
         scale_v = 1e-300
         for i in cand:
             scale_v = max(scale_v, abs(w0[i]), abs(w0[n + i]))
@@ -145,7 +148,14 @@ class _Problem:
         return abs(D[a][a] * D[b][b] - D[a][b] * D[b][a]) <= PARALLEL_RTOL * max(D[a][a] * D[b][b], 1e-300)
 
     def trial(self, S):
-        """(violation, S, P, w) of active set S."""
+        """(violation, S, P, w) of active set S (a pure function of S: computed once per problem; the lists are
+        not to be changed by the caller)."""
+        res = self._trials.get(S)
+        if res is None:
+            res = self._trials[S] = self._trial(S)
+        return res
+
+    def _trial(self, S):
         D, w0, n = self.D, self.w0, self.n
         m = 2 * n
         P = [0.0] * m
