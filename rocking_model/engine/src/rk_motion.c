@@ -163,7 +163,6 @@ static double sampled_eval(const rk_motion *m, double t, long long *i_last)
 {
     const double *tl = m->t, *al = m->ag;
     long long n = m->n, i = *i_last;
-    double t0, t1, a0, a1;
     if (!(tl[i] <= t && t < tl[i + 1])) {
         if (t < tl[0] || t > tl[n - 1])
             return 0.0;
@@ -180,11 +179,7 @@ static double sampled_eval(const rk_motion *m, double t, long long *i_last)
             return al[n - 1];
         *i_last = i;
     }
-    t0 = tl[i];
-    t1 = tl[i + 1];
-    a0 = al[i];
-    a1 = al[i + 1];
-    return a0 + (a1 - a0) * (t - t0) / (t1 - t0);
+    return rk_motion_sampled_value(m, i, t);
 }
 
 static double eval_const(const rk_motion *m, double t, long long *cache, int *failed, char *msg)

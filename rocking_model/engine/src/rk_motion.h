@@ -71,16 +71,22 @@ rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk
 rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
 rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
 
-/** ag(t) of a SAMPLED motion whose cached interval holds t (a step's stages, between two samples): 1 with
- *  *out the value rk_motion_eval gives (the same expression), 0 for any other motion or t (then call
- *  rk_motion_eval). Inline: every Runge-Kutta stage reads ag. */
-static inline int rk_motion_sampled_cached(const rk_motion *m, double t, double *out)
+/** SampledMotion.__call__ on the interval [t[i], t[i + 1]] that holds t: the linear interpolation */
+static inline double rk_motion_sampled_value(const rk_motion *m, long long i, double t)
 {
     const double *tl = m->t, *al = m->ag;
+    return al[i] + (al[i + 1] - al[i]) * (t - tl[i]) / (tl[i + 1] - tl[i]);
+}
+
+/** ag(t) of a SAMPLED motion whose cached interval holds t (a step's stages, between two samples): 1 with
+ *  *out the value rk_motion_eval gives, 0 for any other motion or t (then call rk_motion_eval). Inline: every
+ *  Runge-Kutta stage reads ag. */
+static inline int rk_motion_sampled_cached(const rk_motion *m, double t, double *out)
+{
     long long i = m->i_last;
-    if (m->kind != RK_MOTION_SAMPLED || !(tl[i] <= t && t < tl[i + 1]))
+    if (m->kind != RK_MOTION_SAMPLED || !(m->t[i] <= t && t < m->t[i + 1]))
         return 0;
-    *out = al[i] + (al[i + 1] - al[i]) * (t - tl[i]) / (tl[i + 1] - tl[i]);
+    *out = rk_motion_sampled_value(m, i, t);
     return 1;
 }
 
