@@ -139,6 +139,29 @@ def _interleaved(fns: dict, rounds: int) -> dict:
     return out
 
 
+def _sample_run(sim, grid, spec):
+    """One `Engine.sample` call of ``sim``'s engine over ``grid`` (the C loop over the communication steps) into
+    fresh row arrays; returns them."""
+    eng = sim.integrator._engine
+    m = len(grid) + 1
+    rows = (np.empty(m, np.intc), np.empty((m, eng.n_outputs + 2)), np.empty(m, np.int64), np.empty(m, np.intc))
+    eng.sample(grid, spec, 100000, *rows, 0)
+    return rows
+
+
+def _raw_run(sim, times, ag) -> list:
+    """The raw loop on ``sim``'s engine: `Engine.advance(t, ag, 0, max_steps)` and `output_row()` per
+    communication step (what an FMU's doStep costs in C plus one Python call each); returns phi after each."""
+    eng = sim.integrator._engine
+    adv, row = eng.advance, eng.output_row
+    j = eng.output_names.index("phi")
+    phis = []
+    for tk, ak in zip(times, ag):
+        adv(tk, ak, 0.0, 100000)
+        phis.append(row()[j])
+    return phis
+
+
 def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
     from rocking_model import FlexibleOscillator, RigidBlock, SampledMotion, Simulator, simulate
     from rocking_model.engine import motion_spec
@@ -159,14 +182,7 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
 
         def raw():
             sim = Simulator(make(), scheme, engine="c", **kw)
-            eng = sim.integrator._engine
-            adv, row = eng.advance, eng.output_row
-            j = eng.output_names.index("phi")
-            phis = []
-            for tk, ak in zip(times, ag):
-                adv(tk, ak, 0.0, 100000)
-                phis.append(row()[j])
-            return sim, phis
+            return sim, _raw_run(sim, times, ag)
 
         def api(engine):
             def run():
@@ -182,14 +198,8 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
             # one call into C for the whole record (Engine.sample: the C loop over the communication steps);
             # the record is then integrated as given (linear between samples, simulate's hold="exact"), not held
             sim = Simulator(make(), scheme, engine="c", **kw)
-            eng = sim.integrator._engine
             spec = motion_spec(SampledMotion(t[:n + 1], a[:n + 1] * scale))
-            grid = np.asarray(times)
-            m = len(grid) + 1
-            rows = (np.empty(m, np.intc), np.empty((m, eng.n_outputs + 2)), np.empty(m, np.int64),
-                    np.empty(m, np.intc))
-            eng.sample(grid, spec, 100000, *rows, 0)
-            return sim, rows
+            return sim, _sample_run(sim, np.asarray(times), spec)
 
         best = _interleaved({
             "raw": raw, "sampled": sampled, "api": api("c"),
@@ -246,19 +256,12 @@ def prototype_shaped(repeats: int = 3, duration: float = 40.0) -> dict:
 
     def sampled():
         sim = new()
-        eng = sim.integrator._engine
-        rows = (np.empty(n + 1, np.intc), np.empty((n + 1, eng.n_outputs + 2)), np.empty(n + 1, np.int64),
-                np.empty(n + 1, np.intc))
-        eng.sample(grid, spec, 100000, *rows, 0)
+        _sample_run(sim, grid, spec)
         return sim
 
     def raw():
         sim = new()
-        eng = sim.integrator._engine
-        adv, row = eng.advance, eng.output_row
-        for tk, ak in zip(times, ag):
-            adv(tk, ak, 0.0, 100000)
-            row()
+        _raw_run(sim, times, ag)
         return sim
 
     best = _interleaved({"sampled": sampled, "raw": raw}, repeats)
