@@ -170,15 +170,26 @@ def bench_scene(scene: S.Scene, args) -> dict:
     return out
 
 
-def _second_pass(again: list, reps: int, budget: float) -> None:
+#: rounds of the second pass: each (entry, run) it times is timed once per round, the rounds one after the other
+SECOND_PASS_ROUNDS = 4
+
+
+def _second_pass(again: list, reps: int, budget: float, rounds: int = SECOND_PASS_ROUNDS) -> None:
     """Time each (entry, run) of ``again`` (the compiled event-driven settings and the solve_ivp baseline's, the two
-    that the speed target compares) once more, after every other contender of the scene, and keep the repeats of
-    both passes (the minimum over both): each is then sampled at two times of the run, so that a slow phase of a
-    shared machine (seen: another job halving the speed for some seconds) does not decide a ratio alone."""
-    for e, run in again:
-        post = C.outputs_of if e["contender"] == "c_event_driven" else None
-        _, times = C.timed(run, reps, budget, post=post)
-        e["times"] = list(e["times"]) + list(times)
+    that the speed target compares) once more, after every other contender of the scene, in ``rounds`` interleaved
+    rounds (each round times every entry for its share of the repeats and of the time), and keep the repeats of
+    both passes (the minimum over all of them). The two sides of a ratio are then sampled at the same times of the
+    run, many seconds apart: a slow phase of a shared machine (seen: another job halving the speed for some
+    seconds, or for minutes) slows both, and the minimum of each comes from the fastest phase both saw."""
+    extra = {id(e): [] for e, _ in again}
+    for _ in range(rounds):
+        for e, run in again:
+            post = C.outputs_of if e["contender"] == "c_event_driven" else None
+            _, times = C.timed(run, max(1, -(-reps // rounds)), budget / rounds, min_total=C.MIN_TOTAL / rounds,
+                               post=post)
+            extra[id(e)] += times
+    for e, _ in again:
+        e["times"] = list(e["times"]) + extra[id(e)]
         e["time"], e["median"] = C.best(e["times"]), C.median(e["times"])
 
 
@@ -627,7 +638,8 @@ def main(argv=None) -> int:
     t_start = time.perf_counter()
     info = machine_info()
     log(f"machine: {info['cpu']}, {info['cores']} cores; {info['versions']}")
-    res = {"info": info, "quick": args.quick, "repeats": args.repeats, "budget": args.budget, "min_total": C.MIN_TOTAL, "scenes": {},
+    res = {"info": info, "quick": args.quick, "repeats": args.repeats, "budget": args.budget, "min_total": C.MIN_TOTAL,
+           "second_pass_rounds": SECOND_PASS_ROUNDS, "scenes": {},
            "skipped": {}}
     args.siconos_ok, why = (False, "--skip-siconos") if args.skip_siconos else C.siconos_available()
     if not args.siconos_ok:
