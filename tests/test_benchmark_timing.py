@@ -50,3 +50,21 @@ def test_post_is_applied_once_to_the_last_result_outside_the_timed_runs():
                       post=lambda r: seen.append(gc.isenabled()) or r * 10)
     assert len(ts) == len(calls) == 4
     assert out == 40 and seen == [True]
+
+
+def test_second_pass_interleaves_the_entries_in_rounds(monkeypatch):
+    """Each round times every entry once, in order, so that the two sides of a ratio are sampled at the same
+    times of the run; each entry keeps its first pass's runs and adds the second pass's, and reports the minimum
+    of all of them."""
+    from benchmarks import run as R
+
+    order = []
+    monkeypatch.setattr(C, "MIN_TOTAL", 0.0)
+    entries = [({"contender": "c_event_driven", "times": [5.0]}, lambda: order.append("c") or {}),
+               ({"contender": "baseline", "times": [7.0]}, lambda: order.append("b") or {})]
+    monkeypatch.setattr(C, "outputs_of", lambda out: out)
+    R._second_pass(entries, reps=1, budget=1.0, rounds=3)
+    assert order == ["c", "b"] * 3
+    for e, _ in entries:
+        assert len(e["times"]) == 4 and e["times"][0] in (5.0, 7.0)
+        assert e["time"] == min(e["times"]) < 1.0
