@@ -222,6 +222,20 @@ static void rigid_mode_jacobian(const rk_model *m, int mode, const double *r, co
     jd[2] = 0.0;
 }
 
+/* (g + ag_v) / g [1]: 1.0 exactly when ag_v = 0 (the division skipped there: the same bits) */
+static inline double rigid_g_ratio(const rk_model *m, double ag_v)
+{
+    return ag_v == 0.0 ? 1.0 : (G + ag_v) / G;
+}
+
+/* mode_closures' rocking_acceleration on the pivot of sign s [rad/s2]:
+ * p^2 (ag / g cos(alpha + s phi) + s (g + ag_v) / g sin(alpha + s phi)) */
+static inline double rigid_rocking_acc(const rk_model *m, double s, double phi, double ag, double ag_v)
+{
+    double x = m->d[D_ALPHA] + s * phi;
+    return m->d[D_P2] * (ag / G * cos(x) + s * rigid_g_ratio(m, ag_v) * sin(x));
+}
+
 /* mode_closures' rhs */
 static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy)
 {
@@ -233,12 +247,8 @@ static void rigid_mode_rhs(const rk_model *m, int mode, const double *y, double 
         return;
     }
     {
-        double s = (double)rk_pivot_sign(mode);
-        double x = m->d[D_ALPHA] + s * y[0];
-        /* (g + ag_v) / g is 1.0 exactly when ag_v = 0 (the division skipped there: the same bits) */
-        double gr = ag_v == 0.0 ? 1.0 : (G + ag_v) / G;
         dy[0] = y[1];
-        dy[1] = m->d[D_P2] * (ag / G * cos(x) + s * gr * sin(x));
+        dy[1] = rigid_rocking_acc(m, (double)rk_pivot_sign(mode), y[0], ag, ag_v);
     }
 }
 
@@ -249,7 +259,7 @@ static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, do
     double b = B, h = H, grav = G, ge = G + ag_v;
     if (mode == RK_MODE_FULL) {
         /* the corner forces over the weight m g (not m (g + ag_v), which may vanish or change sign) */
-        double d = 0.5 * ag * h / b / grav, gr = ge / grav;
+        double d = 0.5 * ag * h / b / grav, gr = rigid_g_ratio(m, ag_v);
         g[0] = 0.5 * gr + d;
         g[1] = 0.5 * gr - d;
         g[2] = RK_HALF_PI;
@@ -272,9 +282,8 @@ static void rigid_mode_monitors(const rk_model *m, int mode, const double *y, do
     {
         double s = (double)rk_pivot_sign(mode);
         double phi = y[0], w = y[1];
-        double x = m->d[D_ALPHA] + s * phi;
-        double gr = ag_v == 0.0 ? 1.0 : ge / grav;         /* (exactly ge / grav: see rigid_mode_rhs) */
-        double acc = m->d[D_P2] * (ag / grav * cos(x) + s * gr * sin(x));
+        double gr = rigid_g_ratio(m, ag_v);
+        double acc = rigid_rocking_acc(m, s, phi, ag, ag_v);
         double sp = sin(phi), cp = cos(phi);
         /* vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + (g + ag_v) / g */
         double lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / grav + gr;
@@ -351,7 +360,7 @@ static void rigid_mode_outputs(const rk_model *m, int mode, const double *y, dou
 static void rigid_contact_forces(const rk_model *m, int mode, const double *q, const double *v, double ag, double ag_v,
                                  double *lam)
 {
-    double mass = MASS, grav = G, ge = G + ag_v;
+    double mass = MASS, ge = G + ag_v;
     if (mode == RK_MODE_FULL) {
         /* vertical and moment equilibrium with the horizontal sticking force m ag at y = -h */
         double d = 0.5 * mass * ag * H / B;
@@ -367,8 +376,7 @@ static void rigid_contact_forces(const rk_model *m, int mode, const double *q, c
         /* vertical Newton's law of the centroid: lambda_N = m (y_ddot + g + ag_v) */
         double s = (double)rk_pivot_sign(mode);
         double phi = q[2], w = v[2];
-        double a = m->d[D_ALPHA] + s * phi;
-        double acc = m->d[D_P2] * ((ag / grav) * cos(a) + s * (ge / grav) * sin(a));
+        double acc = rigid_rocking_acc(m, s, phi, ag, ag_v);
         double y_dd = (-s * B * cos(phi) - H * sin(phi)) * acc + (s * B * sin(phi) - H * cos(phi)) * w * w;
         lam[s < 0 ? 0 : 1] = mass * (y_dd + ge);
     }
