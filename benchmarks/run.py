@@ -181,15 +181,15 @@ def _second_pass(again: list, reps: int, budget: float, rounds: int = SECOND_PAS
     both passes (the minimum over all of them). The two sides of a ratio are then sampled at the same times of the
     run, many seconds apart: a slow phase of a shared machine (seen: another job halving the speed for some
     seconds, or for minutes) slows both, and the minimum of each comes from the fastest phase both saw."""
-    extra = {id(e): [] for e, _ in again}
+    for e, _ in again:
+        e["times"] = list(e["times"])
     for _ in range(rounds):
         for e, run in again:
             post = C.outputs_of if e["contender"] == "c_event_driven" else None
             _, times = C.timed(run, max(1, -(-reps // rounds)), budget / rounds, min_total=C.MIN_TOTAL / rounds,
                                post=post)
-            extra[id(e)] += times
+            e["times"] += times
     for e, _ in again:
-        e["times"] = list(e["times"]) + extra[id(e)]
         e["time"], e["median"] = C.best(e["times"]), C.median(e["times"])
 
 
