@@ -34,6 +34,11 @@ GENERATOR = os.path.join(HERE, "rocking_model", "engine", "gen_rk.py")
 if os.path.exists(GENERATOR):
     runpy.run_path(GENERATOR, run_name="__main__")
 
+# the model kernels: rocking_model/engine/gen_models.py writes src/rk_models_gen.c from the models' declarations
+# (sympy, at build time; the file is rewritten only when a declaration or the generator changed)
+sys.path.insert(0, HERE)
+runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"), run_name="__main__")
+
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
 #: the test entry points of the parts (rocking_model/engine/py/py_*.c), linked into the same module
 TEST_SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "py", "*.c")))

@@ -34,6 +34,7 @@ from ..params import Param, check_parameters, param
 from ..validation import check_real
 from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
                    impact_law_param)
+from .declare import ENERGY, SLIP, Check, ClassicalImpact, Mechanics
 from .flexible_impact import classical_impact
 
 
@@ -44,6 +45,16 @@ from .flexible_impact import classical_impact
 #: sub-steps to 0.25/omega: 4e4 steps per second of motion at the bound), so an unbounded EI lets one
 #: co-simulation step take minutes (EI = 1e15 measured at ~10 s per 0.01 s step).
 OMEGA_MAX = 1e4
+
+
+def _classical_velocity(sp, m_tilde, D, M_t, J0, b, q, v_minus, s_new):
+    """The classical impact rule's post-impact velocity (rocking_model.post_impact.classical_impact): the
+    angular momentum about the landing corner (pivot sign s_new) conserved, u_dot continuous, rocking on about
+    that corner."""
+    u = q[0]
+    a0 = J0 + m_tilde * u ** 2
+    w_plus = (a0 - M_t * b ** 2) / (a0 + M_t * b ** 2 - 2 * s_new * b * D * u) * v_minus[3]
+    return (v_minus[0], 0, -s_new * b * w_plus, w_plus)
 
 
 @dataclass(frozen=True)
@@ -114,6 +125,72 @@ class FlexibleOscillator(RockingModel):
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
               "potential + strain); once overturned, the potential + strain energy of the pose reached"),
     )
+
+    @staticmethod
+    def mechanics(sp, p, q, v) -> Mechanics:
+        """The oscillator's mechanics (the paper's Eqs. 48-54) for the engine's code generator
+        (`rocking_model.models.declare`): the column's deflection u psi(xi) with Eq. (48)'s shape function,
+        its kinetic energy and first moment integrated over the height."""
+        u, x, y, phi = q
+        u_dot, x_dot, y_dot, phi_dot = v
+        m, m_c, m_b, rho, h, b, EI, zeta, g = p.m, p.m_c, p.m_b, p.rho, p.h, p.b, p.EI, p.zeta, p.g
+        xi = sp.Symbol("xi", nonnegative=True)
+        psi = 3 * xi ** 2 / (2 * h ** 2) - xi ** 3 / (2 * h ** 3)
+        sin, cos = sp.sin(phi), sp.cos(phi)
+
+        def point(along, across):          # a point of the column, (along, across) in the body frame
+            return x - along * sin + across * cos, y + along * cos + across * sin
+
+        def rate(e):
+            return sum(sp.diff(e, qi) * vi for qi, vi in zip(q, v))
+
+        def column(e):                     # integral of a polynomial in xi over the column's height
+            return sp.integrate(sp.expand(e), (xi, 0, h))
+
+        X_top, Y_top = point(h, u)
+        X_c, Y_c = point(xi, u * psi)
+        kinetic = (m * (rate(X_top) ** 2 + rate(Y_top) ** 2) / 2
+                   + column(m_c / h * (rate(X_c) ** 2 + rate(Y_c) ** 2) / 2)
+                   + m_b * (x_dot ** 2 + y_dot ** 2) / 2 + m_b * rho ** 2 * phi_dot ** 2 / 2)
+        m_tilde = m + sp.Rational(33, 140) * m_c
+        k_tilde = 3 * EI / h ** 3
+        omega = sp.sqrt(k_tilde / m_tilde)
+        M_t = m + m_b + m_c
+        A_h = (m + m_c / 2) * h
+        J0 = m_b * rho ** 2 + m * h ** 2 + m_c * h ** 2 / 3
+        h_cg = A_h / M_t
+        R = sp.sqrt(b ** 2 + h_cg ** 2)
+        p_freq = sp.sqrt(M_t * g * R / (J0 + M_t * b ** 2))
+        singular = "NAME is out of range when m_c = 0: the mass matrix is singular unless m_c > 0 " \
+                   "or m_b*rho^2 > 0; allowed range with m_c = 0: m_b in (0, 1e+12] and rho in (0, 1000]"
+        return Mechanics(
+            kinetic=kinetic,
+            first_moment=(m * X_top + column(m_c / h * X_c) + m_b * x, m * Y_top + column(m_c / h * Y_c) + m_b * y),
+            potential=k_tilde * u ** 2 / 2,
+            dissipation=zeta * sp.sqrt(m_tilde * k_tilde) * u_dot ** 2,      # c u_dot^2 / 2, c = 2 zeta sqrt(m k)
+            contacts=[(x + s * b * cos, y + s * b * sin) for s in (-1, 1)],
+            rest=(0, 0, 0, 0),
+            derived={"omega": omega, "R": R, "alpha": sp.atan2(b, h_cg), "p": p_freq,
+                     "EI_max": OMEGA_MAX ** 2 * m_tilde * h ** 3 / 3},
+            length_scale=sp.sqrt(b ** 2 + h ** 2), time_scale=1 / p_freq, force_scale=M_t * g,
+            step_limit=sp.Rational(1, 4) / omega,
+            outputs={"u": u, "u_dot": u_dot, "phi": phi, "phi_dot": phi_dot, "x": x, "y": y, "x_dot": x_dot,
+                     "y_dot": y_dot, "slip": SLIP, "top_displacement": x - h * sin + u * cos, "energy": ENERGY},
+            initial_bounds={"u_0": (-h, h)},
+            checks=[
+                Check(sp.And(sp.Eq(m_c, 0), sp.Eq(m_b, 0)), singular.replace("NAME", "m_b = {m_b:g}")),
+                Check(sp.And(sp.Eq(m_c, 0), sp.Ne(m_b, 0), sp.Eq(m_b * rho ** 2, 0)),
+                      singular.replace("NAME", "rho = {rho:g}")),
+                Check(omega > OMEGA_MAX,
+                      "EI = {EI:g} is out of range for m = {m:g}, m_c = {m_c:g}, h = {h:g}; allowed range "
+                      "(0, {EI_max:.6g}] N m2: the column's circular frequency omega = sqrt(3 EI/(h^3 m_tilde)) = "
+                      "{omega:.4g} rad/s exceeds OMEGA_MAX = " + f"{OMEGA_MAX:g}" + " rad/s; a column this stiff "
+                      "rocks as a rigid body: use RigidBlock"),
+            ],
+            work_note="column omega = {omega:.6g} rad/s",
+            classical_impact=ClassicalImpact("impact_rule", 1, lambda q_, v_, s_new: _classical_velocity(
+                sp, m_tilde, m + sp.Rational(3, 8) * m_c, M_t, J0, b, q_, v_, s_new)),
+        )
 
     def __post_init__(self):
         check_parameters(self)

@@ -19,6 +19,7 @@ from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
                    impact_law_param)
+from .declare import ENERGY, SLIP, Mechanics
 
 _S = (-1.0, 1.0)
 
@@ -51,6 +52,29 @@ class RigidBlock(RockingModel):
         Param("energy", 0.0, "J", "Mechanical energy relative to rest (kinetic relative to the ground + "
               "potential); once overturned, the potential energy of the pose reached, m g (b - h) lying on a side"),
     )
+
+    @staticmethod
+    def mechanics(sp, p, q, v) -> Mechanics:
+        """The block's mechanics for the engine's code generator (`rocking_model.models.declare`)."""
+        x, y, phi = q
+        x_dot, y_dot, phi_dot = v
+        b, h, m, g = p.b, p.h, p.m, p.g
+        R = sp.sqrt(b ** 2 + h ** 2)
+        I_c = m * R ** 2 / 3
+        p_freq = sp.sqrt(3 * g / (4 * R))
+        # corner s (-1 left, +1 right) at body coordinates (s b, -h)
+        corners = [(x + s * b * sp.cos(phi) + h * sp.sin(phi), y + s * b * sp.sin(phi) - h * sp.cos(phi))
+                   for s in (-1, 1)]
+        return Mechanics(
+            kinetic=m * (x_dot ** 2 + y_dot ** 2) / 2 + I_c * phi_dot ** 2 / 2,
+            first_moment=(m * x, m * y),
+            contacts=corners,
+            rest=(0, h, 0),
+            derived={"R": R, "alpha": sp.atan2(b, h), "p": p_freq},
+            length_scale=R, time_scale=1 / p_freq, force_scale=m * g,
+            outputs={"phi": phi, "phi_dot": phi_dot, "x": x, "y": y - h, "x_dot": x_dot, "y_dot": y_dot,
+                     "slip": SLIP, "energy": ENERGY},
+        )
 
     def __post_init__(self):
         check_parameters(self)

@@ -32,7 +32,7 @@ extern "C" {
 #define RK_MAX_INITIAL 8
 #define RK_MAX_OUTPUTS 16
 /** largest number of derived parameters a kernel may keep in rk_model.d */
-#define RK_MAX_DERIVED 32
+#define RK_MAX_DERIVED 256
 /** reports kept per advance (more are counted in rk_engine_report_count but their text is dropped) */
 #define RK_MAX_REPORTS 16
 /** length of every message buffer (error and report texts), NUL included */

@@ -1,6 +1,7 @@
 /* rk_model.c -- the model registry and the generic functions of rk_model.h (part A).
  *
- * The registry lists the kernels (adding a model: one kernel file and one line in KINDS). The any-mode
+ * The registry lists the kernels generated from the models' declarations (gen_models.py: a model is one
+ * Python declaration, no C of its own). The any-mode
  * functions dispatch to the kernel for the sticking modes and to rk_sliding.c for the sliding ones, as
  * RockingModel.dofs_of / embed_any / reduce_any / functions_of / outputs_of do. The generic fallbacks are the
  * ports of RockingModel's numpy defaults (reduced_acceleration, mode_functions, sliding.force_totals): a
@@ -16,11 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const rk_model_ops *const KINDS[] = {
-    &RK_RIGID_BLOCK,
-    &RK_FLEXIBLE_OSCILLATOR,
-    NULL
-};
+/* the kernels generated from the model declarations (rk_models_gen.c, written at build time by gen_models.py) */
+#define KINDS rk_generated_models
 
 const rk_model_ops *const *rk_model_kinds(void)
 {

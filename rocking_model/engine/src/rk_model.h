@@ -1,14 +1,13 @@
-/* rk_model.h -- the model kernel interface: what a model provides to the engine (part A).
+/* rk_model.h -- the model kernel interface: what a model provides to the engine.
  *
- * C counterpart of rocking_model.models.base.RockingModel. A model kind is one constant rk_model_ops (a
- * struct of function pointers plus its static description) defined in one kernel file (rk_rigid.c,
- * rk_flexible.c); an instance is an rk_model (its parameters and derived constants, plain data, copyable by
- * assignment). Adding a third model = writing one kernel file with its rk_model_ops and adding it to
- * rk_model_kinds() in rk_model.c; nothing else in the engine names a model.
+ * A model kind is one constant rk_model_ops (a struct of function pointers plus its static description),
+ * generated at build time from the model's Python declaration (rocking_model/engine/gen_models.py writes
+ * rk_models_gen.c); an instance is an rk_model (its parameters and derived constants, plain data, copyable by
+ * assignment). Adding a model = declaring it in one Python file; nothing in the engine names a model.
  *
- * Owner: part A (rk_model.c: the generic functions below; rk_sliding.c: the sliding modes; rk_rigid.c,
- * rk_flexible.c: the kernels). Every kernel function is pinned to the Python on random states to round-off
- * (tests/test_engine_model.py).
+ * rk_model.c holds the generic functions below, rk_sliding.c the sliding modes (any kernel). The generated
+ * kernels are checked against the sympy expressions they come from, evaluated in high precision
+ * (tests/test_generated_kernels.py).
  *
  * Conventions
  * - q, v: full coordinates in the order of dof_names (rigid: x, y, phi; flexible: u, x, y, phi), SI units.
@@ -312,8 +311,9 @@ rk_status rk_la_lstsq(int rows, int cols, const double *A, const double *b, doub
 #define RK_HALF_PI (0.5 * 3.141592653589793)
 
 /* ------------------------------------------------------------------------------------------ kernels */
-extern const rk_model_ops RK_RIGID_BLOCK;          /* rk_rigid.c */
-extern const rk_model_ops RK_FLEXIBLE_OSCILLATOR;  /* rk_flexible.c */
+/** The kernels of the declared models, NULL-terminated: generated at build time into rk_models_gen.c by
+ *  rocking_model/engine/gen_models.py from each model's declaration. */
+extern const rk_model_ops *const rk_generated_models[];
 
 #ifdef __cplusplus
 }
