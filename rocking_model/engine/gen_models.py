@@ -293,7 +293,7 @@ class ModelCode:
     # ----------------------------------------------------------------------------------- emission
     def _block(self, targets: list, indent: str = "    ") -> str:
         """C statements assigning each (lhs, expr) after hoisting and common-subexpression elimination."""
-        exprs = [self.D.hoist(self._collect(sp.sympify(e))) for _, e in targets]
+        exprs = [self.D.hoist(self._canonical(sp.sympify(e))) for _, e in targets]
         self._n_blocks = getattr(self, "_n_blocks", 0) + 1
         repl, red = sp.cse(exprs, symbols=sp.numbered_symbols(f"t{self._n_blocks}_"), optimizations="basic")
         pr = _Printer(self._names_all())
@@ -301,6 +301,34 @@ class ModelCode:
         for (lhs, _), e in zip(targets, red):
             lines.append(f"{indent}{lhs} = {pr.doprint(e)};")
         return "\n".join(lines)
+
+    def _canonical(self, e):
+        """e as a polynomial in the state (coordinates, velocities, their sines and cosines, accelerations):
+        one parameter-only coefficient per monomial (computed once per instance), grouped by the ground
+        accelerations; non-polynomial parts are treated the same way argument by argument."""
+        if e.is_Atom or not (e.free_symbols - self.D.params):
+            return e
+        params = self.D.params
+        gens = sorted({a for a in e.atoms(sp.Symbol) if a not in params}
+                      | {f for f in e.atoms(sp.sin, sp.cos) if f.free_symbols - params}, key=sp.default_sort_key)
+        try:
+            poly = sp.Poly(e, *gens)
+            if any(c.free_symbols - params for c in poly.coeffs()):
+                raise sp.PolynomialError
+        except (sp.PolynomialError, sp.GeneratorsNeeded, sp.CoercionFailed):
+            return e.func(*[self._canonical(a) for a in e.args])
+        groups = {}
+        special = [g for g in (self.ag, self.ag_v) if g in gens]
+        for monom, coeff in poly.terms():
+            powers = dict(zip(gens, monom))
+            key = tuple(powers.get(g, 0) for g in special)
+            rest = sp.Mul(*[g ** k for g, k in powers.items() if g not in special and k])
+            groups.setdefault(key, []).append(sp.factor_terms(coeff) * rest)
+        out = []
+        for key, terms in sorted(groups.items()):
+            factor = sp.Mul(*[g ** k for g, k in zip(special, key) if k])
+            out.append(factor * sp.Add(*terms) if factor != 1 else sp.Add(*terms))
+        return sp.Add(*out)
 
     def _collect(self, e):
         """e grouped by the ground accelerations (fewer products than the expanded sum)."""
