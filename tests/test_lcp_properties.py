@@ -66,7 +66,6 @@ def _build(cache_dir: Path):
     cache_dir.mkdir(parents=True, exist_ok=True)
     found = list(cache_dir.glob(name + ".*.so")) + list(cache_dir.glob(name + ".*.pyd"))
     if not found:
-        from distutils.errors import CompileError, LinkError      # noqa: F401  (setuptools' copy)
         ffi = cffi.FFI()
         ffi.cdef(CDEF)
         ffi.set_source(name, HEADER, sources=[str(p) for p in sources], include_dirs=[str(SRC)],
