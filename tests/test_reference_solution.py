@@ -129,6 +129,8 @@ def test_flexible_oscillator_event_driven_matches_the_reference(name):
 
 
 # ---------------------------------------------------------------------------------------------- engine bug
+@pytest.mark.xfail(strict=True, reason="known engine defect: the event-driven scheme misses a pivot's lift-off "
+                   "inside one long advance of the flexible oscillator")
 def test_flexible_pivot_lifts_off_when_its_force_turns_negative():
     """ENGINE BUG (fails on the current engine). The heavy-base oscillator released at phi_0 = 0.08 rad
     rocks on its right corner after its first impact (t = 0.2407 s); between t = 0.2790 and 0.2870 s the
