@@ -294,17 +294,21 @@ class Simulator:
             raise ValueError("times must be increasing")
         return self._sample(times, self._ground_motion(ag, ag_v))
 
-    def _sample(self, times, gm) -> tuple:
-        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``."""
+    def _sample(self, times, gm, hold: bool = False) -> tuple:
+        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``;
+        hold (compiled engine, on_report not "raise"): gm(t_k) (and gm.vertical(t_k)) held over each interval
+        [t_k, t_k+1), t_0 the current time, as one `advance` per interval under those numbers does."""
         integ = self.integrator
         if self.engine == "c" and self.on_report != "raise":
             # the lean path, as advance's: the engine checkpoints, checks the outputs and restores itself on any
             # error (rk_engine_sample); the same exceptions and reports as _guarded
             try:
-                result = integ.sample(times, gm, max_steps=self.max_steps)
+                result = integ.sample(times, gm, max_steps=self.max_steps, hold=hold)
             except BaseException as exc:
                 t_fail = integ.t
                 integ.forget_failure()
+                if hold and integ._engine.callback_raised:
+                    raise         # ag(t_k) raised: as the number ag(t_k) of an advance would, unwrapped
                 err = self._failure(exc, times[-1], gm, t_fail)
                 if err is exc:
                     raise
@@ -530,7 +534,14 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values["impacts"] = impacts
         values["overturned"] = overturned
     elif sim.engine == "c" and sim.on_report != "raise":
-        values = _zoh_c(sim, gm, times, n)
+        # one call into C: the advances of the loop below (ag(t_k) held over each output interval), in C
+        modes, values, impacts, overturned = sim._sample(times[1:], gm, hold=True)
+        # (the keys in the order of Simulator.outputs(), as the loop below records them)
+        tail = values.pop("friction_demand"), values.pop("painleve")
+        values["contact"] = modes
+        values["impacts"] = impacts
+        values["overturned"] = overturned
+        values["friction_demand"], values["painleve"] = tail
     else:
         records = [sim.outputs()]
         for k in range(n):
@@ -542,26 +553,6 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
     return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
                   n_steps=sim.integrator.n_steps)
-
-
-def _zoh_c(sim: Simulator, gm, times, n: int) -> dict:
-    """simulate's zero-order-hold loop on the compiled engine: the same advances (Simulator.advance under the
-    number ag(t_k), one call into C each) and the same outputs, read as one row of floats per step."""
-    eng = sim.integrator._engine
-    tl = times.tolist()
-    rows = [eng.output_row()]
-    vert = gm.vertical
-    for k in range(n):
-        if vert is None:
-            sim.advance(tl[k + 1], gm(tl[k]))
-        else:
-            sim.advance(tl[k + 1], gm(tl[k]), ag_v=vert(tl[k]))
-        rows.append(eng.output_row())
-    arr = np.array(rows)
-    names = list(eng.output_names) + ["contact", "impacts", "overturned", "friction_demand", "painleve"]
-    types = {"contact": np.int64, "impacts": np.int64, "overturned": bool, "painleve": np.int64}
-    return {name: arr[:, j].astype(types[name]) if name in types else arr[:, j].copy()
-            for j, name in enumerate(names)}
 
 
 def report_summary(reports) -> str:

@@ -386,7 +386,9 @@ class CompiledIntegrator(Integrator):
         self._last_motion = ag
         return id(ag)
 
-    def sample(self, times, ag, max_steps: int | None = None):
+    def sample(self, times, ag, max_steps: int | None = None, hold: bool = False):
+        """`Integrator.sample`; hold: ag (and ag_v) held at each interval's start instead (simulate's
+        hold="zoh": the results of a `Simulator.advance` per interval under the number ag(t_k), in one call)."""
         if type(times) is not np.ndarray or times.dtype != np.float64 or not times.flags.c_contiguous:
             times = np.ascontiguousarray(times, dtype=float)
         n = times.size + 1
@@ -399,7 +401,7 @@ class CompiledIntegrator(Integrator):
         vspec = vertical_spec(ag)
         ident = self._identity(ag)
         self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident,
-                                              vspec, True))
+                                              vspec, True, hold))
         return _sampled(names, modes, values, impacts, overturned)
 
     # ------------------------------------------------------------------ state
