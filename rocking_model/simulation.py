@@ -490,6 +490,35 @@ class Result:
         np.savetxt(path, data, delimiter=",", header=",".join(["time"] + names), comments="")
 
 
+#: (t0, dt, n, t_end) and the output grid of the last simulate (a run repeated over many models or motions, an
+#: ensemble's, builds the same grid each time: a copy of it costs a third of building it)
+_LAST_GRID = None
+
+
+def _grid(t0: float, dt: float, n: int, t_end: float) -> np.ndarray:
+    """The output grid as fmpy builds it: t_k = t0 + k dt (k = 0..n), the last one clipped to t_end; a new array."""
+    global _LAST_GRID
+    key = (t0, dt, n, t_end)
+    last = _LAST_GRID
+    if last is not None and last[0] == key:
+        return last[1].copy()
+    # (0 + x is x; k dt in place: the same products as dt * np.arange(n + 1), without two temporaries)
+    times = np.arange(n + 1, dtype=float)
+    times *= dt
+    end = n * dt                      # times[n] as a float: the same product (n < 2^53 converts exactly)
+    if t0:
+        times += t0
+        end += t0
+    if end > t_end:                   # (the grid increases: only when its last time is past t_end is any)
+        np.minimum(times, t_end, out=times)
+    _LAST_GRID = (key, times.copy())
+    return times
+
+
+#: the accepted values of ``simulate(hold=...)``
+_HOLDS = {"exact": "exact", "zoh": "zoh"}
+
+
 def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, scheme="event_driven",
              output_interval: float = 0.01, hold: str = "exact", ag_v=None, **kwargs) -> Result:
     """Simulate ``model`` from t0 to ``t_end`` [s] and return the outputs every ``output_interval`` [s].
@@ -509,21 +538,14 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     gm = as_ground_motion(ground_motion)
     gm = checked_motion(gm if ag_v is None else _with_vertical(gm, ag_v))
     vert = gm.vertical
-    hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
+    hold = check_choice("hold", hold, _HOLDS)
     kwargs.setdefault("impact_log_size", None)
     sim = Simulator(model, scheme, **kwargs)
     t0 = sim.t
     t_end = check_real("t_end", t_end, lo=t0)
     dt = check_real("output_interval", output_interval, lo=0.0, lo_open=True)
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
-    # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
-    # (0 + x is x; k dt in place: the same products as dt * np.arange(n + 1), without two temporaries)
-    times = np.arange(n + 1, dtype=float)
-    times *= dt
-    if t0:
-        times += t0
-    if times[n] > t_end:              # (the grid increases: only when its last time is past t_end is any)
-        np.minimum(times, t_end, out=times)
+    times = _grid(t0, dt, n, t_end)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples
@@ -551,8 +573,11 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
                 sim.advance(times[k + 1], ConstantMotion(gm(times[k])), ag_v=ConstantMotion(vert(times[k]), "ag_v"))
             records.append(sim.outputs())
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
-    return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
-                  n_steps=sim.integrator.n_steps)
+    integ = sim.integrator
+    # (the compiled engine's impact times read from it directly: the same list sim.impact_times returns)
+    impact_times = integ._engine.impact_times if sim.engine == "c" else sim.impact_times
+    return Result(t=times, values=values, impact_times=np.array(impact_times), scheme=sim.scheme,
+                  n_steps=integ.n_steps)
 
 
 def report_summary(reports) -> str:
