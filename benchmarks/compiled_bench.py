@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import gc
 import json
+import math
 import os
 import subprocess
 import sys
@@ -274,9 +275,143 @@ def prototype_shaped(repeats: int = 3, duration: float = 40.0) -> dict:
     return out
 
 
+#: the lean C program of the event-driven scheme (the engine's speed reference: /work/shared/bench/README.md)
+LEAN_C = os.environ.get("ROCKING_LEAN_C", "/work/shared/bench/rigid_ed.c")
+
+
+def _lean_c(tmp: str) -> str | None:
+    """`LEAN_C` compiled with gcc -O2 (its README's flags) into ``tmp``; None when missing or gcc fails."""
+    exe = os.path.join(tmp, "rigid_ed")
+    if not os.path.exists(LEAN_C):
+        return None
+    r = subprocess.run(["gcc", "-O2", "-o", exe, LEAN_C, "-lm"], capture_output=True, text=True)
+    return exe if r.returncode == 0 else None
+
+
+def _lean_run(exe: str, record: str, b: float, h: float, tol: float, reps: int) -> dict:
+    """One run of the lean program: its ``key value`` pairs (min_s: the fastest of ``reps`` runs in its process)."""
+    out = subprocess.run([exe, record, repr(b), repr(h), "1", "0", "0", repr(tol), str(reps)], capture_output=True,
+                         text=True, timeout=300).stdout.split()
+    return {k: float(v) for k, v in zip(out[::2], out[1::2])}
+
+
+def holds_vs_lean(rounds: int = 15, duration: float = 40.0) -> dict:
+    """`simulate(hold="zoh")` and `simulate(hold="exact")` (the rigid block, event-driven, tolerance 1e-8) on
+    `PROTOTYPE_RECORD` against the lean C program on the same record (b, h, tol, ag held over each sample as
+    hold="zoh" does), in interleaved rounds (one run of each simulate, one of the lean program taking the fastest of
+    3 in its process); the fastest of the rounds of each and their ratios."""
+    from rocking_model import RigidBlock, SampledMotion, simulate
+    from rocking_model.records import synthetic_record
+
+    kw = dict(PROTOTYPE_RECORD, duration=duration)
+    t, a = synthetic_record(**kw)
+    gm = SampledMotion(t, a)
+    b, h, tol, t_end = S.RECORD_BLOCK["b"], S.RECORD_BLOCK["h"], 1e-8, float(t[-1])
+
+    def run(hold):
+        return lambda: simulate(RigidBlock(b=b, h=h), gm, t_end, output_interval=kw["dt"], hold=hold, tolerance=tol)
+
+    with tempfile.TemporaryDirectory(prefix="rocking_lean_") as tmp:
+        exe = _lean_c(tmp)
+        if exe is None:
+            return {"error": f"the lean C program {LEAN_C} is missing or does not compile"}
+        record = os.path.join(tmp, "record.csv")
+        np.savetxt(record, np.column_stack([t, a]), delimiter=",", header="time,ag", comments="")
+        best: dict = {}
+        cpu: dict = {}
+        lean: dict = {}
+        lean_cpu = math.inf
+        enabled = gc.isenabled()
+        for _ in range(max(1, rounds)):
+            for name, fn in (("zoh", run("zoh")), ("exact", run("exact"))):
+                # wall and CPU time of one run (the CPU time is blind to the other jobs' time slices on a shared
+                # machine: a 5 ms run is cut by them more often than the lean program's 2 ms runs)
+                gc.disable()
+                try:
+                    c0, t0 = time.process_time(), time.perf_counter()
+                    res = fn()
+                    wall, c1 = time.perf_counter() - t0, time.process_time() - c0
+                finally:
+                    if enabled:
+                        gc.enable()
+                best[name] = (res, min(wall, best[name][1]) if name in best else wall)
+                cpu[name] = min(c1, cpu.get(name, math.inf))
+            one = _lean_run(exe, record, b, h, tol, 3)
+            if not lean or one["min_s"] < lean["min_s"]:
+                lean = one
+            lean_cpu = min(lean_cpu, one["cpu_median_s"])
+    out = {"record": kw, "steps": len(t) - 1, "b": b, "h": h, "tolerance": tol, "lean_s": lean["min_s"],
+           "lean_cpu_s": lean_cpu, "lean_impacts": int(lean["impacts"]), "loadavg": os.getloadavg()}
+    for name in ("zoh", "exact"):
+        res, wall = best[name]
+        out[name + "_s"] = wall
+        out[name + "_cpu_s"] = cpu[name]
+        out[name + "_impacts"] = int(res["impacts"][-1])
+        out[name + "_over_lean"] = wall / lean["min_s"]
+        out[name + "_over_lean_cpu"] = cpu[name] / lean_cpu
+    print(f"[compiled] prototype-shaped record, simulate against the lean C program (wall; CPU time): hold=\"zoh\" "
+          f"{out['zoh_s'] * 1e3:.2f} ms ({out['zoh_over_lean']:.2f}x; {out['zoh_over_lean_cpu']:.2f}x), "
+          f"hold=\"exact\" {out['exact_s'] * 1e3:.2f} ms ({out['exact_over_lean']:.2f}x; "
+          f"{out['exact_over_lean_cpu']:.2f}x), lean C {out['lean_s'] * 1e3:.2f} ms; impacts {out['zoh_impacts']} / "
+          f"{out['exact_impacts']} / {out['lean_impacts']} (the lean program counts every impact of a rest "
+          f"sequence); load {out['loadavg'][0]:.2f}", flush=True)
+    return out
+
+
+def pulse_python_fraction(rounds: int = 300) -> dict:
+    """The Python layer of a short `simulate`: the pulse scene (`simulate(RigidBlock(...), SinePulse(...), t_end)`,
+    the rigid block below overturning, 4 s in 0.01 s outputs) against `Engine.sample` alone on the same grid and
+    motion (a fresh engine, built outside the timing), in interleaved rounds. fraction = 1 - sample / simulate, of
+    the fastest runs and the median of the rounds' own fractions."""
+    from rocking_model import RigidBlock, SinePulse, Simulator, simulate
+    from rocking_model.engine import motion_spec
+
+    scene = next(s for s in S.rigid_scenes() if s.name == "pulse_below")
+    A, w = scene.motion[1], scene.motion[2]
+    res = simulate(RigidBlock(**scene.model_kw), SinePulse(A, w), t_end=scene.t_end)
+    grid = np.ascontiguousarray(res.t[1:])
+    spec = motion_spec(SinePulse(A, w))
+    integ = Simulator(RigidBlock(**scene.model_kw)).integrator
+    from rocking_model import _engine
+
+    def sample():
+        eng = integ._new_engine(_engine)
+        m = len(grid) + 1
+        rows = (np.empty(m, np.int64), np.empty((eng.n_outputs + 2, m)), np.empty(m, np.int64), np.empty(m, bool))
+        t0 = time.perf_counter()
+        eng.sample(grid, spec, 10000, *rows, 0, None, True)
+        return time.perf_counter() - t0
+
+    def whole():
+        t0 = time.perf_counter()
+        simulate(RigidBlock(**scene.model_kw), SinePulse(A, w), t_end=scene.t_end)
+        return time.perf_counter() - t0
+
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        pairs = [(whole(), sample()) for _ in range(max(1, rounds))]
+    finally:
+        if enabled:
+            gc.enable()
+    sim_s = min(p[0] for p in pairs)
+    eng_s = min(p[1] for p in pairs)
+    fractions = sorted(1.0 - e / w_ for w_, e in pairs)
+    out = {"simulate_us": sim_s * 1e6, "sample_us": eng_s * 1e6, "python_us": (sim_s - eng_s) * 1e6,
+           "python_fraction": 1.0 - eng_s / sim_s, "python_fraction_median": fractions[len(fractions) // 2],
+           "rounds": len(pairs), "outputs": len(grid) + 1, "loadavg": os.getloadavg()}
+    print(f"[compiled] pulse scene, the Python layer of simulate: simulate {out['simulate_us']:.1f} us, "
+          f"Engine.sample {out['sample_us']:.1f} us: Python {out['python_us']:.1f} us = "
+          f"{100 * out['python_fraction']:.0f} % of the whole (median of the rounds "
+          f"{100 * out['python_fraction_median']:.0f} %); load {out['loadavg'][0]:.2f}", flush=True)
+    return out
+
+
 def main(quick: bool = False) -> dict:
     return {"per_step": per_step(3 if quick else 15, 8.0 if quick else 30.0),
             "prototype": prototype_shaped(3 if quick else 15, 10.0 if quick else 40.0),
+            "holds": holds_vs_lean(3 if quick else 15, 10.0 if quick else 40.0),
+            "pulse_python": pulse_python_fraction(50 if quick else 300),
             "cold": cold_start(2 if quick else 7)}
 
 

@@ -294,17 +294,21 @@ class Simulator:
             raise ValueError("times must be increasing")
         return self._sample(times, self._ground_motion(ag, ag_v))
 
-    def _sample(self, times, gm) -> tuple:
-        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``."""
+    def _sample(self, times, gm, hold: bool = False) -> tuple:
+        """`sample` of checked ``times`` (increasing, from the current time on) under a checked motion ``gm``;
+        hold (compiled engine, on_report not "raise"): gm(t_k) (and gm.vertical(t_k)) held over each interval
+        [t_k, t_k+1), t_0 the current time, as one `advance` per interval under those numbers does."""
         integ = self.integrator
         if self.engine == "c" and self.on_report != "raise":
             # the lean path, as advance's: the engine checkpoints, checks the outputs and restores itself on any
             # error (rk_engine_sample); the same exceptions and reports as _guarded
             try:
-                result = integ.sample(times, gm, max_steps=self.max_steps)
+                result = integ.sample(times, gm, max_steps=self.max_steps, hold=hold)
             except BaseException as exc:
                 t_fail = integ.t
                 integ.forget_failure()
+                if hold and integ._engine.callback_raised:
+                    raise         # ag(t_k) raised: as the number ag(t_k) of an advance would, unwrapped
                 err = self._failure(exc, times[-1], gm, t_fail)
                 if err is exc:
                     raise
@@ -486,6 +490,35 @@ class Result:
         np.savetxt(path, data, delimiter=",", header=",".join(["time"] + names), comments="")
 
 
+#: (t0, dt, n, t_end) and the output grid of the last simulate (a run repeated over many models or motions, an
+#: ensemble's, builds the same grid each time: a copy of it costs a third of building it)
+_LAST_GRID = None
+
+
+def _grid(t0: float, dt: float, n: int, t_end: float) -> np.ndarray:
+    """The output grid as fmpy builds it: t_k = t0 + k dt (k = 0..n), the last one clipped to t_end; a new array."""
+    global _LAST_GRID
+    key = (t0, dt, n, t_end)
+    last = _LAST_GRID
+    if last is not None and last[0] == key:
+        return last[1].copy()
+    # (0 + x is x; k dt in place: the same products as dt * np.arange(n + 1), without two temporaries)
+    times = np.arange(n + 1, dtype=float)
+    times *= dt
+    end = n * dt                      # times[n] as a float: the same product (n < 2^53 converts exactly)
+    if t0:
+        times += t0
+        end += t0
+    if end > t_end:                   # (the grid increases: only when its last time is past t_end is any)
+        np.minimum(times, t_end, out=times)
+    _LAST_GRID = (key, times.copy())
+    return times
+
+
+#: the accepted values of ``simulate(hold=...)``
+_HOLDS = {"exact": "exact", "zoh": "zoh"}
+
+
 def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, scheme="event_driven",
              output_interval: float = 0.01, hold: str = "exact", ag_v=None, **kwargs) -> Result:
     """Simulate ``model`` from t0 to ``t_end`` [s] and return the outputs every ``output_interval`` [s].
@@ -505,21 +538,14 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
     gm = as_ground_motion(ground_motion)
     gm = checked_motion(gm if ag_v is None else _with_vertical(gm, ag_v))
     vert = gm.vertical
-    hold = check_choice("hold", hold, {"exact": "exact", "zoh": "zoh"})
+    hold = check_choice("hold", hold, _HOLDS)
     kwargs.setdefault("impact_log_size", None)
     sim = Simulator(model, scheme, **kwargs)
     t0 = sim.t
     t_end = check_real("t_end", t_end, lo=t0)
     dt = check_real("output_interval", output_interval, lo=0.0, lo_open=True)
     n = max(1, int(math.ceil((t_end - t0) / dt - 1e-9)))
-    # output grid as fmpy builds it: t_k = t0 + k dt, the last one clipped to t_end
-    # (0 + x is x; k dt in place: the same products as dt * np.arange(n + 1), without two temporaries)
-    times = np.arange(n + 1, dtype=float)
-    times *= dt
-    if t0:
-        times += t0
-    if times[n] > t_end:              # (the grid increases: only when its last time is past t_end is any)
-        np.minimum(times, t_end, out=times)
+    times = _grid(t0, dt, n, t_end)
     if hold == "exact":
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples
@@ -530,7 +556,14 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values["impacts"] = impacts
         values["overturned"] = overturned
     elif sim.engine == "c" and sim.on_report != "raise":
-        values = _zoh_c(sim, gm, times, n)
+        # one call into C: the advances of the loop below (ag(t_k) held over each output interval), in C
+        modes, values, impacts, overturned = sim._sample(times[1:], gm, hold=True)
+        # (the keys in the order of Simulator.outputs(), as the loop below records them)
+        tail = values.pop("friction_demand"), values.pop("painleve")
+        values["contact"] = modes
+        values["impacts"] = impacts
+        values["overturned"] = overturned
+        values["friction_demand"], values["painleve"] = tail
     else:
         records = [sim.outputs()]
         for k in range(n):
@@ -540,28 +573,11 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
                 sim.advance(times[k + 1], ConstantMotion(gm(times[k])), ag_v=ConstantMotion(vert(times[k]), "ag_v"))
             records.append(sim.outputs())
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
-    return Result(t=times, values=values, impact_times=np.array(sim.impact_times), scheme=sim.scheme,
-                  n_steps=sim.integrator.n_steps)
-
-
-def _zoh_c(sim: Simulator, gm, times, n: int) -> dict:
-    """simulate's zero-order-hold loop on the compiled engine: the same advances (Simulator.advance under the
-    number ag(t_k), one call into C each) and the same outputs, read as one row of floats per step."""
-    eng = sim.integrator._engine
-    tl = times.tolist()
-    rows = [eng.output_row()]
-    vert = gm.vertical
-    for k in range(n):
-        if vert is None:
-            sim.advance(tl[k + 1], gm(tl[k]))
-        else:
-            sim.advance(tl[k + 1], gm(tl[k]), ag_v=vert(tl[k]))
-        rows.append(eng.output_row())
-    arr = np.array(rows)
-    names = list(eng.output_names) + ["contact", "impacts", "overturned", "friction_demand", "painleve"]
-    types = {"contact": np.int64, "impacts": np.int64, "overturned": bool, "painleve": np.int64}
-    return {name: arr[:, j].astype(types[name]) if name in types else arr[:, j].copy()
-            for j, name in enumerate(names)}
+    integ = sim.integrator
+    # (the compiled engine's impact times read from it directly: the same list sim.impact_times returns)
+    impact_times = integ._engine.impact_times if sim.engine == "c" else sim.impact_times
+    return Result(t=times, values=values, impact_times=np.array(impact_times), scheme=sim.scheme,
+                  n_steps=integ.n_steps)
 
 
 def report_summary(reports) -> str:

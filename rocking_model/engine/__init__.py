@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import operator
+import sys
 
 import numpy as np
 
@@ -90,21 +91,32 @@ def _sampled(names, modes, values, impacts, overturned) -> tuple:
     outputs, friction_demand, painleve, one row each: the engine wrote them in columns; ``modes`` int64 and
     ``overturned`` bool, as the Python scheme returns them): one contiguous array per output (rows of one block: a
     copy per column costs more than the run of a short scene)."""
-    cols = values
+    cols = list(values)               # the row views, made at once
     out = dict(zip(names, cols))
     out["friction_demand"] = cols[-2]
     out["painleve"] = cols[-1].astype(np.int64)
     return modes, out, impacts, overturned
 
 
+#: Engine's max_events default (engine_init in _engine.c), passed by position with the arguments after it: the
+#: keyword parser cost a third of the engine's creation
+_MAX_EVENTS = 100000
+
+#: model class -> its output names, as the engine lists them (read once: the engine builds the list per read)
+_NAMES: dict = {}
+
 #: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
 _SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", "v_tol", "v_zeno", "event_tol",
              "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
 
 
+#: numpy's float64 descriptor (an identity test: a dtype's == parses its other side first)
+_F64 = np.dtype(np.float64)
+
+
 def _floats(x) -> list:
     """``x`` as a list of floats (a float64 array's tolist(): the same values without a numpy scalar each)."""
-    if type(x) is np.ndarray and x.dtype == np.float64:
+    if type(x) is np.ndarray and x.dtype is _F64:
         return x.tolist()
     return [float(a) for a in x]
 
@@ -183,7 +195,10 @@ class CompiledIntegrator(Integrator):
         self._t0 = float(t0)
         self._start = (int(mode), _floats(q), _floats(v))
         self._engine = self._new_engine(_engine)
-        self._names = self._engine.output_names
+        names = _NAMES.get(type(model))
+        if names is None:
+            names = _NAMES[type(model)] = tuple(self._engine.output_names)
+        self._names = names
         self._t_fail = None
         self.reports = []
 
@@ -242,7 +257,7 @@ class CompiledIntegrator(Integrator):
         o = self._options
         return _engine.Engine(*self._engine_args(), None, self._scheme_cls.code, self._t0, float(o.dt_max),
                               float(o.tolerance), float(o.theta), float(o.zeno_tol), o.method, o.impact_log_size,
-                              tolerances=o.tolerances, state=self._start)
+                              _MAX_EVENTS, o.tolerances, self._start)
 
     def _engine_kwargs(self):
         o = self._options
@@ -352,16 +367,21 @@ class CompiledIntegrator(Integrator):
         self._t_fail = None
         try:
             call()
-        except BaseException as exc:
-            # the engine is restored; ``t`` says where the scheme had got to (Simulator._diverged's "at t = ...",
-            # as the Python integrator's t before its rollback) until the Simulator rolls back
-            self._t_fail = self._engine.fail_time
-            if isinstance(exc, _extension().NonFiniteError):
-                raise FloatingPointError(str(exc)) from None
+        except BaseException:
+            self._run_failed()
             raise
         finally:
             if self._engine.report_count:
                 self.reports = [Report(kind, t, msg) for kind, t, msg in self._engine.reports()]
+
+    def _run_failed(self):
+        """In the except clause of a failed engine call: the engine is restored; ``t`` says where the scheme had got
+        to (Simulator._diverged's "at t = ...", as the Python integrator's t before its rollback) until the
+        Simulator rolls back; the engine's NonFiniteError raised as FloatingPointError."""
+        self._t_fail = self._engine.fail_time
+        exc = sys.exc_info()[1]
+        if isinstance(exc, _extension().NonFiniteError):
+            raise FloatingPointError(str(exc)) from None
 
     def advance(self, t_end: float, ag, max_steps: int | None = None) -> None:
         eng = self._engine
@@ -386,21 +406,30 @@ class CompiledIntegrator(Integrator):
         self._last_motion = ag
         return id(ag)
 
-    def sample(self, times, ag, max_steps: int | None = None):
+    def sample(self, times, ag, max_steps: int | None = None, hold: bool = False):
+        """`Integrator.sample`; hold: ag (and ag_v) held at each interval's start instead (simulate's
+        hold="zoh": the results of a `Simulator.advance` per interval under the number ag(t_k), in one call)."""
         if type(times) is not np.ndarray or times.dtype != np.float64 or not times.flags.c_contiguous:
             times = np.ascontiguousarray(times, dtype=float)
         n = times.size + 1
         names = self._names
-        modes = np.empty(n, dtype=np.int64)
+        ints = np.empty((2, n), dtype=np.int64)                     # modes and impacts: one block
         values = np.empty((len(names) + 2, n), dtype=float)        # one row per output (columns=True)
-        impacts = np.empty(n, dtype=np.int64)
         overturned = np.empty(n, dtype=bool)
         spec = motion_spec(ag)
-        vspec = vertical_spec(ag)
-        ident = self._identity(ag)
-        self._run(lambda: self._engine.sample(times, spec, max_steps, modes, values, impacts, overturned, ident,
-                                              vspec, True))
-        return _sampled(names, modes, values, impacts, overturned)
+        vspec = None if ag.vertical is None else motion_spec(ag.vertical)
+        ident = 0 if ag.constant else self._identity(ag)
+        eng = self._engine
+        self._t_fail = None
+        try:
+            eng.sample(times, spec, max_steps, ints[0], values, ints[1], overturned, ident, vspec, True, hold)
+        except BaseException:
+            self._run_failed()
+            raise
+        finally:
+            if eng.report_count:
+                self.reports = [Report(kind, t, msg) for kind, t, msg in eng.reports()]
+        return _sampled(names, ints[0], values, ints[1], overturned)
 
     # ------------------------------------------------------------------ state
     def state(self):

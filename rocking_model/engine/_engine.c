@@ -386,6 +386,7 @@ typedef struct EngineObject {
     rk_engine *e;
     PyObject *keys;     /* the keys of output_dict(): the output names, contact, impacts, overturned,
                            friction_demand, painleve (made once) */
+    int callback_raised;    /* the last advance_motion / sample raised a motion callback's own exception */
 } EngineObject;
 
 static int read_options(PyObject *kw, rk_options *o);
@@ -742,7 +743,9 @@ static PyObject *engine_advance(EngineObject *self, PyObject *const *args, Py_ss
  *  callback's exception re-raised with the state restored. */
 static PyObject *finish_call(EngineObject *self, motion_holder *h, rk_status st, rk_core *saved)
 {
+    self->callback_raised = 0;
     if (h->n_cbs > 0 && holder_reraise(h)) {
+        self->callback_raised = 1;
         if (st == RK_OK)
             rk_engine_load(self->e, saved);     /* the call went on past the exception: undo it */
         holder_release(h);
@@ -819,10 +822,21 @@ static int writable_buffer(PyObject *obj, Py_buffer *b, const char *name, Py_ssi
     return 0;
 }
 
+/** rk_engine_sample (rows or columns) or, hold, rk_engine_sample_held */
+static rk_status run_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n,
+                            long long max_steps, int columns, int hold, int *modes, double *values, long long *impacts,
+                            int *over)
+{
+    if (hold)
+        return rk_engine_sample_held(e, ag, ag_v, times, n, max_steps, columns, modes, values, impacts, over);
+    return (columns ? rk_engine_sample_columns : rk_engine_sample)(e, ag, ag_v, times, n, max_steps, modes, values,
+                                                                   impacts, over);
+}
+
 static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwargs)
 {
     static char *kwlist[] = {"times", "motion", "max_steps", "modes", "values", "impacts", "overturned", "identity",
-                             "vspec", "columns", NULL};
+                             "vspec", "columns", "hold", NULL};
     PyObject *times_obj, *spec, *ms, *modes_obj, *values_obj, *impacts_obj, *over_obj, *r, *vspec = Py_None;
     rk_motion *mv = NULL;
     unsigned long long identity = 0;
@@ -831,12 +845,12 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
     Py_buffer bm, bv, bi, bo;
     const double *times;
     Py_ssize_t n;
-    int idx, stride, columns = 0;
+    int idx, stride, columns = 0, hold = 0;
     rk_status st;
     rk_core *saved = NULL;
-    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|KOp", kwlist, &times_obj, &spec, &ms,
+    if (!ready(self) || !PyArg_ParseTupleAndKeywords(args, kwargs, "OOOOOOO|KOpp", kwlist, &times_obj, &spec, &ms,
                                                       &modes_obj, &values_obj, &impacts_obj, &over_obj,
-                                                      &identity, &vspec, &columns))
+                                                      &identity, &vspec, &columns, &hold))
         return NULL;
     if (read_max_steps(ms, &max_steps) < 0)
         return NULL;
@@ -908,16 +922,13 @@ static PyObject *engine_sample(EngineObject *self, PyObject *args, PyObject *kwa
                 rk_fail(&self->e->error, st, "out of memory");
             } else {
                 rk_engine_save(self->e, saved);
-                st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times,
-                                                                             (long long)n, max_steps, modes,
-                                                                             (double *)bv.buf, (long long *)bi.buf,
-                                                                             over);
+                st = run_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, columns, hold, modes,
+                                (double *)bv.buf, (long long *)bi.buf, over);
             }
         } else {
             Py_BEGIN_ALLOW_THREADS
-            st = (columns ? rk_engine_sample_columns : rk_engine_sample)(self->e, &h.m[idx], mv, times, (long long)n,
-                                                                         max_steps, modes, (double *)bv.buf,
-                                                                         (long long *)bi.buf, over);
+            st = run_sample(self->e, &h.m[idx], mv, times, (long long)n, max_steps, columns, hold, modes,
+                            (double *)bv.buf, (long long *)bi.buf, over);
             Py_END_ALLOW_THREADS
         }
         if (modes != (int *)bm.buf) {
@@ -1455,10 +1466,12 @@ static PyMethodDef engine_methods[] = {
      "advance_motion(t_end, motion, max_steps=None, identity=0, vspec=None): integrate to t_end under a motion "
      "spec (vspec: the vertical component's, None: none)."},
     {"sample", (PyCFunction)(void (*)(void))engine_sample, METH_VARARGS | METH_KEYWORDS,
-     "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None, columns=False): "
+     "sample(times, motion, max_steps, modes, values, impacts, overturned, identity=0, vspec=None, columns=False, "
+     "hold=False): "
      "Integrator.sample into the given arrays (modes: int32 or int64 n+1, values: float64 (n+1) x (n_outputs+2), "
      "impacts: int64 n+1, overturned: int32 or bool n+1; columns=True: values (n_outputs+2) x (n+1), one row per "
-     "output)."},
+     "output). hold=True: ag (and ag_v) held at each interval's start (simulate's hold=\"zoh\", "
+     "rk_engine_sample_held)."},
     {"outputs", (PyCFunction)engine_outputs, METH_NOARGS, "outputs() -> tuple in the declared order."},
     {"output_dict", (PyCFunction)engine_output_dict, METH_NOARGS,
      "output_dict() -> Simulator.outputs(): the outputs by name, contact, impacts, overturned, friction_demand, "
@@ -1503,6 +1516,7 @@ GETTER(n_modes, PyLong_FromLong(rk_engine_n_modes(self->e)))
 GETTER(scheme, PyLong_FromLong((long)rk_engine_scheme(self->e)))
 GETTER(model_class, PyUnicode_FromString(rk_engine_model_class(self->e)))
 GETTER(report_count, PyLong_FromLong(rk_engine_reports(self->e)->count))
+GETTER(callback_raised, PyBool_FromLong(self->callback_raised))
 GETTER(impact_times, impact_times_list(self->e))
 
 static PyObject *get_output_names(EngineObject *self, void *closure)
@@ -1532,6 +1546,8 @@ static PyGetSetDef engine_getset[] = {
     {"scheme", (getter)get_scheme, NULL, "0 moreau_jean, 1 event_driven", NULL},
     {"model_class", (getter)get_model_class, NULL, "the Python class name of the model", NULL},
     {"report_count", (getter)get_report_count, NULL, "reports of the last call (all counted)", NULL},
+    {"callback_raised", (getter)get_callback_raised, NULL, "the last advance_motion / sample re-raised a motion "
+     "callback's own exception", NULL},
     {"impact_times", (getter)get_impact_times, NULL, "the last impact_log_size impact times [s]", NULL},
     {NULL, NULL, NULL, NULL, NULL}
 };

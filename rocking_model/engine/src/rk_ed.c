@@ -1119,7 +1119,8 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     if (k == 0 && f.constant) {
         /* nothing moves and the (positive) contact forces cannot change */
         if (has_totals) {
-            ED_TRYF(&f, ed_totals(&f, s->t, s->y, lam));
+            /* (through g_memo: the settle before it computed them at an input change) */
+            ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 0, g_prev, lam));
             if (lam[0] > s->force_floor)
                 ed_note_ratio(e, fabs(lam[1]) / lam[0]);
         }
@@ -1259,12 +1260,14 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
     int mode = s->mode, nc = m->ops->n_contacts, n_e, i, ok, new_mode, changed;
     rk_set closed = rk_closed_of(m, mode), cc;
     double ev[RK_MAX_EVENTS], clear = e->options.tolerances.clearly_open, q[RK_MAX_DOF], v[RK_MAX_DOF];
-    double v_new[RK_MAX_DOF], a, av;
+    double v_new[RK_MAX_DOF], a, av, lam[2];
     ed_fn f;
     int kinds[RK_MAX_EVENTS];
     ed_fn_init(&f, e, mode, ag, ag_v);
     n_e = ed_kinds(m, mode, kinds);
-    ED_TRYF(&f, ed_G(&f, t, s->y, ev));
+    /* (with the totals where the segment reads them: the segment that follows starts from the same values, kept
+     * in g_memo; G is the same with or without them) */
+    ED_TRYF(&f, ed_G_totals(&f, t, s->y, 2 * s->k, ev, ed_has_totals(m, mode) ? lam : NULL));
     /* fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip going
      * on or just starting */
     ok = 1;

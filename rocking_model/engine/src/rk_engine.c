@@ -740,13 +740,14 @@ static void write_row(rk_engine *e, long long r, int *modes, double *values, lon
 }
 
 static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
-                             long long max_steps, int *modes, double *values, long long *impacts, int *overturned);
+                             long long max_steps, int hold, int *modes, double *values, long long *impacts,
+                             int *overturned);
 
 rk_status rk_engine_sample(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
                            long long max_steps, int *modes, double *values, long long *impacts, int *overturned)
 {
     e->sample_cs = 0;
-    return sample_impl(e, ag, ag_v, times, n_times, max_steps, modes, values, impacts, overturned);
+    return sample_impl(e, ag, ag_v, times, n_times, max_steps, 0, modes, values, impacts, overturned);
 }
 
 rk_status rk_engine_sample_columns(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times,
@@ -755,13 +756,56 @@ rk_status rk_engine_sample_columns(rk_engine *e, rk_motion *ag, rk_motion *ag_v,
 {
     rk_status st;
     e->sample_cs = n_times >= 1 ? n_times + 1 : 0;
-    st = sample_impl(e, ag, ag_v, times, n_times, max_steps, modes, values, impacts, overturned);
+    st = sample_impl(e, ag, ag_v, times, n_times, max_steps, 0, modes, values, impacts, overturned);
     e->sample_cs = 0;
     return st;
 }
 
+rk_status rk_engine_sample_held(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
+                                long long max_steps, int columns, int *modes, double *values, long long *impacts,
+                                int *overturned)
+{
+    rk_status st;
+    e->sample_cs = columns && n_times >= 1 ? n_times + 1 : 0;
+    st = sample_impl(e, ag, ag_v, times, n_times, max_steps, 1, modes, values, impacts, overturned);
+    e->sample_cs = 0;
+    return st;
+}
+
+/** One interval of the zero-order hold: the advance rk_engine_advance(e, t_end, a, 0, av, 0, max_steps, 0) makes
+ *  (its checks, a constant input, no vertical motion where av == 0, the settle at the start), without its own
+ *  checkpoint and output check (the caller's). */
+static rk_status held_advance(rk_engine *e, double t_end, double a, double av, long long max_steps)
+{
+    rk_motion m, mv;
+    if (check_input(e, t_end, a, 0.0, 0, "ag") != RK_OK || check_input(e, t_end, av, 0.0, 0, "ag_v") != RK_OK)
+        return e->error.status;
+    rk_motion_constant(&m, a);
+    if (av != 0.0)
+        rk_motion_constant(&mv, av);
+    if (is_mj(e))
+        return rk_mj_advance(e, t_end, &m, av != 0.0 ? &mv : NULL, max_steps, &e->error);
+    return rk_ed_run(e, t_end, &m, av != 0.0 ? &mv : NULL, NULL, 0, max_steps, NULL, NULL, NULL, NULL, 0u,
+                     &e->error);
+}
+
+/** The held values ag(t), ag_v(t) (0 without a vertical motion); a callback's failure as RK_ERR_VALUE with its
+ *  message (the extension re-raises the callback's own exception). */
+static rk_status held_values(rk_engine *e, rk_motion *ag, rk_motion *ag_v, double t, double *a, double *av)
+{
+    int failed = 0;
+    char msg[RK_MSG_LEN];
+    msg[0] = '\0';
+    *a = rk_motion_eval(ag, t, &failed, msg);
+    *av = ag_v != NULL && !failed ? rk_motion_eval(ag_v, t, &failed, msg) : 0.0;
+    if (failed)
+        return rk_fail(&e->error, RK_ERR_VALUE, "%s", msg);
+    return RK_OK;
+}
+
 static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
-                             long long max_steps, int *modes, double *values, long long *impacts, int *overturned)
+                             long long max_steps, int hold, int *modes, double *values, long long *impacts,
+                             int *overturned)
 {
     rk_core saved;
     rk_status st = RK_OK;
@@ -784,7 +828,23 @@ static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const
     save_core(e, &saved);
     if (!rk_motion_pair_constant(ag, ag_v))
         e->motion_calls++;
-    if (is_mj(e)) {
+    if (hold) {
+        /* the zero-order hold: one constant-input advance per interval [t_k, t_k+1), t_0 the current time, each
+         * with its own settle, work budget and output check, as a loop of rk_engine_advance calls makes them */
+        write_row(e, 0, modes, values, impacts, overturned);
+        for (i = 0; i < n_times && st == RK_OK; i++) {
+            double a, av;
+            st = held_values(e, ag, ag_v, i ? times[i - 1] : t, &a, &av);
+            if (st == RK_OK)
+                st = held_advance(e, times[i], a, av, max_steps);
+            if (st == RK_OK) {
+                touch(e);
+                st = check_outputs(e);
+            }
+            if (st == RK_OK)
+                write_row(e, i + 1, modes, values, impacts, overturned);
+        }
+    } else if (is_mj(e)) {
         write_row(e, 0, modes, values, impacts, overturned);
         for (i = 0; i < n_times && st == RK_OK; i++) {
             st = rk_mj_advance(e, times[i], ag, ag_v, max_steps, &e->error);

@@ -100,6 +100,16 @@ rk_status rk_engine_sample_columns(rk_engine *e, rk_motion *ag, rk_motion *ag_v,
                                    long long n_times, long long max_steps, int *modes, double *values,
                                    long long *impacts, int *overturned);
 
+/** simulate(hold="zoh"): rk_engine_sample with the input held over each interval [t_k, t_k+1) of the grid (t_0 the
+ *  current time, t_k+1 = times[k]) at ag(t_k) and ag_v(t_k) (ag_v NULL or a held 0: no vertical motion): the
+ *  results of n_times calls rk_engine_advance(e, times[k], ag(t_k), 0, ag_v(t_k), 0, max_steps, 0) with the
+ *  outputs read after each (each interval settles at its start, has its own work budget and output check), in
+ *  one call. columns: the layout of rk_engine_sample_columns, else rk_engine_sample's rows. On failure the
+ *  engine is left as before the call. */
+rk_status rk_engine_sample_held(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
+                                long long max_steps, int columns, int *modes, double *values, long long *impacts,
+                                int *overturned);
+
 /* ------------------------------------------------------------------------------------------ read */
 int rk_engine_n_outputs(const rk_engine *e);
 const char *rk_engine_output_name(const rk_engine *e, int i);
