@@ -245,6 +245,8 @@ class CompiledIntegrator(Integrator):
         cls = type(self.model)
         getter = _PARAM_GETTERS.get(cls)
         if getter is None:
+            from .plugin import ensure
+            ensure(cls)                   # a model declared after the build: its kernels compiled and added
             names = tuple(p.name for p in cls.parameters())
             # (a one-parameter attrgetter returns the value itself: a tuple either way)
             getter = _PARAM_GETTERS[cls] = (operator.attrgetter(*names) if len(names) > 1

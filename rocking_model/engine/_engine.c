@@ -1687,7 +1687,40 @@ fail:
     return NULL;
 }
 
+/* add_model(address): the kernel of a model declared after the build (rocking_model.engine.plugin compiles it
+ * into a library of its own and passes the address of its rk_model_ops) */
+static PyObject *py_add_model(PyObject *self, PyObject *arg)
+{
+    rk_error err;
+    void *p = PyLong_AsVoidPtr(arg);
+    (void)self;
+    if (p == NULL) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "add_model: the kernel's address is NULL");
+        return NULL;
+    }
+    memset(&err, 0, sizeof err);
+    if (rk_model_add((const rk_model_ops *)p, &err) != RK_OK) {
+        PyErr_SetString(PyExc_ValueError, err.message);
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+/* kinds(): the model kinds the engine knows (built in, then added) */
+static PyObject *py_kinds(PyObject *self, PyObject *unused)
+{
+    char buf[4096];
+    (void)self;
+    (void)unused;
+    rk_model_kind_names(buf, sizeof buf);
+    return PyUnicode_FromString(buf);
+}
+
 static PyMethodDef methods[] = {
+    {"add_model", py_add_model, METH_O, "add_model(address): add the kernel (rk_model_ops *) of a model declared "
+     "after the build."},
+    {"kinds", py_kinds, METH_NOARGS, "kinds() -> str: the known model kinds, quoted and comma-separated."},
     {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
     {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
     {"motion_eval", py_motion_eval, METH_VARARGS,

@@ -33,6 +33,8 @@ extern "C" {
 #define RK_MAX_OUTPUTS 16
 /** largest number of derived parameters a kernel may keep in rk_model.d */
 #define RK_MAX_DERIVED 256
+/** models added at run time (rk_model_add) */
+#define RK_MAX_ADDED_KINDS 64
 /** reports kept per advance (more are counted in rk_engine_report_count but their text is dropped) */
 #define RK_MAX_REPORTS 16
 /** length of every message buffer (error and report texts), NUL included */

@@ -278,18 +278,14 @@ static rk_engine *engine_new(const char *kind, const double *params, int n_param
         opt = *options;
     if (check_options(&opt, err) != RK_OK)
         return NULL;
-    if (kind == NULL) {
-        rk_fail(err, RK_ERR_VALUE, "model kind is missing; allowed values 'rigid', 'flexible'");
-        return NULL;
-    }
     ops = rk_model_find(kind);
     if (ops == NULL) {
-        if (strcmp(kind, "rigid") == 0 || strcmp(kind, "flexible") == 0 || strcmp(kind, "RigidBlock") == 0
-            || strcmp(kind, "FlexibleOscillator") == 0)
-            rk_fail(err, RK_ERR_NOT_IMPLEMENTED, "the C kernel of model '%s' is not implemented yet (issue 21, "
-                    "part A); use engine=\"python\"", kind);
+        char kinds[256];
+        rk_model_kind_names(kinds, sizeof kinds);
+        if (kind == NULL)
+            rk_fail(err, RK_ERR_VALUE, "model kind is missing; allowed values %s", kinds);
         else
-            rk_fail(err, RK_ERR_VALUE, "model kind '%s' is unknown; allowed values 'rigid', 'flexible'", kind);
+            rk_fail(err, RK_ERR_VALUE, "model kind '%s' is unknown; allowed values %s", kind, kinds);
         return NULL;
     }
     if (n_params != ops->n_params) {

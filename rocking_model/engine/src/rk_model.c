@@ -17,24 +17,74 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* the kernels generated from the model declarations (rk_models_gen.c, written at build time by gen_models.py) */
-#define KINDS rk_generated_models
+/* the kernels generated from the model declarations (rk_models_gen.c, written at build time by gen_models.py),
+ * and those of models declared after the build, added at run time (rk_model_add: a kernel generated from a
+ * declaration and compiled into a library of its own). The added table is the one mutable static of the
+ * engine: it is written only by rk_model_add, which the binding calls with the interpreter's lock held and
+ * before any engine of that kind exists; engines keep their ops pointer, so an entry is never removed. */
+static const rk_model_ops *ADDED[RK_MAX_ADDED_KINDS + 1];
 
 const rk_model_ops *const *rk_model_kinds(void)
 {
-    return KINDS;
+    return rk_generated_models;
 }
 
 const rk_model_ops *rk_model_find(const char *kind)
 {
     const rk_model_ops *const *k;
+    int i;
     if (kind == NULL)
         return NULL;
-    for (k = KINDS; *k != NULL; k++) {
+    for (k = rk_generated_models; *k != NULL; k++) {
         if (strcmp((*k)->kind, kind) == 0 || strcmp((*k)->class_name, kind) == 0)
             return *k;
     }
+    for (i = RK_MAX_ADDED_KINDS - 1; i >= 0; i--) {        /* the latest declaration of a kind first */
+        if (ADDED[i] != NULL && (strcmp(ADDED[i]->kind, kind) == 0 || strcmp(ADDED[i]->class_name, kind) == 0))
+            return ADDED[i];
+    }
     return NULL;
+}
+
+rk_status rk_model_add(const rk_model_ops *ops, rk_error *err)
+{
+    const rk_model_ops *const *k;
+    int i;
+    if (ops == NULL || ops->kind == NULL || ops->class_name == NULL)
+        return rk_fail(err, RK_ERR_VALUE, "model kernel is missing its kind");
+    if (ops->n_dof < 1 || ops->n_dof > RK_MAX_DOF || ops->n_contacts < 1 || ops->n_contacts > RK_MAX_CONTACTS
+        || ops->n_params > RK_MAX_PARAMS || ops->n_initial > RK_MAX_INITIAL || ops->n_outputs > RK_MAX_OUTPUTS)
+        return rk_fail(err, RK_ERR_VALUE, "model '%s' exceeds the engine's limits (at most %d coordinates, %d "
+                       "contacts, %d parameters, %d initial values, %d outputs)", ops->kind, RK_MAX_DOF,
+                       RK_MAX_CONTACTS, RK_MAX_PARAMS, RK_MAX_INITIAL, RK_MAX_OUTPUTS);
+    for (k = rk_generated_models; *k != NULL; k++) {
+        if (strcmp((*k)->kind, ops->kind) == 0)
+            return rk_fail(err, RK_ERR_VALUE, "model kind '%s' is built into the engine; declare a new kind",
+                           ops->kind);
+    }
+    for (i = 0; i < RK_MAX_ADDED_KINDS; i++) {
+        if (ADDED[i] == ops)
+            return RK_OK;
+        if (ADDED[i] == NULL) {
+            ADDED[i] = ops;
+            return RK_OK;
+        }
+    }
+    return rk_fail(err, RK_ERR_VALUE, "too many models added at run time (at most %d)", RK_MAX_ADDED_KINDS);
+}
+
+void rk_model_kind_names(char *buf, size_t n)
+{
+    const rk_model_ops *const *k;
+    size_t pos = 0;
+    int i;
+    if (n == 0)
+        return;
+    buf[0] = '\0';
+    for (k = rk_generated_models; *k != NULL && pos < n; k++)
+        pos += (size_t)snprintf(buf + pos, n - pos, "%s'%s'", pos ? ", " : "", (*k)->kind);
+    for (i = 0; i < RK_MAX_ADDED_KINDS && ADDED[i] != NULL && pos < n; i++)
+        pos += (size_t)snprintf(buf + pos, n - pos, "%s'%s'", pos ? ", " : "", ADDED[i]->kind);
 }
 
 rk_status rk_model_init(rk_model *m, const rk_model_ops *ops, const double *params, int n_params,

@@ -205,8 +205,14 @@ static inline int rk_mode_sliding(const rk_model *m, int mode)
 /* ------------------------------------------------------------------------------------------ registry */
 /** The kernels, NULL-terminated (rk_model.c). */
 const rk_model_ops *const *rk_model_kinds(void);
-/** The kernel of a kind name ("rigid", "flexible") or Python class name; NULL if none. */
+/** The kernel of a kind name ("rigid", "flexible") or Python class name, built in or added; NULL if none. */
 const rk_model_ops *rk_model_find(const char *kind);
+/** Add the kernel of a model declared after the build (generated and compiled into a library of its own). Not
+ *  thread-safe: call it before any engine of that kind exists, from one thread (the binding holds the GIL).
+ *  A kind built into the engine cannot be replaced; adding a kind again makes the new kernel the one found. */
+rk_status rk_model_add(const rk_model_ops *ops, rk_error *err);
+/** The known kinds as "'rigid', 'flexible', ..." (for messages). */
+void rk_model_kind_names(char *buf, size_t n);
 /** Build an instance: ops->init plus rest_abscissae and the mode tables. */
 rk_status rk_model_init(rk_model *m, const rk_model_ops *ops, const double *params, int n_params,
                         rk_error *err);
