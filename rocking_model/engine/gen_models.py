@@ -291,15 +291,20 @@ class ModelCode:
         return out
 
     # ----------------------------------------------------------------------------------- emission
-    def _block(self, targets: list, indent: str = "    ") -> str:
-        """C statements assigning each (lhs, expr) after hoisting and common-subexpression elimination."""
+    def _block(self, targets: list, indent: str = "    ", keep: bool = False) -> str:
+        """C statements assigning each (lhs, expr) after hoisting and common-subexpression elimination. With
+        ``keep``, the sines and cosines computed by the previous blocks of the same scope are reused."""
+        if not keep:
+            self._scope = {}
         exprs = [self.D.hoist(self._canonical(sp.sympify(e))) for _, e in targets]
+        exprs = [e.xreplace(self._scope) for e in exprs]
         self._n_blocks = getattr(self, "_n_blocks", 0) + 1
         repl, red = sp.cse(exprs, symbols=sp.numbered_symbols(f"t{self._n_blocks}_"), optimizations="basic")
         pr = _Printer(self._names_all())
         lines = [f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};" for s, e in repl]
         for (lhs, _), e in zip(targets, red):
             lines.append(f"{indent}{lhs} = {pr.doprint(e)};")
+        self._scope.update({e: s for s, e in repl if isinstance(e, (sp.sin, sp.cos))})
         return "\n".join(lines)
 
     def _canonical(self, e):
@@ -573,9 +578,9 @@ class ModelCode:
             if CLOSED[mode]:
                 rdd = f"    double rdd[{max(k, 1)}];\n    (void)rdd;\n" + self._with_names(names, lambda md=md: self._rdd_code(md))
                 targets = [(f"g[{c}]", md["lam"][c] / Fs) for c in CLOSED[mode]]
-                forces = self._with_names(names, lambda t=targets: self._block(t))
+                forces = self._with_names(names, lambda t=targets: self._block(t, keep=True))
                 tot = self._with_names(names, lambda md=md: self._block(
-                    [("totals[0]", md["totals"][0]), ("totals[1]", md["totals"][1])], "        "))
+                    [("totals[0]", md["totals"][0]), ("totals[1]", md["totals"][1])], "        ", keep=True))
                 lines.insert(0, rdd + "\n" + forces)
                 lines.append(f"    if (totals != NULL) {{\n{tot}\n    }}")
             cases[mode] = "\n".join(lines)
@@ -592,7 +597,7 @@ class ModelCode:
                 names = self._y_names(md)
                 lines.append(self._with_names(names, lambda md=md: self._rdd_code(md)))
                 lines.append(self._with_names(names, lambda md=md: self._block(
-                    [(f"lam[{c}]", md["lam"][c]) for c in CLOSED[mode]])))
+                    [(f"lam[{c}]", md["lam"][c]) for c in CLOSED[mode]], keep=True)))
             cases[mode] = "\n".join(lines)
         s.append(f"static void {P}_contact_forces(const rk_model *m, int mode, const double *q, const double *v, "
                  "double ag, double ag_v, double *lam)\n{\n    (void)q; (void)v; (void)ag; (void)ag_v;\n"
