@@ -93,10 +93,10 @@ def test_contact_tolerances_shared_and_checked():
     model = RigidBlock(b=0.2, h=1.0)
     ed = Simulator(model, "event_driven", tolerances=tol).integrator
     mj = Simulator(model, "moreau_jean", tolerances=tol).integrator
-    assert ed.gap_tol == 1e-8 * model.length_scale and ed.event_tol == 1e-9
-    assert mj.gap_margin == 1e-11 * model.length_scale
-    default_ed = Simulator(model, "event_driven").integrator
-    assert default_ed.gap_tol == ContactTolerances().gap * model.length_scale
+    assert ed.tolerances is tol and mj.tolerances is tol
+    scaled = tol.for_model(model)
+    assert scaled.gap == 1e-8 * model.length_scale and scaled.step_gap == 1e-11 * model.length_scale
+    assert Simulator(model, "event_driven").integrator.tolerances == ContactTolerances()
     with pytest.raises(ValueError, match=r"tolerances.gap = -1.0 is out of range; allowed range \(0, 1\)"):
         ContactTolerances(gap=-1.0)
     with pytest.raises(ValueError, match=r"tolerances.sub_samples = 1 is out of range"):
