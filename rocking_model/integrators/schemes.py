@@ -23,6 +23,46 @@ def _flat_rows(flat, n_dof) -> list:
     return [flat[i] for i in range(0, len(flat), w)]
 
 
+# (registered in the order of their codes: the allowed values are listed in that order)
+@register_scheme
+class MoreauJean(Integrator):
+    """Declaration of the Moreau-Jean time-stepper (run by rk_mj.c): steps of at most ``dt_max`` [s] and at
+    most ``model.step_limit`` (0.25/omega for the flexible oscillator)."""
+
+    name = "moreau_jean"
+    code = 0
+    summary = "Moreau-Jean time-stepping: one velocity-level LCP per step, order 1"
+    STATE_KEYS = ("t", "q", "v", "mode", "closed", "impacts", "overturned", "n_steps", "impact_times",
+                  "friction_demand", "painleve")
+
+    @staticmethod
+    def settings(model, options) -> dict:
+        return {"theta": check_real("theta", options.theta, lo=0.5, hi=1.0),
+                "dt_max": min(options.dt_max or DT_DEFAULT, model.step_limit), "tolerances": options.tolerances}
+
+    @staticmethod
+    def read_state(model, state, impact_log_size) -> dict:
+        n = model.n_dof
+        t = state_float(state, "t")
+        q = state_floats(state, "q", length=n)
+        v = state_floats(state, "v", length=n)
+        mode = state_int(state, "mode", 0, model.n_modes - 1)
+        nc = model.n_contacts
+        closed = state_ints(state, "closed", lo=0, hi=nc - 1, max_len=nc)
+        if closed != sorted(set(closed)):
+            raise ValueError(f"state field 'closed' = {closed!r} must list distinct corners in increasing order")
+        if model.closed_of(model.mode_code(mode)) != tuple(closed):
+            raise ValueError(f"state field 'mode' = {mode} does not match 'closed' = {closed!r}; expected "
+                             f"one of the modes with these closed corners, e.g. {int(model.mode_of(closed))}")
+        impacts = state_int(state, "impacts")
+        return {"t": t, "q": q, "v": v, "mode": mode, "closed": closed, "impacts": impacts,
+                "overturned": state_bool(state, "overturned"), "n_steps": state_int(state, "n_steps"),
+                "impact_times": check_times(state, "impact_times", state_floats(
+                    state, "impact_times", max_len=impact_log_size), t, impacts),
+                "friction_demand": state_float(state, "friction_demand", lo=0.0),
+                "painleve": state_int(state, "painleve")}
+
+
 @register_scheme
 class EventDriven(Integrator):
     """Declaration of the event-driven scheme (run by rk_ed.c)."""
@@ -62,42 +102,3 @@ class EventDriven(Integrator):
         out["friction_demand"] = state_float(state, "friction_demand", lo=0.0)
         out["painleve"] = state_int(state, "painleve")
         return out
-
-
-@register_scheme
-class MoreauJean(Integrator):
-    """Declaration of the Moreau-Jean time-stepper (run by rk_mj.c): steps of at most ``dt_max`` [s] and at
-    most ``model.step_limit`` (0.25/omega for the flexible oscillator)."""
-
-    name = "moreau_jean"
-    code = 0
-    summary = "Moreau-Jean time-stepping: one velocity-level LCP per step, order 1"
-    STATE_KEYS = ("t", "q", "v", "mode", "closed", "impacts", "overturned", "n_steps", "impact_times",
-                  "friction_demand", "painleve")
-
-    @staticmethod
-    def settings(model, options) -> dict:
-        return {"theta": check_real("theta", options.theta, lo=0.5, hi=1.0),
-                "dt_max": min(options.dt_max or DT_DEFAULT, model.step_limit), "tolerances": options.tolerances}
-
-    @staticmethod
-    def read_state(model, state, impact_log_size) -> dict:
-        n = model.n_dof
-        t = state_float(state, "t")
-        q = state_floats(state, "q", length=n)
-        v = state_floats(state, "v", length=n)
-        mode = state_int(state, "mode", 0, model.n_modes - 1)
-        nc = model.n_contacts
-        closed = state_ints(state, "closed", lo=0, hi=nc - 1, max_len=nc)
-        if closed != sorted(set(closed)):
-            raise ValueError(f"state field 'closed' = {closed!r} must list distinct corners in increasing order")
-        if model.closed_of(model.mode_code(mode)) != tuple(closed):
-            raise ValueError(f"state field 'mode' = {mode} does not match 'closed' = {closed!r}; expected "
-                             f"one of the modes with these closed corners, e.g. {int(model.mode_of(closed))}")
-        impacts = state_int(state, "impacts")
-        return {"t": t, "q": q, "v": v, "mode": mode, "closed": closed, "impacts": impacts,
-                "overturned": state_bool(state, "overturned"), "n_steps": state_int(state, "n_steps"),
-                "impact_times": check_times(state, "impact_times", state_floats(
-                    state, "impact_times", max_len=impact_log_size), t, impacts),
-                "friction_demand": state_float(state, "friction_demand", lo=0.0),
-                "painleve": state_int(state, "painleve")}
