@@ -2324,10 +2324,6 @@ FAMILIES = {
              "not provided: fmi2Error; the queries: fmi2OK (fmi2Discard for a status FMI 2.0 does not define)",
              "fmi2DoStepStatus is fmi2Discard and fmi2Terminated true after a discard, "
              "fmi2LastSuccessfulTime the slave's time; \"2.0\", \"default\""),
-    "report": ("a failed adaptive step; a contact LCP without an exact solution",
-               "fmi2Discard; fmi2Warning",
-               "the failed step is refused with the state kept and a message; the inexact solve is reported as a "
-               "warning and the step done"),
     "instantiate": ("`fmi2Instantiate` with a wrong GUID, `fmi2ModelExchange`, a resource location NULL, not a "
                     "local file URI, on a remote host, missing or badly escaped; `file:/…` and "
                     "`file://localhost/…`",

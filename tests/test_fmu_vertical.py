@@ -487,8 +487,8 @@ def test_source_drives_both_components_through_the_fmpy_master(fmus, built_fmus,
     for out in ("phi", "y", "impacts"):
         np.testing.assert_allclose(res[f"block.{out}"], alone[:, names.index(out)], rtol=0, atol=ROUNDOFF,
                                    err_msg=out)
-    assert_close(alone, run_api(RIGID, steps, "c", names), "the block FMU vs the API", names)
-    flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], "c", names)
+    assert_close(alone, run_api(RIGID, steps, names), "the block FMU vs the API", names)
+    flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], names)
     assert 0.01 < np.abs(res["block.phi"]).max() < 0.5 * RigidBlock().alpha and res["block.impacts"][-1] >= 1
     assert np.all(flat[:, names.index("phi")] == 0.0)                  # without ag_v: no uplift
 
