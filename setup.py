@@ -1,10 +1,9 @@
 """Build of the compiled engine (issue 21): the extension module rocking_model._engine from the C99 sources
-in rocking_model/engine/src (every *.c there: the parts add their files without touching this one), the
-parts' test entry points rocking_model/engine/py/*.c and the module glue rocking_model/engine/_engine.c. Everything else is declared in pyproject.toml.
+in rocking_model/engine/src (every *.c there) and the module glue rocking_model/engine/_engine.c. Everything else is declared in pyproject.toml.
 
 Flags: portable (-std=c99 -O3, no -march=native) and -ffp-contract=off, so that the compiler does not fuse
-a*b + c into an FMA: the C engine must round like the Python reference (rocking_model/engine/DESIGN.md,
-"Numerics"). -O3 rather than -O2: 6 % fewer instructions per run on the benchmark's pulse scene, the same bits
+a*b + c into an FMA: the results must not depend on the compiler's choice of contraction (the goldens are
+recorded bit for bit; rocking_model/engine/DESIGN.md, "Numerics"). -O3 rather than -O2: 6 % fewer instructions per run on the benchmark's pulse scene, the same bits
 (without -ffast-math the compiler may not reassociate, so its vector code computes what the scalar code does).
 -fvisibility=hidden: the engine's functions are called directly rather than through the PLT (the module exports
 PyInit__engine alone, as the self-contained FMU's binary exports the fmi2 functions alone): 1 % fewer
@@ -27,9 +26,8 @@ def package_version() -> str:
     return match.group(1) if match else "unknown"
 
 
-# generated sources: rocking_model/engine/gen_rk.py (part C) writes src/rk_tableaux.h from the tableaux of
-# rocking_model/integrators/dop853.py and dopri5.py (read with ast: no numpy in the build environment), so that
-# the C Runge-Kutta pairs and the Python ones have one source of truth
+# generated sources: rocking_model/engine/gen_rk.py writes src/rk_tableaux.h from the tableaux of
+# rocking_model/engine/tableaux.py (read with ast: no numpy in the build environment)
 GENERATOR = os.path.join(HERE, "rocking_model", "engine", "gen_rk.py")
 if os.path.exists(GENERATOR):
     runpy.run_path(GENERATOR, run_name="__main__")
@@ -40,8 +38,6 @@ sys.path.insert(0, HERE)
 runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"), run_name="__main__")
 
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
-#: the test entry points of the parts (rocking_model/engine/py/py_*.c), linked into the same module
-TEST_SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "py", "*.c")))
 if sys.platform == "win32":
     CFLAGS = ["/O2", "/fp:precise"]
     LIBS = []
@@ -53,7 +49,7 @@ setup(
     ext_modules=[
         Extension(
             "rocking_model._engine",
-            sources=SOURCES + TEST_SOURCES + [os.path.join("rocking_model", "engine", "_engine.c")],
+            sources=SOURCES + [os.path.join("rocking_model", "engine", "_engine.c")],
             include_dirs=[os.path.join("rocking_model", "engine")],
             define_macros=[("RK_ENGINE_VERSION_STRING", '"%s"' % package_version())],
             depends=sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.h"))),

@@ -76,7 +76,7 @@ def _outputs(res) -> dict:
     return out
 
 
-def package_result(scene: Scene, scheme: str, engine: str = "python", **settings):
+def package_result(scene: Scene, scheme: str, engine: str = "c", **settings):
     """One run of ``simulate`` (the public API, the model built as a user builds it) on the scene's grid, on the
     Python engine (the reference implementation) or the compiled one (``engine="c"``): its `Result`. This is
     what the benchmark times (`timed(..., post=outputs_of)`)."""
@@ -88,7 +88,7 @@ def package_result(scene: Scene, scheme: str, engine: str = "python", **settings
 outputs_of = _outputs
 
 
-def run_package(scene: Scene, scheme: str, engine: str = "python", **settings) -> dict:
+def run_package(scene: Scene, scheme: str, engine: str = "c", **settings) -> dict:
     """`package_result` as the benchmark's dict of arrays."""
     return _outputs(package_result(scene, scheme, engine, **settings))
 

@@ -638,7 +638,7 @@ def write_report(path: Path, plot_name: str, info: dict, ov: dict, wp: dict, qui
           + ("; ".join(bumps) if bumps else "none here") + ".",
           "- Event-driven with a finite mu integrates the sliding phases with generic numpy code (the sliding "
           "equations of motion assembled and solved as small linear systems at every right-hand-side "
-          "evaluation, `rocking_model/models/sliding.py`), which is slower per step than the closed-form "
+          "evaluation, in the Python reference engine these figures were measured on), which is slower per step than the closed-form "
           "right-hand sides of the sticking phases (rocking, full contact) that mu = inf uses; the sliding "
           f"scenes' event-driven times above include that cost{per_step}. Moreau-Jean with a finite mu solves the "
           "frictional contact LCP (open / stick / slide forward / slide back per contact) at each step, more "

@@ -25,7 +25,7 @@ def rss_mib() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def main(minutes: float = 10.0, scheme: str = "event_driven", engine: str = "python") -> dict:
+def main(minutes: float = 10.0, scheme: str = "event_driven", engine: str = "c") -> dict:
     from rocking_model import RigidBlock, Simulator
     from rocking_model.ground_motion import ConstantMotion
 
@@ -59,5 +59,5 @@ if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     minutes = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
     scheme = sys.argv[2] if len(sys.argv) > 2 else "event_driven"
-    engine = sys.argv[3] if len(sys.argv) > 3 else "python"
+    engine = sys.argv[3] if len(sys.argv) > 3 else "c"
     print(json.dumps(main(minutes, scheme, engine)))

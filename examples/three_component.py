@@ -30,8 +30,6 @@ from rocking_model.records import read_at2  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 RECORD = ROOT / "examples" / "records" / "synthetic_2017.AT2"
 VERTICAL = ROOT / "examples" / "records" / "synthetic_2017-UP.AT2"
-#: the default (compiled) engine; "python" runs the reference engine, which gives the same figure
-ENGINE = "c"
 
 
 def run(t_end: float = 35.0, out: Path = ROOT / "docs" / "three_component.png",
@@ -41,8 +39,8 @@ def run(t_end: float = 35.0, out: Path = ROOT / "docs" / "three_component.png",
     rec = read_at2(RECORD, vertical=VERTICAL)          # one Record: ag and its vertical component ag_v
     models = {"rigid block b = 0.4 m, h = 2.0 m": RigidBlock(b=0.4, h=2.0),
               "flexible oscillator (default specimen)": FlexibleOscillator()}
-    runs = {name: (simulate(m, rec.horizontal, t_end, output_interval=output_interval, engine=ENGINE),
-                   simulate(m, rec, t_end, output_interval=output_interval, engine=ENGINE))
+    runs = {name: (simulate(m, rec.horizontal, t_end, output_interval=output_interval),
+                   simulate(m, rec, t_end, output_interval=output_interval))
             for name, m in models.items()}
 
     fig, ax = plt.subplots(1 + 2 * len(models), 1, figsize=(9, 12), sharex=True,

@@ -4,8 +4,7 @@ Thin wrapper: the FMI plumbing lives in `rocking_model.fmi`, the physics and eve
 unit, range and description in `rocking_model.models.flexible_oscillator` (defaults: its representative
 laboratory specimen). Build with ``python build_fmu.py`` (writes dist/FlexibleRockingOscillator.fmu). Unique
 module name on purpose.
-It runs the compiled engine (one call into C per doStep); ROCKING_FMU_ENGINE=python selects the Python
-reference engine (rocking_model.fmi.slave).
+It runs the compiled engine (one call into C per doStep).
 """
 from rocking_model.fmi import DefaultExperiment, ModelSlave
 from rocking_model.models import FlexibleOscillator

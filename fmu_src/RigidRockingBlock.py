@@ -4,8 +4,7 @@ Thin wrapper: the FMI plumbing lives in `rocking_model.fmi`, the physics and eve
 unit, range and description in `rocking_model.models.rigid_block`. Build with ``python build_fmu.py`` (writes
 dist/RigidRockingBlock.fmu). The module name is unique on purpose: two FMUs whose scripts share a module name
 cannot be loaded in the same process.
-It runs the compiled engine (one call into C per doStep); ROCKING_FMU_ENGINE=python selects the Python
-reference engine (rocking_model.fmi.slave).
+It runs the compiled engine (one call into C per doStep).
 """
 from rocking_model.fmi import DefaultExperiment, ModelSlave
 from rocking_model.models import RigidBlock

@@ -322,11 +322,6 @@ def run_case(case: dict) -> dict:
     return row
 
 
-#: the engine the cases run on (`Simulator`'s ``engine``): the compiled one; the benchmark sets "python" for its
-#: reference row
-ENGINE = "c"
-
-
 def _simulate_case(case: dict) -> dict:
     """The result fields of one case (raises on a bad case; `run_case` records it)."""
     import numpy as np
@@ -342,7 +337,7 @@ def _simulate_case(case: dict) -> dict:
     if case.get("dt_max") is not None and not math.isnan(float(case["dt_max"])):
         kw["dt_max"] = case["dt_max"]
     res = simulate(model, case_motion(case), case["t_end"], scheme=case["scheme"],
-                   output_interval=case["output_interval"], engine=ENGINE, **kw)
+                   output_interval=case["output_interval"], **kw)
     phi = np.abs(res.phi)
     over = np.asarray(res.overturned, dtype=bool)
     return dict(alpha=alpha, p=p, max_abs_phi=float(phi.max()),

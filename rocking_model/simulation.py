@@ -19,7 +19,7 @@ from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
 from .validation import MAX_STEPS, WorkLimitError, check_choice, check_real, check_state_keys, state_int, state_str
 
 
-#: the engine of `Simulator` and `simulate` unless told otherwise (the FMUs read ROCKING_FMU_ENGINE)
+#: the engine of `Simulator` and `simulate`: the compiled one, the only one (``engine="c"`` is accepted)
 DEFAULT_ENGINE = "c"
 
 class SolverWarning(UserWarning):
@@ -113,9 +113,8 @@ class Simulator:
         answer, are only kept in ``last_reports`` for the caller: the FMUs log them), or "ignore".
         ``last_reports`` keeps the reports of the last advance in every case.
     t0 : [s] start time.
-    engine : "c" (default: the compiled engine of `rocking_model.engine`) or "python" (the reference
-        implementation in Python, which the compiled engine is pinned to by tests: the same algorithms, steps
-        and results to round-off, the same state format both ways; the compiled one is 10-100x faster).
+    engine : "c", the compiled engine of `rocking_model.engine` (the only one; the keyword is kept for
+        existing callers).
     **initial : initial state, passed to ``model.initial_state`` (phi_0 [rad], phi_dot_0 [rad/s], and
         u_0 [m], u_dot_0 [m/s] for the flexible oscillator).
 
@@ -129,9 +128,8 @@ class Simulator:
     `get_state` / `set_state` save and load the state as a flat dict of plain values.
     """
 
-    #: "python" or "c" (set by __init__; this class default reads simulators pickled before the engine switch,
-    #: which were all Python)
-    engine = "python"
+    #: the engine that runs the simulation: "c", the compiled one
+    engine = "c"
 
     def __init__(self, model: RockingModel, scheme="event_driven", *, dt_max: float | None = None,
                  tolerance: float = 1e-8, theta: float = 0.5, zeno_tol: float = ZENO_TOL, t0: float = 0.0,
@@ -163,11 +161,11 @@ class Simulator:
             raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
         self.on_report = check_choice("on_report", on_report, _ON_REPORT)
         options = SolverOptions.of(dt, tolerance, theta, zeno_tol, method, impact_log_size, tolerances)
+        if isinstance(engine, str) and engine == "python":
+            raise ValueError("engine = 'python' is not supported: the Python reference engine was removed; "
+                             "allowed values: 'c' (the compiled engine, the default)")
         self.engine = check_choice("engine", engine, ENGINES)
-        if self.engine == "c":
-            self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)
-        else:
-            self.integrator = SCHEME_CLASSES[self.scheme].from_options(model, mode, q, v, t0, options)
+        self.integrator = CompiledIntegrator.from_options(model, mode, q, v, t0, options, scheme=self.scheme)
         # the attribute replaced (never mutated) whenever the state changes: caches key on its identity
         self._token = self.integrator.STATE_TOKEN
         #: `Report`s of the last advance
@@ -228,7 +226,7 @@ class Simulator:
         exactly as before the call."""
         if ag_v is not None:                  # (the per-step path without a vertical component stays a test)
             ag_v = _vertical_or_none(ag_v)
-        if self.engine == "c" and ag_v is None and type(ag) in _NUMBERS and type(t_end) in _NUMBERS \
+        if ag_v is None and type(ag) in _NUMBERS and type(t_end) in _NUMBERS \
                 and self.on_report != "raise" \
                 and (type(ag) is not np.float64 or math.isfinite(ag)) \
                 and (type(t_end) is not np.float64 or math.isfinite(t_end)):
@@ -278,7 +276,7 @@ class Simulator:
         if ag_v is not None:                  # (the per-step path without a vertical component stays a test)
             ag_v = _vertical_or_none(ag_v)
         integ = self.integrator
-        if self.engine == "c" and isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1:
+        if isinstance(times, np.ndarray) and times.dtype == np.float64 and times.ndim == 1:
             # the compiled engine reads the array as is: checked at once (the first bad value named as below)
             arr = times
             bad = ~(np.isfinite(arr) & (arr >= integ.t))
@@ -299,7 +297,7 @@ class Simulator:
         hold (compiled engine, on_report not "raise"): gm(t_k) (and gm.vertical(t_k)) held over each interval
         [t_k, t_k+1), t_0 the current time, as one `advance` per interval under those numbers does."""
         integ = self.integrator
-        if self.engine == "c" and self.on_report != "raise":
+        if self.on_report != "raise":
             # the lean path, as advance's: the engine checkpoints, checks the outputs and restores itself on any
             # error (rk_engine_sample); the same exceptions and reports as _guarded
             try:
@@ -405,20 +403,7 @@ class Simulator:
 
         Once overturned the outputs are those of the pose reached at |phi| = pi/2 at rest: every velocity 0,
         energy the potential (and strain) energy of that pose relative to rest; they no longer change."""
-        integ = self.integrator
-        if self.engine == "c":
-            return integ._engine.output_dict()    # computed on demand by the engine (cached by its state)
-        cached = self._out
-        if cached is not None and cached[0] is getattr(integ, self._token):
-            out = dict(cached[1])         # computed (and checked finite) at the end of the last advance
-        else:
-            out = integ.outputs()
-        out["contact"] = integ.contact_code
-        out["impacts"] = int(integ.impacts)
-        out["overturned"] = bool(integ.overturned)
-        out["friction_demand"] = float(integ.friction_demand)
-        out["painleve"] = int(integ.painleve)
-        return out
+        return self.integrator._engine.output_dict()    # computed on demand by the engine (cached by its state)
 
     # ------------------------------------------------------------------ plain-data state
     def get_state(self) -> dict:
@@ -550,12 +535,11 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         # one pass through the output grid (the event-driven scheme reads its dense output there); the work
         # budget applies between consecutive output samples
         # (the grid is finite and increasing from t0 by construction: the compiled engine reads it unchecked)
-        modes, values, impacts, overturned = (sim._sample(times[1:], gm) if sim.engine == "c"
-                                              else sim.sample(times[1:], gm))
+        modes, values, impacts, overturned = sim._sample(times[1:], gm)
         values["contact"] = modes
         values["impacts"] = impacts
         values["overturned"] = overturned
-    elif sim.engine == "c" and sim.on_report != "raise":
+    elif sim.on_report != "raise":
         # one call into C: the advances of the loop below (ag(t_k) held over each output interval), in C
         modes, values, impacts, overturned = sim._sample(times[1:], gm, hold=True)
         # (the keys in the order of Simulator.outputs(), as the loop below records them)
@@ -575,7 +559,7 @@ def simulate(model: RockingModel, ground_motion=None, t_end: float = 10.0, *, sc
         values = {name: np.array([r[name] for r in records]) for name in records[0]}
     integ = sim.integrator
     # (the compiled engine's impact times read from it directly: the same list sim.impact_times returns)
-    impact_times = integ._engine.impact_times if sim.engine == "c" else sim.impact_times
+    impact_times = integ._engine.impact_times
     return Result(t=times, values=values, impact_times=np.array(impact_times), scheme=sim.scheme,
                   n_steps=integ.n_steps)
 

@@ -21,7 +21,7 @@ Why the two schemes use different values for what looks like one notion:
   theta-method's force average; ``step_rest_velocity`` = 1e-9 sqrt(g L) separates that from an approach
   that is an impact (the slowest impact of a rocking block at rest-tilt energies is some 1e-4 sqrt(g L)).
 
-The contact LCPs (`rocking_model.lcp`, through `rocking_model.contact`) of both schemes take the user's
+The contact LCPs (the engine's `rk_lcp.c`, through `rk_contact.c`) of both schemes take the user's
 ``lcp_exact`` and ``lcp_hint``: the event-driven scheme's impact LCP (and its Zeno re-solves), uplift LCP
 (`contact.next_mode`, the mode after every event) and Painleve impact LCP; Moreau-Jean's step LCP.
 ``lcp_exact`` tells an exact solution (an inexact one is reported, `inexact_contact`; with mu = inf the

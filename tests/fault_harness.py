@@ -2121,102 +2121,6 @@ add("misc/rigid/status-queries", status_queries, kinds=("status",),
     desc="fmi2Get*Status after a discarded step and after its retry")
 
 
-def _bundled(module: str):
-    """The modules ``module`` (e.g. "integrators.rk") of the FMUs' bundled packages loaded in this process."""
-    return [m for name, m in list(sys.modules.items())
-            if name.startswith("rocking_model_") and name.endswith("." + module)]
-
-
-class _PythonEngine:
-    """Instances initialized inside run the Python reference engine (ROCKING_FMU_ENGINE=python, read when the
-    FMU builds its simulator): the cases that force a failure into the bundled Python stepper or solvers. The
-    compiled engine's handling of the same reports is tested at its boundary in tests/test_fmu_engine.py."""
-
-    def __enter__(self):
-        self.previous = os.environ.get("ROCKING_FMU_ENGINE")
-        os.environ["ROCKING_FMU_ENGINE"] = "python"
-
-    def __exit__(self, *exc):
-        if self.previous is None:
-            os.environ.pop("ROCKING_FMU_ENGINE", None)
-        else:
-            os.environ["ROCKING_FMU_ENGINE"] = self.previous
-
-
-def failed_step(h: Harness, fmu: str):
-    """A Runge-Kutta step accepted only at the smallest step size with its error above tolerance (forced here by
-    flagging the bundled stepper once, issue 14): the FMU refuses the step (fmi2Discard, a message naming the
-    failed step), the state is kept, and the retry goes on like a control instance."""
-    s = h.instance(fmu)
-    ctrl = h.instance(fmu, "control")
-    with _PythonEngine():
-        for inst in (s, ctrl):
-            inst.init(phi_0=0.05)
-    mods = _bundled("integrators.rk")
-    h.check("status", "the FMU's bundled stepper module is loaded in this process", bool(mods), None)
-    if not mods:
-        return
-    originals = [(m, m.ExplicitRK.step) for m in mods]
-    state = {"armed": True}
-
-    def flagged(original):
-        def step(self, t_bound):
-            original(self, t_bound)
-            if state["armed"]:
-                state["armed"] = False
-                self.failed, self.failure = True, "DOP853: forced failure (fault case)"
-        return step
-    for m, original in originals:
-        m.ExplicitRK.step = flagged(original)
-    try:
-        refusal(h, s, "a failed Runge-Kutta step", lambda: s.step(), status=DISCARD,
-                fragments=("refused", "failed step", "forced failure (fault case)"), control=ctrl)
-    finally:
-        for m, original in originals:
-            m.ExplicitRK.step = original
-
-
-for _fmu in (RIGID, FLEX):
-    add(f"report/{SHORT[_fmu]}/failed-step", failed_step, fmu=_fmu,
-        desc=f"{_fmu}: a failed adaptive step is refused (fmi2Discard), the state kept")
-
-
-def inexact_contact_is_a_warning(h: Harness):
-    """A contact LCP without an exact solution is reported as a warning (fmi2Warning with the report), not
-    passed silently and not refused. Since the mu -> inf limit filled the hole of the sticking law (issue 15)
-    no scene of the models has one: the bundled contact solvers are made to flag their solutions here."""
-    s = h.instance(RIGID)
-    with _PythonEngine():
-        s.init(phi_0=0.05)
-    mods = _bundled("contact")
-    h.check("status", "the FMU's bundled contact module is loaded in this process", bool(mods), None)
-    if not mods:
-        return
-    import dataclasses
-    originals = [(m, name, getattr(m, name)) for m in mods for name in ("solve_contact_lcp", "solve_friction_lcp")]
-
-    def flagged(original):
-        def solve(*args, **kwargs):
-            return dataclasses.replace(original(*args, **kwargs), exact=False, violation=0.5)
-        return solve
-    for m, name, original in originals:
-        setattr(m, name, flagged(original))
-    try:
-        mark = h.mark()
-        statuses = [s.step(0.01) for _ in range(100)]     # rocks and impacts within the first second
-    finally:
-        for m, name, original in originals:
-            setattr(m, name, original)
-    h.check("status", "no step refused or failed", all(st in (OK, WARNING) for st in statuses), sorted(set(statuses)))
-    h.check("status", "the steps with an inexact contact solve answer fmi2Warning", WARNING in statuses, None)
-    h.expect_log("the warning names the inexact contact solve", mark, s,
-                 ("inexact contact report", "has no exact solution"), min_status=WARNING)
-
-
-add("report/rigid/inexact-contact", inexact_contact_is_a_warning, kinds=("status", "message"),
-    desc="RigidRockingBlock: an inexact contact solve is a warning (fmi2Warning), the step done")
-
-
 def info_functions(h: Harness):
     s = h.instance(RIGID)
     h.check("status", "fmi2GetVersion = 2.0", s.fmu.getVersion() == "2.0", s.fmu.getVersion())
@@ -2420,10 +2324,6 @@ FAMILIES = {
              "not provided: fmi2Error; the queries: fmi2OK (fmi2Discard for a status FMI 2.0 does not define)",
              "fmi2DoStepStatus is fmi2Discard and fmi2Terminated true after a discard, "
              "fmi2LastSuccessfulTime the slave's time; \"2.0\", \"default\""),
-    "report": ("a failed adaptive step; a contact LCP without an exact solution",
-               "fmi2Discard; fmi2Warning",
-               "the failed step is refused with the state kept and a message; the inexact solve is reported as a "
-               "warning and the step done"),
     "instantiate": ("`fmi2Instantiate` with a wrong GUID, `fmi2ModelExchange`, a resource location NULL, not a "
                     "local file URI, on a remote host, missing or badly escaped; `file:/…` and "
                     "`file://localhost/…`",
@@ -2556,8 +2456,6 @@ _PY_PAYLOAD = ("it edits the pythonfmu FMU's own state payload (a field of its J
                "(refused there as a bad header or a CRC mismatch): the state cases that apply to any format "
                "(pickles, random, short, empty, truncated, padded, versions, 2 MiB, another FMU's state, "
                "flipped bytes) run on it")
-_PY_MODULE = ("it forces the failure by patching the FMU's bundled Python module (the stepper or the contact "
-              "solver) in this process; the self-contained FMU has no Python module to patch")
 #: cases (id or id prefix) that do not apply to the self-contained FMUs, with the reason
 STANDALONE_NA: Dict[str, str] = {
     **{f"badstate/{f}/{w}": _PY_PAYLOAD for f in ("rigid", "flex")
@@ -2565,9 +2463,6 @@ STANDALONE_NA: Dict[str, str] = {
                  "initialized-string", "value-wrong-type", "value-missing", "extra-key", "signature",
                  "pending-huge", "array-length", "array-wrong-type", "mode=10", "negative-impacts",
                  "negative-n_steps", "sim-nan")},
-    "report/rigid/failed-step": _PY_MODULE,
-    "report/flex/failed-step": _PY_MODULE,
-    "report/rigid/inexact-contact": _PY_MODULE,
 }
 
 

@@ -2,8 +2,7 @@
 
 Issue 14 restructures the package (contact states per corner, declared contracts, one set of tolerances,
 event handling as pure functions) without changing a single number. This module runs every benchmark scene
-(`benchmarks/scenes.py`, full length) on both engines (the Python reference, and the compiled one with `@c`
-after the run name), with both schemes and both Runge-Kutta methods, plus stepwise and
+(`benchmarks/scenes.py`, full length) on the compiled engine, with both schemes and both Runge-Kutta methods, plus stepwise and
 zero-order-hold runs as the FMUs do them, and the FMUs' own cross-check runs through fmpy, and compares
 every output with the recording in ``tests/data/golden.npz``.
 
@@ -56,28 +55,12 @@ def _pack(result) -> dict:
     return out
 
 
-#: the engines whose library runs are recorded, and the suffix of their run names: the Python reference
-#: (its recording predates the compiled engine) and the compiled engine, the default (`@c`)
-ENGINES = (("python", ""), ("c", "@c"))
-
-
 def library_runs() -> dict:
-    """{run name: {output name: array}} of the Python API runs, on every engine of `ENGINES`."""
-    runs = {}
-    for engine, suffix in ENGINES:
-        runs.update({name + suffix: arrays for name, arrays in _library_runs(engine).items()})
-    return runs
-
-
-def _library_runs(engine: str) -> dict:
-    from functools import partial
-
+    """{run name: {output name: array}} of the Python API runs."""
     from scenes import flexible_scenes, rigid_scenes
     from rocking_model import Simulator, simulate
     from rocking_model.ground_motion import ConstantMotion, as_ground_motion
 
-    simulate = partial(simulate, engine=engine)                  # noqa: F811
-    Simulator = partial(Simulator, engine=engine)                # noqa: F811
     runs = {}
     for s in rigid_scenes() + flexible_scenes():
         for label, scheme, kw in SETTINGS:
@@ -128,7 +111,7 @@ def flatten(runs: dict) -> dict:
 
 
 def is_smooth(key: str) -> bool:
-    run = key.split(":", 1)[0].split("@", 1)[0]
+    run = key.split(":", 1)[0]
     scene, label = run.split("/", 1)
     return scene in SMOOTH_SCENES and label != "stepwise"
 

@@ -1,5 +1,5 @@
 """The C engine's public API through Python (issue 21, part E): ground motions pinned to ground_motion.py, the
-Engine type, its errors, state round trips C <-> Python (both schemes), checkpoint / rollback, snapshots,
+Engine type, its errors, state round trips (both schemes), checkpoint / rollback, snapshots,
 bounded logs, and Simulator(engine=...)."""
 import math
 import pickle
@@ -115,30 +115,26 @@ def test_bad_motion_specs_are_clear_errors():
 # ---------------------------------------------------------------------------------------------- Engine, errors
 def test_engine_type_reports_what_is_missing_or_runs():
     params = [float(getattr(RigidBlock(), p.name)) for p in RigidBlock.parameters()]
-    try:
-        eng = _engine.Engine("rigid", params, [0.05, 0.0], scheme="moreau_jean")
-    except NotImplementedError as exc:
-        assert "not implemented yet" in str(exc) and 'engine="python"' in str(exc)
-        return
+    eng = _engine.Engine("rigid", params, [0.05, 0.0], scheme="moreau_jean")
     assert eng.output_names == tuple(p.name for p in RigidBlock.OUTPUTS)
     assert eng.t == 0.0 and eng.n_dof == 3 and eng.model_class == "RigidBlock"
 
 
 def test_unknown_engine_is_refused_with_the_allowed_values():
-    with pytest.raises(ValueError, match="engine = 'fortran' is not supported; allowed values: 'c', 'python'"):
+    with pytest.raises(ValueError, match="engine = 'fortran' is not supported; allowed values: 'c'"):
         Simulator(RigidBlock(), engine="fortran")
+    with pytest.raises(ValueError, match="engine = 'python' is not supported: the Python reference engine was "
+                                         "removed"):
+        Simulator(RigidBlock(), engine="python")
 
 
-def test_engine_c_is_the_default_and_agrees_with_python():
+def test_engine_c_is_the_default_and_the_keyword_changes_nothing():
     a = Simulator(RigidBlock(), phi_0=0.1)
-    b = Simulator(RigidBlock(), phi_0=0.1, engine="python")
+    b = Simulator(RigidBlock(), phi_0=0.1, engine="c")
     for t in (0.5, 1.0, 2.5):
         a.advance(t, 0.3)
         b.advance(t, 0.3)
-    assert a.engine == "c" and b.engine == "python"
-    sa, sb = a.get_state(), b.get_state()
-    assert sa.keys() == sb.keys() and sa["impacts"] == sb["impacts"] and sa["mode"] == sb["mode"]
-    assert abs(sa["y"][0] - sb["y"][0]) <= 1e-12
+    assert a.engine == b.engine == "c" and a.get_state() == b.get_state()
 
 
 @needs_mj
@@ -148,10 +144,9 @@ def test_engine_c_is_the_default_and_agrees_with_python():
     (dict(dt_max=1e-9), r"dt_max = 1e-09 is out of range; allowed values 0"),
     (dict(phi_0=2.0), r"phi_0"),
 ])
-def test_bad_input_gives_the_python_message(kwargs, match):
-    for engine in ("python", "c"):
-        with pytest.raises(ValueError, match=match):
-            Simulator(RigidBlock(), "moreau_jean", engine=engine, **kwargs)
+def test_bad_input_is_refused_naming_it(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Simulator(RigidBlock(), "moreau_jean", **kwargs)
 
 
 @needs_mj
@@ -161,14 +156,13 @@ def test_bad_input_gives_the_python_message(kwargs, match):
     (1.0, 2e3, r"ag = 2000 is out of range; allowed range \[-1000, 1000\]"),
     (1.0, float("inf"), r"ag = inf is not finite"),
 ])
-def test_bad_advances_are_refused_alike_and_keep_the_state(t_end, ag, match):
-    for engine in ("python", "c"):
-        sim = Simulator(RigidBlock(), "moreau_jean", engine=engine, phi_0=0.1)
-        sim.advance(0.1, 0.0)
-        before = sim.get_state()
-        with pytest.raises(ValueError, match=match):
-            sim.advance(t_end, ag)
-        assert sim.get_state() == before
+def test_bad_advances_are_refused_and_keep_the_state(t_end, ag, match):
+    sim = Simulator(RigidBlock(), "moreau_jean", phi_0=0.1)
+    sim.advance(0.1, 0.0)
+    before = sim.get_state()
+    with pytest.raises(ValueError, match=match):
+        sim.advance(t_end, ag)
+    assert sim.get_state() == before
 
 
 @needs_mj
@@ -193,22 +187,18 @@ def test_the_raw_engine_checks_its_inputs_too():
 @pytest.mark.parametrize("model, t0, span", [(RigidBlock(), 0.0, 1.0),
                                              (FlexibleOscillator(EI=9.45e7), 123456.789, 1e6)],
                          ids=["rigid", "flexible_stiff"])
-def test_work_refusal_before_any_work_with_the_python_message(model, t0, span):
-    msgs = []
-    for engine in ("python", "c"):
-        sim = Simulator(model, "moreau_jean", engine=engine, phi_0=0.1, max_steps=50, t0=t0)
-        sim.advance(t0 + 0.02, 0.0)
-        before = sim.get_state()
-        with pytest.raises(WorkLimitError) as info:
-            sim.advance(t0 + span, 0.0)
-        assert sim.get_state() == before
-        msgs.append(str(info.value))
-    assert msgs[0] == msgs[1]
+def test_work_refusal_before_any_work(model, t0, span):
+    sim = Simulator(model, "moreau_jean", phi_0=0.1, max_steps=50, t0=t0)
+    sim.advance(t0 + 0.02, 0.0)
+    before = sim.get_state()
+    with pytest.raises(WorkLimitError, match="max_steps = 50"):
+        sim.advance(t0 + span, 0.0)
+    assert sim.get_state() == before
 
 
 # ---------------------------------------------------------------------------------------------- state, checkpoint
-def _scene(engine, scheme="moreau_jean", model=None, **kw):
-    sim = Simulator(model or RigidBlock(b=0.25, h=1.0, e_N=0.9), scheme, engine=engine, phi_0=0.15, **kw)
+def _scene(scheme="moreau_jean", model=None, **kw):
+    sim = Simulator(model or RigidBlock(b=0.25, h=1.0, e_N=0.9), scheme, phi_0=0.15, **kw)
     return sim
 
 
@@ -222,20 +212,15 @@ def _run(sim, t0, t1, dt=0.05, ag=lambda t: 0.0):
 @needs_mj
 @pytest.mark.parametrize("model", [None, FlexibleOscillator(e_N=0.5)], ids=["rigid", "flexible"])
 @pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
-def test_state_moves_between_the_engines_both_ways(scheme, model):
+def test_a_loaded_state_continues_exactly(scheme, model):
     ag = lambda t: 2.0 * math.sin(7.0 * t)  # noqa: E731
-    py, c = _scene("python", scheme, model=model), _scene("c", scheme, model=model)
-    _run(py, 0.0, 0.6, ag=ag)
+    c = _scene(scheme, model=model)
     _run(c, 0.0, 0.6, ag=ag)
-    # C -> Python and Python -> C: each continues exactly as the engine it came from
-    py2, c2 = _scene("python", scheme, model=model), _scene("c", scheme, model=model)
-    py2.set_state(c.get_state())
-    c2.set_state(py.get_state())
-    for sim in (py, c, py2, c2):
+    c2 = _scene(scheme, model=model)
+    c2.set_state(c.get_state())
+    for sim in (c, c2):
         _run(sim, 0.6, 1.2, ag=ag)
-    assert py2.get_state() == c.get_state() or _close_states(py2.get_state(), c.get_state())
-    assert c2.get_state() == py.get_state() or _close_states(c2.get_state(), py.get_state())
-    assert _close_states(c.get_state(), py.get_state())
+    assert c2.get_state() == c.get_state() and c.get_state()["t"] == 1.2
 
 
 def _close_states(a, b, tol=1e-12):
@@ -253,9 +238,8 @@ def _close_states(a, b, tol=1e-12):
 
 
 @needs_mj
-def test_bad_states_are_refused_with_the_python_messages_and_nothing_changes():
-    py, c = _scene("python"), _scene("c")
-    _run(py, 0.0, 0.3)
+def test_bad_states_are_refused_and_nothing_changes():
+    c = _scene()
     _run(c, 0.0, 0.3)
     good = c.get_state()
     bad_states = []
@@ -269,20 +253,16 @@ def test_bad_states_are_refused_with_the_python_messages_and_nothing_changes():
     s["q"] = [0.0, -2.0, 0.0]
     bad_states.append(s)
     for s in bad_states:
-        msgs = []
-        for sim in (py, c):
-            before = sim.get_state()
-            with pytest.raises(ValueError) as info:
-                sim.set_state(s)
-            assert sim.get_state() == before
-            msgs.append(str(info.value))
-        assert msgs[0] == msgs[1]
+        before = c.get_state()
+        with pytest.raises(ValueError, match="state field"):
+            c.set_state(s)
+        assert c.get_state() == before
 
 
 @needs_mj
 def test_the_c_engine_checks_a_loaded_state_itself():
     """The C API (the FMI binary's path) refuses an inconsistent state without the Python checks."""
-    c = _scene("c")
+    c = _scene()
     _run(c, 0.0, 0.3)
     eng = c.integrator._engine
     good = eng.get_state()
@@ -302,7 +282,7 @@ def test_the_c_engine_checks_a_loaded_state_itself():
 
 @needs_mj
 def test_checkpoint_rollback_and_snapshots_restore_exactly():
-    c = _scene("c")
+    c = _scene()
     _run(c, 0.0, 0.4, ag=lambda t: 1.5)
     eng = c.integrator._engine
     s0, out0, snap = eng.get_state(), eng.outputs(), eng.snapshot()
@@ -328,7 +308,7 @@ def test_checkpoint_rollback_and_snapshots_restore_exactly():
 
 @needs_mj
 def test_a_simulator_on_the_c_engine_pickles_and_continues_identically():
-    c = _scene("c")
+    c = _scene()
     _run(c, 0.0, 0.4)
     c2 = pickle.loads(pickle.dumps(c))
     _run(c, 0.4, 0.9)
@@ -338,7 +318,7 @@ def test_a_simulator_on_the_c_engine_pickles_and_continues_identically():
 
 @needs_mj
 def test_the_impact_log_stays_bounded_over_a_long_run():
-    c = _scene("c", impact_log_size=5)
+    c = _scene(impact_log_size=5)
     eng = c.integrator._engine
     ag = lambda t: 4.0 * math.sin(9.0 * t)  # noqa: E731
     _run(c, 0.0, 6.0, dt=0.5, ag=ag)
@@ -352,7 +332,7 @@ def test_the_impact_log_stays_bounded_over_a_long_run():
 
 @needs_mj
 def test_nan_and_huge_inputs_never_crash():
-    c = _scene("c")
+    c = _scene()
     for ag in (float("nan"), 1e308, -float("inf")):
         with pytest.raises(ValueError):
             c.advance(1.0, ag)
@@ -388,14 +368,15 @@ def test_compiled_integrator_is_an_integrator():
 @needs_mj
 @pytest.mark.parametrize("scheme", ["moreau_jean", pytest.param("event_driven", marks=needs_ed)])
 def test_python_motions_run_as_callbacks_with_the_same_results(scheme):
-    """A callable (a callback into Python) and the pulses the engine evaluates itself (jumps included)."""
-    fm = lambda t: 3.0 * math.sin(6.0 * t)  # noqa: E731
-    for ag in (fm, RickerPulse(4.0, 8.0), CosinePulse(3.0, 8.0, 0.1), RectangularPulse(2.0, 0.3, 0.2)):
-        py, c = _scene("python", scheme, on_report="ignore"), _scene("c", scheme, on_report="ignore")
+    """A pulse the engine evaluates itself (jumps included) and the same pulse as a callable (a callback into
+    Python, with the pulse's breakpoints): the same motion."""
+    for pulse in (RickerPulse(4.0, 8.0), CosinePulse(3.0, 8.0, 0.1), RectangularPulse(2.0, 0.3, 0.2)):
+        native, cb = _scene(scheme, on_report="ignore"), _scene(scheme, on_report="ignore")
+        wrapped = FunctionMotion(pulse, breakpoints=pulse.breakpoints) if hasattr(pulse, "breakpoints") else pulse
         for t in np.arange(0.1, 1.0, 0.1):
-            py.advance(float(t), ag)
-            c.advance(float(t), ag)
-        _close_states(py.get_state(), c.get_state(), tol=1e-11)
+            native.advance(float(t), pulse)
+            cb.advance(float(t), wrapped)
+        _close_states(native.get_state(), cb.get_state(), tol=1e-11)
 
 
 @needs_mj
@@ -406,21 +387,17 @@ def test_a_callback_that_fails_mid_advance_leaves_the_state_and_raises_its_error
             raise ZeroDivisionError("boom")
         return 1.0
 
-    msgs = []
-    for engine in ("python", "c"):
-        sim = _scene(engine, scheme)
-        sim.advance(0.2, 1.0)
-        before = sim.get_state()
-        with pytest.raises(ValueError) as info:
-            sim.advance(0.6, bad)
-        assert sim.get_state() == before
-        msgs.append(str(info.value))
-    assert msgs[0] == msgs[1]
+    sim = _scene(scheme)
+    sim.advance(0.2, 1.0)
+    before = sim.get_state()
+    with pytest.raises(ValueError, match="boom"):
+        sim.advance(0.6, bad)
+    assert sim.get_state() == before
 
 
 @needs_ed
 def test_event_driven_checkpoint_snapshot_and_pickle():
-    c = _scene("c", "event_driven")
+    c = _scene("event_driven")
     _run(c, 0.0, 0.5, ag=lambda t: 1.0)
     eng = c.integrator._engine
     s0, snap = eng.get_state(), eng.snapshot()
@@ -470,8 +447,8 @@ def test_engines_run_in_threads_without_the_gil_and_agree_with_a_sequential_run(
 def test_the_fmu_path_first_order_hold_equals_a_linear_motion(scheme):
     """Engine.advance(t_end, ag0, slope) is LinearMotion(ag0, slope, t_ref = t) (and linear=True with slope 0,
     the FMU's zero-rate input); slope 0 without it is ConstantMotion."""
-    py = _scene("python", scheme, on_report="ignore")
-    c = _scene("c", scheme, on_report="ignore")
+    py = _scene(scheme, on_report="ignore")
+    c = _scene(scheme, on_report="ignore")
     eng = c.integrator._engine
     for k in range(1, 40):
         t0, t1 = (k - 1) * 0.02, k * 0.02
@@ -480,8 +457,7 @@ def test_the_fmu_path_first_order_hold_equals_a_linear_motion(scheme):
             rate = 0.0
         py.advance(t1, LinearMotion(a, rate, t0, t0, t1) if k % 5 else ConstantMotion(a))
         eng.advance(t1, a, rate if k % 5 else 0.0, None, False, bool(k % 5))
-    _close_states(py.get_state(), c.get_state(), tol=1e-12)
-    assert py.integrator.n_steps == c.integrator.n_steps
+    assert py.get_state() == c.get_state()
 
 
 @needs_mj
@@ -494,7 +470,7 @@ def test_an_engine_is_freed_with_its_simulator_without_the_cyclic_collector(sche
 
     gc.disable()
     try:
-        sim = _scene("c", scheme)
+        sim = _scene(scheme)
         sim.advance(0.3, lambda t: 0.5)
         len(sim.impact_times)
         ref = weakref.ref(sim.integrator)
@@ -505,15 +481,13 @@ def test_an_engine_is_freed_with_its_simulator_without_the_cyclic_collector(sche
 
 
 @needs_mj
-def test_sample_times_checked_at_once_with_the_python_messages():
-    for bad in ([0.1, float("nan")], [0.2, 0.1], [-1.0], [0.1, float("inf")], []):
-        msgs = []
-        for engine in ("python", "c"):
-            sim = Simulator(RigidBlock(), engine=engine)
-            with pytest.raises(ValueError) as info:
-                sim.sample(np.array(bad, dtype=float), 0.0)
-            msgs.append(str(info.value))
-        assert msgs[0] == msgs[1]
+def test_sample_times_checked_at_once():
+    for bad, match in (([0.1, float("nan")], r"times = (np.float64\()?nan\)? is not finite"), ([0.2, 0.1], "increasing"),
+                       ([-1.0], r"times = (np.float64\()?-1(.0\))? is out of range"), ([0.1, float("inf")], r"times = (np.float64\()?inf\)? is not finite"),
+                       ([], "at least one time")):
+        sim = Simulator(RigidBlock())
+        with pytest.raises(ValueError, match=match):
+            sim.sample(np.array(bad, dtype=float), 0.0)
 
 
 def test_part_e_sources_compile_without_warnings(tmp_path):
@@ -545,16 +519,16 @@ def test_part_e_sources_compile_without_warnings(tmp_path):
     (np.float64(0.1), np.float64(np.nan)), (np.float64(np.nan), 0.0), (np.float64(-1.0), np.float64(1.0)),
     (0.1, np.float64(2000.0)), (np.float64(0.1), np.float64(-np.inf)), (np.float64(0.1), np.float64(0.5))])
 def test_numpy_numbers_take_the_same_path_and_messages(t_end, ag):
-    """numpy floats go through the lean path when finite, the checked one otherwise: the same results and the
-    Python's messages (np.float64(nan) named as such)."""
+    """numpy floats go through the lean path when finite, the checked one otherwise: the same results and
+    messages as Python floats (np.float64(nan) named as such)."""
     out = []
-    for engine in ("python", "c"):
-        sim = Simulator(RigidBlock(), engine=engine, phi_0=0.05)
+    for args in ((t_end, ag), (float(t_end), float(ag))):
+        sim = Simulator(RigidBlock(), phi_0=0.05)
         try:
-            sim.advance(t_end, ag)
+            sim.advance(*args)
             out.append(sim.outputs()["phi"])
         except ValueError as exc:
-            out.append(str(exc))
+            out.append(str(exc).replace("np.float64(", "").replace(")", ""))
     assert out[0] == out[1]
 
 
@@ -605,7 +579,7 @@ def test_sample_in_columns_writes_the_rows_transposed_bit_for_bit(kind, scheme):
 
 def test_the_engine_reads_each_tolerances_object_it_is_given():
     """The engine keeps the fields of the last frozen ContactTolerances it read (every run reads the same default
-    object): another object is read afresh (its results are the Python engine's, not the default's), the default
+    object): another object is read afresh (its results are not the default's), the default
     again gives the default's results, and a mutable object with the same attributes is read every time."""
     import dataclasses
     import types
@@ -616,8 +590,7 @@ def test_the_engine_reads_each_tolerances_object_it_is_given():
     base = simulate(model, gm, 4.0, engine="c", tolerance=1e-8).phi
     coarse = dataclasses.replace(DEFAULT_TOLERANCES, event=1e-4)   # events located less tightly: phi moves ~1e-9
     c = simulate(model, gm, 4.0, engine="c", tolerance=1e-8, tolerances=coarse).phi
-    py = simulate(model, gm, 4.0, engine="python", tolerance=1e-8, tolerances=coarse).phi
-    assert np.array_equal(c, py) and not np.array_equal(c, base)
+    assert not np.array_equal(c, base)
     assert np.array_equal(simulate(model, gm, 4.0, engine="c", tolerance=1e-8).phi, base)
 
     sim = Simulator(model, "event_driven", engine="c")

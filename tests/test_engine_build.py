@@ -20,13 +20,22 @@ def test_params_must_be_numbers():
         _engine.create_and_free("rigid", ["b"])
 
 
-def test_create_reports_a_clear_error_or_succeeds():
-    """Until parts A, D and E land, creating a rigid block engine says which part is missing; afterwards it
-    succeeds. Either way it never crashes the interpreter."""
-    from rocking_model.models import RigidBlock
+def test_create_succeeds_with_the_declared_defaults():
+    from rocking_model.models import FlexibleOscillator, RigidBlock
 
-    params = [p.default for p in RigidBlock.parameters()]
-    try:
-        _engine.create_and_free("rigid", params)
-    except NotImplementedError as exc:
-        assert "not implemented yet" in str(exc) and "engine=\"python\"" in str(exc)
+    for kind, cls in (("rigid", RigidBlock), ("flexible", FlexibleOscillator)):
+        _engine.create_and_free(kind, [p.default for p in cls.parameters()])
+
+
+def test_the_kernels_declare_the_parameters_of_the_python_classes():
+    """model_kinds() (the low-level API's declarations) names the parameters, initial values and outputs of the
+    model classes, in their order, with their defaults."""
+    from rocking_model.models import FlexibleOscillator, RigidBlock
+
+    kinds = {k["class_name"]: k for k in _engine.model_kinds()}
+    for cls in (RigidBlock, FlexibleOscillator):
+        decl = kinds[cls.__name__]
+        assert [p[0] for p in decl["params"]] == [p.name for p in cls.parameters()]
+        assert [p[2] for p in decl["params"]] == [float(p.default) for p in cls.parameters()]
+        assert [p[0] for p in decl["initial"]] == [p.name for p in cls.INITIAL]
+        assert [p[0] for p in decl["outputs"]] == [p.name for p in cls.OUTPUTS]

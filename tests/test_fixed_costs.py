@@ -9,41 +9,19 @@ import numpy as np
 import pytest
 
 from rocking_model import FlexibleOscillator, RigidBlock, Simulator, SinePulse, simulate
-from rocking_model.integrators.event_driven import EventDriven
-from rocking_model.integrators.moreau_jean import MoreauJean
-
-SCHEMES = (("event_driven", EventDriven), ("moreau_jean", MoreauJean))
-
-
-@pytest.fixture
-def no_python_scheme(monkeypatch):
-    """Building a Python scheme object fails the test (its option checks still run: from_options is kept)."""
-    def refuse(self, *args, **kwargs):
-        raise AssertionError(f"{type(self).__name__} built for a compiled run")
-
-    for _, cls in SCHEMES:
-        monkeypatch.setattr(cls, "__init__", refuse)
-
 
 @pytest.mark.parametrize("scheme", ["event_driven", "moreau_jean"])
-def test_compiled_runs_build_no_python_scheme(no_python_scheme, scheme):
-    sim = Simulator(RigidBlock(), scheme, engine="c", phi_0=0.05)
-    sim.advance(0.1, 0.5)
-    res = simulate(FlexibleOscillator(), SinePulse(3.0, 2 * math.pi), 0.3, scheme=scheme, engine="c")
-    assert len(res.t) == 31 and np.all(np.isfinite(res.phi))
-
-
-@pytest.mark.parametrize("scheme, cls", SCHEMES)
-def test_settings_read_as_the_python_scheme_computes_them(scheme, cls):
+def test_settings_read_from_the_checked_options(scheme):
     model = FlexibleOscillator()
     kw = dict(dt_max=2e-3, tolerance=1e-6, theta=0.6, zeno_tol=1e-5)
-    c = Simulator(model, scheme, engine="c", **kw).integrator
-    py = Simulator(model, scheme, engine="python", **kw).integrator
-    names = [n for n in ("dt_max", "theta", "tolerance", "method", "gap_tol", "v_tol", "v_zeno", "event_tol",
-                         "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events") if n in vars(py)]
-    assert names
-    for name in names:
-        assert getattr(c, name) == getattr(py, name), name
+    c = Simulator(model, scheme, **kw).integrator
+    if scheme == "event_driven":
+        assert (c.dt_max, c.tolerance, c.method) == (2e-3, 1e-6, "DOP853")
+        assert Simulator(model, scheme, method="DOPRI5").integrator.method == "DOPRI5"
+        assert Simulator(model, scheme).integrator.dt_max == math.inf
+    else:
+        assert (c.dt_max, c.theta) == (min(2e-3, model.step_limit), 0.6)
+        assert Simulator(model, scheme).integrator.dt_max == min(1e-3, model.step_limit)
     with pytest.raises(AttributeError, match="no attribute 'no_such_setting'"):
         c.no_such_setting  # noqa: B018
 
@@ -55,9 +33,9 @@ def test_settings_read_as_the_python_scheme_computes_them(scheme, cls):
     ("event_driven", dict(method="RK4"), "method = 'RK4' is not supported"),
     ("moreau_jean", dict(theta=0.2), "theta = 0.2 is out of range"),
 ])
-def test_option_errors_keep_the_python_messages(no_python_scheme, scheme, kw, message):
+def test_option_errors_name_the_option(scheme, kw, message):
     with pytest.raises(ValueError, match=message):
-        Simulator(RigidBlock(), scheme, engine="c", **kw)
+        Simulator(RigidBlock(), scheme, **kw)
 
 
 def test_rigid_block_mass_matrices_made_on_first_use():
@@ -74,8 +52,8 @@ def test_simulate_grid_run_as_simulator_sample(t_end, dt):
     """simulate on the compiled engine samples its own grid without re-checking it: the same outputs as the
     checked Simulator.sample over the same times."""
     model, gm = RigidBlock(), SinePulse(4.0, 2 * math.pi)
-    res = simulate(model, gm, t_end, output_interval=dt, engine="c", phi_0=0.02)
-    sim = Simulator(model, engine="c", impact_log_size=None, phi_0=0.02)
+    res = simulate(model, gm, t_end, output_interval=dt, phi_0=0.02)
+    sim = Simulator(model, impact_log_size=None, phi_0=0.02)
     modes, values, impacts, overturned = sim.sample(res.t[1:], gm)
     assert np.array_equal(res.contact, modes) and np.array_equal(res.impacts, impacts)
     assert np.array_equal(res.overturned, overturned)
@@ -131,7 +109,7 @@ def test_sample_writes_the_dtypes_integrator_sample_returns():
     times = np.arange(1, 101) * 0.01
     outs = []
     for mode_t, over_t in ((np.int64, bool), (np.intc, np.intc)):
-        sim = Simulator(RigidBlock(), engine="c", phi_0=0.02)
+        sim = Simulator(RigidBlock(), phi_0=0.02)
         eng = sim.integrator._engine
         n = times.size + 1
         modes, values = np.empty(n, mode_t), np.empty((eng.n_outputs + 2, n))
@@ -140,7 +118,7 @@ def test_sample_writes_the_dtypes_integrator_sample_returns():
         outs.append((modes.astype(np.int64), values, impacts, over.astype(bool)))
     for a, b in zip(*outs):
         assert np.array_equal(a, b)
-    sim = Simulator(RigidBlock(), engine="c", phi_0=0.02)
+    sim = Simulator(RigidBlock(), phi_0=0.02)
     modes, values, impacts, over = sim.sample(times, gm)
     assert modes.dtype == np.int64 and over.dtype == bool and values["painleve"].dtype == np.int64
     with pytest.raises(ValueError, match="modes"):

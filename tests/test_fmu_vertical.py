@@ -6,16 +6,14 @@ FMUs and the self-contained ones) and both models:
 - ag_v = 0 set explicitly gives the outputs of an FMU that never heard of it, bit for bit (the golden FMU runs
   of tests/test_golden.py pass unchanged too);
 - a nonzero ag_v, held or as a ramp through fmi2SetRealInputDerivatives, gives the Python API's motion
-  (`Simulator.advance(t_end, ag, ag_v=...)` with the same first-order hold): bit for bit where the FMU makes
-  the same calls (the pythonfmu FMU on the Python engine), to round-off otherwise; the standalone FMU equals
-  the pythonfmu FMU on the compiled engine; hypothesis: random ag / ag_v sequences, finite outputs;
+  (`Simulator.advance(t_end, ag, ag_v=...)` with the same first-order hold) to round-off; the standalone FMU
+  equals the pythonfmu FMU bit for bit; hypothesis: random ag / ag_v sequences, finite outputs;
 - the checks, statuses and messages of ag: non-finite or out of range refused naming ag_v (fmi2Error, both
   kinds word for word), a ramp leaving the range refused (fmi2Discard) with ag_v and its rate kept, bad
   derivatives refused;
 - the FMU state carries ag_v and its rate; a state of the FMU before ag_v existed is refused by name."""
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import math
 import os
@@ -37,7 +35,6 @@ from hypothesis import strategies as st  # noqa: E402
 
 from fmu_instance import FMI2_DISCARD, FMI2_ERROR, Instance  # noqa: E402
 from rocking_model import FlexibleOscillator, RigidBlock, Simulator  # noqa: E402
-from rocking_model.fmi.slave import ENGINE_VARIABLE  # noqa: E402
 from rocking_model.ground_motion import LinearMotion  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,20 +64,6 @@ def fmus(extracted_fmus, build_module, tmp_path_factory):
         for path in build_module.build_standalone(dest):
             out[("standalone", path.stem)] = (path, read_model_description(str(path)), extract(str(path)))
     return out
-
-
-@contextlib.contextmanager
-def fmu_engine(engine):
-    """ROCKING_FMU_ENGINE for the pythonfmu FMUs built meanwhile (read at fmi2ExitInitializationMode)."""
-    old = os.environ.get(ENGINE_VARIABLE)
-    os.environ[ENGINE_VARIABLE] = engine
-    try:
-        yield
-    finally:
-        if old is None:
-            os.environ.pop(ENGINE_VARIABLE, None)
-        else:
-            os.environ[ENGINE_VARIABLE] = old
 
 
 def output_names(md):
@@ -140,10 +123,10 @@ def run_fmu(fmu, steps, explicit_zero=True):
     return names, np.array(rows)
 
 
-def run_api(name, steps, engine, names):
+def run_api(name, steps, names):
     """The Python API driven as the FMU: the same step ends, each input a number held over the step or the
     LinearMotion of its value and rate from the step's start."""
-    sim = Simulator(MODELS[name](), "event_driven", engine=engine, impact_log_size=0, on_report="raise")
+    sim = Simulator(MODELS[name](), "event_driven", impact_log_size=0, on_report="raise")
 
     def values():
         out = sim.outputs()
@@ -207,31 +190,18 @@ def test_ag_v_zero_set_explicitly_is_bit_identical_to_never_set(fmus, kind, name
 
 # ---------------------------------------------------------------------------------------------- ag_v != 0
 @pytest.mark.parametrize("scene", ["held", "ramp", "lift-off"])
-@pytest.mark.parametrize("name", [RIGID, FLEX])
-def test_pythonfmu_on_the_python_engine_equals_the_api_bit_for_bit(fmus, name, scene):
-    """The pythonfmu FMU on the Python reference engine (ROCKING_FMU_ENGINE=python) calls
-    `Simulator.advance(t_end, ag, ag_v=...)` as the API user does: the same outputs bit for bit."""
-    steps = steps_of(scene, name)
-    with fmu_engine("python"):
-        names, fmu = run_fmu(fmus[("pythonfmu", name)], steps)
-    api = run_api(name, steps, "python", names)
-    assert np.array_equal(fmu, api)
-    # the vertical component matters: the same steps without it give another motion
-    flat = run_api(name, [(a, r, 0.0, None) for a, r, _, _ in steps], "python", names)
-    assert np.max(np.abs(flat - api)) > 1e-4
-
-
-@pytest.mark.parametrize("scene", ["held", "ramp", "lift-off"])
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("name", [RIGID, FLEX])
 def test_fmu_on_the_compiled_engine_equals_the_api(fmus, kind, name, scene):
-    """Both kinds on the compiled engine (the default) equal the Python API on the compiled engine and on the
-    Python reference engine to round-off."""
+    """Both kinds equal the Python API (`Simulator.advance(t_end, ag, ag_v=...)` as the FMU calls it) to
+    round-off, and the vertical component matters: the same steps without it give another motion."""
     steps = steps_of(scene, name)
     names, fmu = run_fmu(fmus[(kind, name)], steps)
     assert np.all(np.isfinite(fmu))
-    assert_close(fmu, run_api(name, steps, "c", names), f"{kind} vs the API (engine c)", names)
-    assert_close(fmu, run_api(name, steps, "python", names), f"{kind} vs the API (engine python)", names)
+    api = run_api(name, steps, names)
+    assert_close(fmu, api, f"{kind} vs the API", names)
+    flat = run_api(name, [(a, r, 0.0, None) for a, r, _, _ in steps], names)
+    assert np.max(np.abs(flat - api)) > 1e-4
     if scene == "lift-off" and name == RIGID:
         assert np.max(fmu[:, names.index("y")]) > 1e-3          # g + ag_v < 0: the block left the ground
 
@@ -257,13 +227,9 @@ _step = st.tuples(st.floats(-6.0, 6.0), st.one_of(st.none(), st.floats(-300.0, 3
 @given(steps=st.lists(_step, min_size=5, max_size=30), flexible=st.booleans())
 def test_hypothesis_random_ag_and_ag_v_finite_and_equal_to_the_api(fmus, steps, flexible):
     """Random ag / ag_v sequences (some with g + ag_v < 0, some with rates): every step done with finite
-    outputs in both kinds; the pythonfmu FMU on the Python engine equals the API bit for bit, and the
-    standalone FMU equals the pythonfmu FMU on the compiled engine bit for bit (the same engine calls)."""
+    outputs in both kinds, and the standalone FMU equals the pythonfmu FMU bit for bit (the same engine
+    calls)."""
     name = FLEX if flexible else RIGID
-    with fmu_engine("python"):
-        names, fmu = run_fmu(fmus[("pythonfmu", name)], steps)
-    assert np.all(np.isfinite(fmu))
-    assert np.array_equal(fmu, run_api(name, steps, "python", names))
     _, compiled = run_fmu(fmus[("pythonfmu", name)], steps)
     assert np.all(np.isfinite(compiled))
     if HAS_STANDALONE:
@@ -521,8 +487,8 @@ def test_source_drives_both_components_through_the_fmpy_master(fmus, built_fmus,
     for out in ("phi", "y", "impacts"):
         np.testing.assert_allclose(res[f"block.{out}"], alone[:, names.index(out)], rtol=0, atol=ROUNDOFF,
                                    err_msg=out)
-    assert_close(alone, run_api(RIGID, steps, "c", names), "the block FMU vs the API", names)
-    flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], "c", names)
+    assert_close(alone, run_api(RIGID, steps, names), "the block FMU vs the API", names)
+    flat = run_api(RIGID, [(a, None, 0.0, None) for a, _, _, _ in steps], names)
     assert 0.01 < np.abs(res["block.phi"]).max() < 0.5 * RigidBlock().alpha and res["block.impacts"][-1] >= 1
     assert np.all(flat[:, names.index("phi")] == 0.0)                  # without ag_v: no uplift
 
@@ -544,7 +510,6 @@ def _slave(name):
 
 def test_held_ag_v_takes_the_lean_path(monkeypatch):
     """A nonzero ag_v held over the step is one Engine.advance with ag_v (the lean path, no checked path)."""
-    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
     slave, vr = _slave(RIGID)
     assert slave._lean is not None and slave._lean[3] == "ag_v"
     monkeypatch.setattr(slave, "_do_step", lambda *a: pytest.fail("the checked path was taken"))
@@ -559,7 +524,6 @@ def test_overflowing_step_under_ag_v_names_it_as_the_simulator_does(fmus, monkey
     ag_v = 500 m/s2 (> 10 g): the lean path refuses it (fmi2Discard, state kept) with Simulator._diverged's
     message word for word, which names the vertical ground acceleration as a likely cause; the standalone FMU
     (the state crafted into its serialized form) says the same."""
-    monkeypatch.delenv(ENGINE_VARIABLE, raising=False)
     slave, vr = _slave(FLEX)
     state = slave._sim.get_state()
     state.update(mode=1, y=[1e148, 0.01, 0.0, 0.1])                   # mode LEFT, y = [u, phi, u', phi']

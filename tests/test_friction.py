@@ -12,37 +12,10 @@ import pytest
 
 from rocking_model import RigidBlock, Simulator, simulate
 from rocking_model.modes import Mode
-from rocking_model.lcp import OPEN, SLIDE_NEG, SLIDE_POS, STICK, solve_friction_lcp
+
 
 G = 9.81
 
-
-# ---------------------------------------------------------------------------------------------- the LCP
-def _point_mass_on_ground(v_free, mu, b_N=0.0):
-    """One contact, a unit point mass in the plane: normal = y, tangent = x."""
-    W_N = np.array([[0.0], [1.0]])
-    W_T = np.array([[1.0], [0.0]])
-    return solve_friction_lcp(np.eye(2), W_N, W_T, np.asarray(v_free, float), np.array([b_N]), np.zeros(1),
-                              [0], mu)
-
-
-@pytest.mark.parametrize("vx, state", [(0.3, STICK), (-0.3, STICK), (2.0, SLIDE_POS), (-2.0, SLIDE_NEG)])
-def test_friction_lcp_point_mass(vx, state):
-    """A point mass landing with U_N = -1 and tangential velocity vx, mu = 0.5, e_N = 0: it sticks when
-    |vx| <= mu * 1, else slides with the tangential impulse at the cone's edge."""
-    sol = _point_mass_on_ground([vx, -1.0], 0.5)
-    assert sol.exact and sol.states == (state,)
-    assert sol.P_N[0] == pytest.approx(1.0) and sol.v[1] == pytest.approx(0.0, abs=1e-15)
-    if state == STICK:
-        assert sol.v[0] == pytest.approx(0.0, abs=1e-15) and abs(sol.P_T[0]) <= 0.5 * sol.P_N[0]
-    else:
-        assert sol.P_T[0] == pytest.approx(-math.copysign(0.5, vx))
-        assert sol.v[0] == pytest.approx(vx - math.copysign(0.5, vx))
-
-
-def test_friction_lcp_separating_contact_is_open():
-    sol = _point_mass_on_ground([5.0, 1.0], 0.5)
-    assert sol.exact and sol.states == (OPEN,) and sol.P_N[0] == 0.0 and sol.P_T[0] == 0.0
 
 
 # ---------------------------------------------------------------------------------------------- closed forms

@@ -31,26 +31,6 @@ def test_golden_outputs(new_runs):
                     f"recording's ({meta['fingerprint']})")
 
 
-def test_engines_agree_bit_for_bit(new_runs):
-    """Every library run of the recording on both engines: the compiled engine's arrays (``@c``) equal the
-    Python reference's bit for bit (every benchmark scene, both schemes, both Runge-Kutta methods, the held and
-    stepwise runs; the Python's contact products, inverses and solves in the C's operation order,
-    rocking_model/_ordered.py). On kernels other than the recording's (numpy's SIMD sin of the output arrays
-    may differ from libm's by an ulp there) the smooth runs are held to round-off and the others skipped."""
-    same = golden.load()[1]["fingerprint"] == roundoff.fingerprint()
-    pairs = [(k, k.replace(":", "@c:", 1)) for k in new_runs if "@c:" not in k and "/" in k.split(":")[0]]
-    pairs = [(k, kc) for k, kc in pairs if kc in new_runs]
-    assert len(pairs) >= 500
-    c_runs = {kc: new_runs[kc] for _, kc in pairs}
-    py_runs = {kc: new_runs[k] for k, kc in pairs}
-    failures, skipped = golden.compare(py_runs, c_runs, same)
-    assert not failures, f"{len(failures)} of {len(pairs)} arrays differ between the engines:\n" + "\n".join(
-        failures[:20])
-    if skipped:
-        pytest.skip(f"{len(skipped)} chaotic arrays not compared: the arithmetic kernels differ from the "
-                    "recording's")
-
-
 def test_golden_under_other_kernels(built_fmus):
     """The same comparison in a process with the generic libm/BLAS/SIMD kernels: no failure (the smooth
     runs within round-off; the chaotic ones are skipped there, unless the kernels happen to agree)."""

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from rocking_model import ConstantMotion, RigidBlock, Simulator, SinePulse
-from rocking_model.contact import inverse_mass
 from rocking_model.modes import OVERTURNED, Mode
 
 import roundoff

@@ -1,13 +1,7 @@
-"""The compiled engine under a vertical ground acceleration ag_v (issue 23, C part) against the Python reference.
-
-Same algorithm, same steps (rocking_model/engine/DESIGN.md, "Numerics"): on scenes with a vertical component
-(constant, pulses, a sampled record pair, a fall of the ground faster than g: g + ag_v < 0, flight), for both
-models and both schemes, the two engines take the same steps, count the same impacts at the same times, are in
-the same contact mode after every advance and agree on phi to 1e-12 rad (the flexible oscillator within the bound
-of tests/test_engine_event_driven.py: its impact LCP's ulps carried by the column's vibration). ag_v = 0 is
-bit-identical to no vertical component; the state moves between engines during a vertical motion; the
-extension's `Engine.advance` reads ag_v and its slope (the first-order hold) and refuses bad values naming
-ag_v. Every scene is far from a decision boundary (developers' guide)."""
+"""The compiled engine under a vertical ground acceleration ag_v: ag_v = 0 is bit-identical to no vertical
+component; the extension's `Engine.advance` reads ag_v and its slope (the first-order hold) and refuses bad
+values naming ag_v; the engine's pair of motions equals `TwoComponentMotion` (the physics under ag_v:
+tests/test_vertical_physics.py)."""
 from __future__ import annotations
 
 import math
@@ -15,52 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from rocking_model import SampledMotion, Simulator, SinePulse, TwoComponentMotion, _engine, simulate
-from rocking_model.ground_motion import ConstantMotion, LinearMotion, RectangularPulse
+from rocking_model import SampledMotion, Simulator, SinePulse, TwoComponentMotion, _engine
+from rocking_model.ground_motion import ConstantMotion, RectangularPulse
 from rocking_model.models import FlexibleOscillator, RigidBlock
 
 G = 9.81
-#: [rad] phi of the two engines on the rigid block (same steps: round-off of the contact solves only)
-PHI_TOL = 1e-12
-#: [s] impact times
-T_TOL = 1e-12
-#: [1] other outputs, relative to their scale max(1, |value|) (as tests/test_engine_event_driven.py)
-OUT_RTOL = 1e-9
-#: the flexible oscillator's slack on the tolerances above (tests/test_engine_event_driven.py,
-#: test_flexible_free_and_pulse: numpy's and the C's impact-LCP ulps carried by the column's vibration)
-FLEX_SLACK = 1e3
-
-
-def _assert_same(py, c, where="", slack=1.0):
-    ip, ic = py.integrator, c.integrator
-    assert ic.t == ip.t, where
-    assert int(ic.mode) == int(ip.mode), (where, int(ip.mode), int(ic.mode))
-    assert bool(ic.overturned) == bool(ip.overturned), where
-    assert ic.impacts == ip.impacts, (where, ip.impacts, ic.impacts)
-    if slack == 1.0:
-        assert ic.n_steps == ip.n_steps, (where, ip.n_steps, ic.n_steps)
-    else:
-        assert abs(ic.n_steps - ip.n_steps) <= 0.02 * ip.n_steps + 2, (where, ip.n_steps, ic.n_steps)
-    op, oc = py.outputs(), c.outputs()
-    assert abs(oc["phi"] - op["phi"]) <= PHI_TOL * slack, (where, op["phi"], oc["phi"])
-    for name in op:
-        assert abs(oc[name] - op[name]) <= OUT_RTOL * slack * max(1.0, abs(op[name])), (where, name, op[name],
-                                                                                      oc[name])
-    tp, tc = list(py.impact_times), list(c.impact_times)
-    assert len(tp) == len(tc), where
-    assert np.allclose(tc, tp, rtol=0.0, atol=T_TOL * slack), where
-
-
-def _run(model, scheme, times, ag, ag_v, slack=1.0, **kw):
-    """Both engines through the same advances under (ag, ag_v), compared after each; returns the pair."""
-    kw.setdefault("on_report", "ignore")
-    py = Simulator(model, scheme, engine="python", **kw)
-    c = Simulator(model, scheme, engine="c", **kw)
-    for t in times:
-        py.advance(float(t), ag, ag_v=ag_v)
-        c.advance(float(t), ag, ag_v=ag_v)
-        _assert_same(py, c, f"t = {t}", slack)
-    return py, c
 
 
 def _record_pair(seed=7, dt=0.01, T=3.0):
@@ -80,87 +33,7 @@ BLOCK = dict(b=0.2, h=1.0)
 
 
 # ---------------------------------------------------------------------------------------------- rigid scenes
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_rigid_free_rocking_under_a_constant_vertical_acceleration(scheme):
-    """Free rocking from phi_0 = 0.1 under ag_v = +0.3 g (a heavier block): the same steps and impacts."""
-    py, c = _run(RigidBlock(**BLOCK), scheme, np.arange(1, 31) * 0.1, 0.0, 0.3 * G, phi_0=0.1)
-    assert py.integrator.impacts >= 3
-
-
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_rigid_uplift_threshold_moves_with_the_vertical_acceleration(scheme):
-    """ag = 0.8 g tan(alpha) stays below the uplift threshold g tan(alpha) without a vertical component and lifts
-    the block with ag_v = -0.5 g (threshold 0.5 g tan(alpha)): the same uplift in both engines."""
-    block = RigidBlock(**BLOCK)
-    ag = 0.8 * G * math.tan(block.alpha)
-    py, c = _run(block, scheme, np.arange(1, 11) * 0.05, ag, -0.5 * G)
-    assert abs(c.outputs()["phi"]) > 1e-3
-    still = Simulator(block, scheme, engine="c")
-    still.advance(0.5, ag)
-    assert still.outputs()["phi"] == 0.0
-
-
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_rigid_pulses_in_both_directions(scheme):
-    """A horizontal sine pulse (0.5 g, 2 Hz) with a vertical one (0.4 g, 5 Hz, starting later): both
-    components' breakpoints, the same steps."""
-    gm = TwoComponentMotion(SinePulse(0.5 * G, 2.0 * math.pi * 2.0), SinePulse(0.4 * G, 2.0 * math.pi * 5.0, 0.13))
-    py, c = _run(RigidBlock(**BLOCK, e_N=0.2), scheme, np.arange(1, 41) * 0.05, gm, None)
-    assert py.integrator.impacts >= 1
-
-
-@pytest.mark.parametrize("scheme", SCHEMES)
-@pytest.mark.parametrize("kind", ["rigid", "flexible"])
-def test_ground_falling_faster_than_g_sends_the_body_into_flight(scheme, kind):
-    """A rectangular vertical pulse of -1.5 g for 0.1 s (g + ag_v = -0.5 g): the body at rest leaves the
-    ground (the uplift LCP returns flight, it never sinks) and lands after the pulse; both engines alike."""
-    model = RigidBlock(**BLOCK) if kind == "rigid" else FlexibleOscillator(EI=9.45e4)
-    drop = RectangularPulse(-1.5 * G, 0.1, 0.1)
-    py, c = _run(model, scheme, np.arange(1, 41) * 0.02, 0.0, drop, slack=1.0 if kind == "rigid" else FLEX_SLACK)
-    for sim in (py, c):
-        assert sim.integrator.impacts >= 1
-    # in the air at the pulse's end: lifted by 0.5 g (0.1 s)^2 / 2 = 0.0245 m, no corner below the ground
-    sim = Simulator(model, scheme, engine="c")
-    sim.advance(0.2, 0.0, ag_v=drop)
-    out = sim.outputs()
-    assert out["y"] > 1e-3 and int(sim.integrator.contact_code) == 3      # Mode.FLIGHT
-    q, _ = sim.integrator.state()
-    assert min(model.gaps(q)) >= -1e-9
-
-
-def test_rigid_record_pair_through_simulate():
-    """A sampled record pair (t, ag, ag_v) in one `simulate` call (the engine's sample with both components as
-    sampled motions): the same contact codes and impacts at every output, phi within PHI_TOL."""
-    block = RigidBlock(b=0.15, h=0.8)
-    t, ag, ag_v = _record_pair()
-    rp = simulate(block, (t, ag, ag_v), t_end=3.0, output_interval=0.01, engine="python")
-    rc = simulate(block, (t, ag, ag_v), t_end=3.0, output_interval=0.01, engine="c")
-    assert np.array_equal(np.asarray(rp["contact"]), np.asarray(rc["contact"]))
-    assert np.array_equal(np.asarray(rp["impacts"]), np.asarray(rc["impacts"]))
-    assert np.asarray(rp["impacts"])[-1] >= 2
-    assert np.max(np.abs(np.asarray(rp["phi"]) - np.asarray(rc["phi"]))) <= PHI_TOL
-    # the vertical component matters in this scene (the comparison is not that of two copies of one run)
-    rh = simulate(block, (t, ag), t_end=3.0, output_interval=0.01, engine="c")
-    assert np.max(np.abs(np.asarray(rh["phi"]) - np.asarray(rc["phi"]))) > 1e-3
-
-
 # ---------------------------------------------------------------------------------------------- flexible scenes
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_flexible_pulse_with_a_vertical_component(scheme):
-    """The flexible oscillator (EI = 9.45e4 N m2) under the benchmark pulse (0.25 g, 1.5 Hz) with a vertical
-    sine (0.3 g, 4 Hz): the same impacts and modes, the state within the flexible bound."""
-    gm = TwoComponentMotion(SinePulse(0.25 * G, 2.0 * math.pi * 1.5), SinePulse(0.3 * G, 2.0 * math.pi * 4.0))
-    py, c = _run(FlexibleOscillator(EI=9.45e4), scheme, np.arange(1, 41) * 0.05, gm, None, slack=FLEX_SLACK)
-    assert py.integrator.impacts >= 1
-
-
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_flexible_free_rocking_under_a_constant_vertical_acceleration(scheme):
-    py, c = _run(FlexibleOscillator(EI=9.45e4), scheme, np.arange(1, 31) * 0.05, 0.0, -0.2 * G, slack=FLEX_SLACK,
-                 phi_0=0.05)
-    assert py.integrator.impacts >= 1
-
-
 # ---------------------------------------------------------------------------------------------- ag_v = 0
 @pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("kind", ["rigid", "flexible"])
@@ -200,63 +73,9 @@ def test_zero_vertical_is_bit_identical_to_none(scheme, kind):
 
 
 # ---------------------------------------------------------------------------------------------- state
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_state_round_trip_during_a_vertical_motion(scheme):
-    """get_state in the middle of a vertical pulse, loaded into a fresh C simulator and into a Python one:
-    all three go on alike (C -> C bit for bit, C -> Python as the scene comparison)."""
-    block = RigidBlock(**BLOCK)
-    gm = TwoComponentMotion(SinePulse(0.5 * G, 2.0 * math.pi * 2.0), SinePulse(-0.6 * G, 2.0 * math.pi * 3.0))
-    c = Simulator(block, scheme, engine="c")
-    c.advance(0.4, gm)
-    state = c.get_state()
-    c2 = Simulator(block, scheme, engine="c")
-    c2.set_state(state)
-    py = Simulator(block, scheme, engine="python", on_report="ignore")
-    py.set_state(state)
-    assert c2.get_state() == state
-    for t in np.arange(1, 17) * 0.05 + 0.4:
-        for sim in (c, c2, py):
-            sim.advance(float(t), gm)
-        assert c2.outputs() == c.outputs()
-        assert abs(py.outputs()["phi"] - c.outputs()["phi"]) <= PHI_TOL
-        assert py.integrator.impacts == c.integrator.impacts
-    assert c.integrator.impacts >= 1
-    # and the other way: a Python run's state, taken during the motion, goes on alike in the C engine
-    p0 = Simulator(block, scheme, engine="python", on_report="ignore")
-    p0.advance(0.6, gm)
-    c3 = Simulator(block, scheme, engine="c")
-    c3.set_state(p0.get_state())
-    for t in np.arange(1, 11) * 0.05 + 0.6:
-        p0.advance(float(t), gm)
-        c3.advance(float(t), gm)
-        assert abs(p0.outputs()["phi"] - c3.outputs()["phi"]) <= PHI_TOL
-        assert p0.integrator.impacts == c3.integrator.impacts
-
-
 # ---------------------------------------------------------------------------------------------- extension
 def _engine_of(scheme="event_driven", **kw):
     return Simulator(RigidBlock(**BLOCK), scheme, engine="c", **kw).integrator._engine
-
-
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_advance_holds_ag_v_first_order(scheme):
-    """Engine.advance(t1, ag0, slope, ag_v=a, ag_v_slope=s) is the first-order hold ag_v(t) = a + s (t - t0):
-    the Python under TwoComponentMotion(LinearMotion(ag0, slope, t0), LinearMotion(a, s, t0))."""
-    block = RigidBlock(**BLOCK)
-    py = Simulator(block, scheme, engine="python", phi_0=0.05)
-    c = Simulator(block, scheme, engine="c", phi_0=0.05)
-    eng = c.integrator._engine
-    t0 = 0.0
-    for k in range(1, 16):
-        t1 = 0.04 * k
-        a, s = 0.4 * G * math.sin(5.0 * t0), 2.0 * G * math.cos(5.0 * t0)
-        av, sv = -0.5 * G * math.cos(7.0 * t0), 3.5 * G * math.sin(7.0 * t0)
-        py.advance(t1, TwoComponentMotion(LinearMotion(a, s, t0, t0, t1), LinearMotion(av, sv, t0, t0, t1)))
-        eng.advance(t1, a, s, None, ag_v=av, ag_v_slope=sv)
-        assert eng.t == t1
-        assert abs(eng.output_dict()["phi"] - py.outputs()["phi"]) <= PHI_TOL
-        assert eng.n_steps == py.integrator.n_steps
-        t0 = t1
 
 
 def test_advance_arguments():
@@ -350,42 +169,3 @@ def test_the_pair_of_motions_equals_two_component_motion(case):
     assert vvalues == [float(gm.vertical(x)) for x in times]
     assert nb == [float(gm.next_breakpoint(x)) for x in times]
     assert cont == [bool(gm.continuous_at(x)) for x in times]
-
-
-# ---------------------------------------------------------------------------------------------- hypothesis
-from hypothesis import HealthCheck, given, settings          # noqa: E402
-from hypothesis import strategies as st                      # noqa: E402
-from test_engine_event_driven import advance_pair             # noqa: E402
-
-#: [rad] hypothesis scenes: the same motion to the scheme's tolerance (an error of order tol per step that
-#: impacts amplify; 1e-6 rad is 1e-5 of the rocking amplitudes), as tests/test_engine_event_driven.py
-SCENE_PHI_TOL = 1e-6
-
-
-def _hypothesis_scene(model, scheme, phi0, gm, times):
-    py = Simulator(model, scheme, engine="python", phi_0=phi0, on_report="ignore", max_steps=None)
-    c = Simulator(model, scheme, engine="c", phi_0=phi0, on_report="ignore", max_steps=None)
-    if advance_pair(py, c, gm, times):
-        assert abs(c.outputs()["phi"] - py.outputs()["phi"]) <= SCENE_PHI_TOL, (py.outputs()["phi"],
-                                                                                 c.outputs()["phi"])
-
-
-@settings(max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(b=st.floats(0.1, 0.5), h=st.floats(0.8, 2.0), e_N=st.floats(0.0, 1.0), mu=st.sampled_from([math.inf, 0.5]),
-       scheme=st.sampled_from(SCHEMES), phi0=st.floats(-0.1, 0.1), A=st.floats(0.0, 0.6), f=st.floats(0.5, 4.0),
-       Av=st.floats(-1.5, 0.8), fv=st.floats(1.0, 10.0))
-def test_hypothesis_rigid_vertical_scenes(b, h, e_N, mu, scheme, phi0, A, f, Av, fv):
-    """Random blocks under random pulses in both directions (the vertical one down to -1.5 g: flight):
-    finite states, the same motion in both engines within the scheme's tolerance."""
-    block = RigidBlock(b=b, h=h, e_N=e_N, mu=mu)
-    gm = TwoComponentMotion(SinePulse(A * G, 2.0 * math.pi * f), SinePulse(Av * G, 2.0 * math.pi * fv, 0.05))
-    _hypothesis_scene(block, scheme, phi0 * block.alpha, gm, (0.5, 1.0))
-
-
-@settings(max_examples=8, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(EI=st.floats(4.5, 5.3), e_N=st.floats(0.0, 1.0), rule=st.sampled_from([0, 1]), phi0=st.floats(-0.1, 0.1),
-       A=st.floats(0.0, 0.5), f=st.floats(0.5, 3.0), Av=st.floats(-1.2, 0.8), fv=st.floats(1.0, 8.0))
-def test_hypothesis_flexible_vertical_scenes(EI, e_N, rule, phi0, A, f, Av, fv):
-    osc = FlexibleOscillator(EI=10.0 ** EI, e_N=e_N, impact_rule=rule)
-    gm = TwoComponentMotion(SinePulse(A * G, 2.0 * math.pi * f), SinePulse(Av * G, 2.0 * math.pi * fv, 0.05))
-    _hypothesis_scene(osc, "event_driven", phi0 * math.atan2(osc.b, osc.h), gm, (0.5, 1.0))

@@ -220,7 +220,7 @@ def test_three_component_example_runs_and_plots_the_difference(tmp_path):
         diff = np.max(np.abs(both.phi - h_only.phi))
         assert diff > 1e-3 * max(np.max(np.abs(h_only.phi)), 1e-3) and diff > 1e-4, name
         model = mod.RigidBlock(b=0.4, h=2.0) if name.startswith("rigid") else mod.FlexibleOscillator()
-        ref = simulate(model, horizontal, 8.0, output_interval=0.01, engine=mod.ENGINE)
+        ref = simulate(model, horizontal, 8.0, output_interval=0.01)
         assert np.array_equal(ref.phi, h_only.phi), name
     assert mod.main(["--t-end", "2", "--out", str(tmp_path / "short.png")]) == 0
     assert (tmp_path / "short.png").is_file()

@@ -1,10 +1,10 @@
-"""The compiled engine (issue 21): C sources in ``src/``, the extension module `rocking_model._engine`.
+"""The compiled engine: C sources in ``src/``, the extension module `rocking_model._engine`.
 
-See ``DESIGN.md`` in this folder for the architecture, the C API and the task list of each part.
+See ``DESIGN.md`` in this folder for the architecture and the C API.
 
 `CompiledIntegrator` implements the `rocking_model.integrators.base.Integrator` contract on top of
-`rocking_model._engine.Engine`, so that `Simulator(..., engine="c")`, `simulate`, the CLI, the ensembles and the
-FMUs run the C engine unchanged; `motion_spec` turns a `GroundMotion` into the plain tuple the engine reads.
+`rocking_model._engine.Engine`, so that `Simulator`, `simulate`, the CLI, the ensembles and the FMUs run the C
+engine; `motion_spec` turns a `GroundMotion` into the plain tuple the engine reads.
 """
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ from ..modes import ContactState
 
 __all__ = ["CompiledIntegrator", "motion_spec", "vertical_spec", "ENGINES", "available"]
 
-#: the accepted values of ``Simulator(engine=...)``
-ENGINES = {"c": "c", "python": "python"}
+#: the accepted values of ``Simulator(engine=...)``: the compiled engine is the only one
+ENGINES = {"c": "c"}
 
 
 def available() -> bool:
@@ -105,11 +105,6 @@ _MAX_EVENTS = 100000
 #: model class -> its output names, as the engine lists them (read once: the engine builds the list per read)
 _NAMES: dict = {}
 
-#: the settings of a scheme that `CompiledIntegrator` reads off the Python scheme built from the same options
-_SETTINGS = ("dt_max", "theta", "tolerance", "method", "tolerances", "gap_tol", "v_tol", "v_zeno", "event_tol",
-             "stateless_step", "force_floor", "gap_margin", "v_rest", "max_events")
-
-
 #: numpy's float64 descriptor (an identity test: a dtype's == parses its other side first)
 _F64 = np.dtype(np.float64)
 
@@ -119,11 +114,6 @@ def _floats(x) -> list:
     if type(x) is np.ndarray and x.dtype is _F64:
         return x.tolist()
     return [float(a) for a in x]
-
-
-def _checked_arguments(*args, **kwargs) -> tuple:
-    """Stands in for a Python scheme class in its `from_options`: (args, kwargs) it would be built with."""
-    return args, kwargs
 
 
 #: model class -> a getter of its declared parameters in order, as a tuple (declared_parameters is slow to call
@@ -171,10 +161,9 @@ class _Log:
 
 
 class CompiledIntegrator(Integrator):
-    """An integration scheme run by the C engine: the same algorithm as the Python scheme of the same name
-    (``moreau_jean`` or ``event_driven``), the same state format (`get_state` / `set_state`), the same reports and
-    errors. The checkpoint around an advance is a copy of a C struct, the outputs are computed by the engine on
-    demand."""
+    """An integration scheme (``moreau_jean`` or ``event_driven``, declared in
+    `rocking_model.integrators.schemes`) run by the C engine. The checkpoint around an advance is a copy of a C
+    struct, the outputs are computed by the engine on demand."""
 
     engine = "c"
 
@@ -183,8 +172,7 @@ class CompiledIntegrator(Integrator):
             _engine = _extension()
         except ImportError as exc:
             raise ImportError("engine='c' needs the compiled extension rocking_model._engine, which is not built "
-                              f"({exc}); `pip install .` builds it (a C compiler is required), or use "
-                              "engine='python'") from exc
+                              f"({exc}); `pip install .` builds it (a C compiler is required)") from exc
 
         ref_cls = SCHEMES[scheme]
         self.name, self.code, self.summary = ref_cls.name, ref_cls.code, ref_cls.summary
@@ -216,27 +204,18 @@ class CompiledIntegrator(Integrator):
 
     @classmethod
     def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
-        # the Python scheme's own checks of its options first (the same messages), then the engine's. The
-        # scheme's `from_options` runs with `_checked_arguments` in place of the class: its checks run, and the
-        # arguments it would build the scheme with are kept; the Python scheme itself (its settings: dt_max,
-        # the scaled tolerances ...) is built only if someone reads them (`__getattr__`), not on every run
-        ref_args = SCHEMES[scheme].from_options.__func__(_checked_arguments, model, mode, q, v, t0, options)
+        # the scheme's checks of its options first (messages naming the option), then the engine's
+        settings = SCHEMES[scheme].settings(model, options)
         integ = cls(model, scheme, mode, q, v, t0, options)
-        integ._ref_args = ref_args
+        integ._settings = settings
         return integ
 
     def __getattr__(self, name):
-        # the scheme's settings (dt_max, theta, tolerance, method, the scaled tolerances ...), as the Python
-        # scheme computed them from the same options; never its state (that is the engine's)
-        d = self.__dict__
-        if name in _SETTINGS:
-            settings = d.get("_settings")
-            if settings is None and "_ref_args" in d:
-                args, kwargs = d["_ref_args"]
-                ref = d["_scheme_cls"](*args, **kwargs)
-                settings = d["_settings"] = {key: getattr(ref, key) for key in _SETTINGS if key in ref.__dict__}
-            if settings is not None and name in settings:
-                return settings[name]
+        # the scheme's settings (dt_max, theta, tolerance, method, tolerances) as checked from the options;
+        # never its state (that is the engine's)
+        settings = self.__dict__.get("_settings")
+        if settings is not None and name in settings:
+            return settings[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _engine_args(self):
@@ -449,11 +428,9 @@ class CompiledIntegrator(Integrator):
         return {key: state[key] for key in self.STATE_KEYS}
 
     def set_state(self, state) -> None:
-        """Load a `get_state` dict: checked field by field by the Python scheme itself (the same messages), then
-        loaded into the engine (which checks it again in C); nothing changes on error."""
-        ref = self._scheme_cls.from_options(self.model, *self._start, self._t0, self._options)
-        ref.set_state(state)
-        self._engine.set_state(ref.get_state())
+        """Load a `get_state` dict: its fields read with their types checked (`read_state`), then loaded into the
+        engine, which checks their ranges and consistency with the model; nothing changes on error."""
+        self._engine.set_state(self._scheme_cls.read_state(self.model, state, self._options.impact_log_size))
 
     def report(self, kind: str, t: float, message: str) -> None:
         self.reports.append(Report(kind, float(t), message))

@@ -12,12 +12,6 @@
 #include <math.h>
 #include <string.h>
 
-/* the test entry points of parts A-D (rocking_model/engine/py/py_*.c) */
-extern PyMethodDef rk_py_model_methods[];
-extern PyMethodDef rk_py_contact_methods[];
-extern PyMethodDef rk_py_rk_methods[];
-extern PyMethodDef rk_py_ed_methods[];
-
 static int read_doubles(PyObject *seq, const char *name, double *out, int cap, int *n)
 {
     PyObject *fast;
@@ -1571,6 +1565,59 @@ static PyType_Spec engine_spec = {
     "rocking_model._engine.Engine", (int)sizeof(EngineObject), 0, Py_TPFLAGS_DEFAULT, engine_slots
 };
 
+/* model_kinds(): the registered model kernels and their declarations (parameters, initial values,
+ * outputs), so that a caller of the low-level Engine can build its parameter list without the package */
+static PyObject *int_list_of(const int *x, int n)
+{
+    PyObject *out = PyList_New(n);
+    int i;
+    if (out == NULL)
+        return NULL;
+    for (i = 0; i < n; i++)
+        PyList_SET_ITEM(out, i, PyLong_FromLong(x[i]));
+    return out;
+}
+
+static PyObject *decls_of(const rk_param_decl *d, int n)
+{
+    PyObject *out = PyList_New(n);
+    int i;
+    if (out == NULL)
+        return NULL;
+    for (i = 0; i < n; i++)
+        PyList_SET_ITEM(out, i, Py_BuildValue("(ssdddiiiii)", d[i].name, d[i].unit, d[i].default_value, d[i].lo,
+                                              d[i].hi, d[i].lo_open, d[i].hi_open, d[i].inf_ok, d[i].integer,
+                                              d[i].n_items));
+    return out;
+}
+
+static PyObject *py_model_kinds(PyObject *self, PyObject *args)
+{
+    const rk_model_ops *const *k;
+    PyObject *out = PyList_New(0);
+    (void)self; (void)args;
+    if (out == NULL)
+        return NULL;
+    for (k = rk_model_kinds(); *k != NULL; k++) {
+        const rk_model_ops *o = *k;
+        PyObject *item = Py_BuildValue("{s:s,s:s,s:i,s:i,s:i,s:i,s:i,s:i,s:N,s:N,s:N,s:N}", "kind", o->kind,
+                                       "class_name", o->class_name, "n_dof", o->n_dof, "n_contacts", o->n_contacts,
+                                       "n_modes", o->n_modes, "phi_index", o->phi_index, "slide_index",
+                                       o->slide_index, "lift_index", o->lift_index,
+                                       "params", decls_of(o->param_decls, o->n_params),
+                                       "initial", decls_of(o->initial_decls, o->n_initial),
+                                       "outputs", decls_of(o->output_decls, o->n_outputs),
+                                       "shifted", int_list_of(o->shifted, o->n_shifted));
+        if (item == NULL || PyList_Append(out, item) < 0) {
+            Py_XDECREF(item);
+            Py_DECREF(out);
+            return NULL;
+        }
+        Py_DECREF(item);
+    }
+    return out;
+}
+
 static PyObject *py_version(PyObject *self, PyObject *args)
 {
     (void)self; (void)args;
@@ -1721,6 +1768,7 @@ static PyMethodDef methods[] = {
     {"add_model", py_add_model, METH_O, "add_model(address): add the kernel (rk_model_ops *) of a model declared "
      "after the build."},
     {"kinds", py_kinds, METH_NOARGS, "kinds() -> str: the known model kinds, quoted and comma-separated."},
+    {"model_kinds", py_model_kinds, METH_NOARGS, "model_kinds() -> the registered model kernels and their declarations."},
     {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
     {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
     {"motion_eval", py_motion_eval, METH_VARARGS,
@@ -1744,11 +1792,6 @@ PyMODINIT_FUNC PyInit__engine(void)
     PyObject *m = PyModule_Create(&module);
     if (m == NULL)
         return NULL;
-    if (PyModule_AddFunctions(m, rk_py_model_methods) < 0 || PyModule_AddFunctions(m, rk_py_contact_methods) < 0
-        || PyModule_AddFunctions(m, rk_py_rk_methods) < 0 || PyModule_AddFunctions(m, rk_py_ed_methods) < 0) {
-        Py_DECREF(m);
-        return NULL;
-    }
     {
         PyObject *type = PyType_FromSpec(&engine_spec);
         if (type == NULL || PyModule_AddObject(m, "Engine", type) < 0) {

@@ -1,17 +1,14 @@
-"""Generate src/rk_tableaux.h, the Runge-Kutta tableaux of the C engine, from the Python ones (issue 21).
+"""Generate src/rk_tableaux.h, the Runge-Kutta tableaux of the C engine, from rocking_model/engine/tableaux.py.
 
-One source of truth: the coefficients live in rocking_model/integrators/dop853.py and dopri5.py, from which the
-Python generates its straight-line step code (rk._Compiled). This script reads the same lists with `ast` (no
-import: the build environment has no numpy) and writes them as C data, with the nonzero pattern that
-`rk._lincomb` uses (zero coefficients left out, the others in index order), so that the C sums add the same
-terms in the same order as the generated Python. Which lists form the error estimates and the dense-output
-rows is read from the tableau classes' `error_sources` and `dense_sources` too. The error norm and the
-interpolant are code, not data: rk_rk.c implements each tableau's form (``style``), pinned to the Python by
-tests/test_engine_rk.py.
+The coefficients live in one place, tableaux.py (plain data), which this script reads with `ast` (no import: the
+build environment has no numpy) and writes as C data, each combination sum_i c_i k_i as its nonzero terms in
+index order (the order the C sums them in). Which lists form the error estimates and the dense-output rows is
+read from each pair's ``error_rows`` and ``dense_rows``. The error norm and the interpolant are code, not data:
+rk_rk.c implements each tableau's form (``style``).
 
 Also records whether the Python that builds the extension sums floats with Neumaier's compensation
-(``sum()`` since CPython 3.12): `ExplicitRK._initial_step` uses ``sum``, so the C follows the interpreter it is
-built for.
+(``sum()`` since CPython 3.12): the C initial step size follows the interpreter it is built for (the results
+recorded so far were computed that way).
 
 Run by setup.py at every build; rewrites the header only when its content changes (no needless rebuild).
 Usage: python rocking_model/engine/gen_rk.py (no arguments: setup.py runs it as __main__ with its own argv, so
@@ -24,12 +21,12 @@ import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-INTEGRATORS = os.path.join(HERE, os.pardir, "integrators")
+SOURCE = os.path.join(HERE, "tableaux.py")
 OUTPUT = os.path.join(HERE, "src", "rk_tableaux.h")
 
-#: the tableaux: (source file, class name, C style code); the style selects the error norm and interpolant
-#: forms of rk_rk.c (error_norm_source / interpolant_source of that class)
-TABLEAUX = [("dop853.py", "_DOP853Tableau", "RK_STYLE_DOP853"), ("dopri5.py", "_DOPRI5Tableau", "RK_STYLE_DOPRI5")]
+#: the tableaux: (class name in tableaux.py, C style code); the style selects the error norm and interpolant
+#: forms of rk_rk.c
+TABLEAUX = [("DOP853", "RK_STYLE_DOP853"), ("DOPRI5", "RK_STYLE_DOPRI5")]
 #: limits of rk_rk.h (RK_MAX_STAGES, RK_MAX_DENSE); checked here and in the generated header
 MAX_STAGES = 16
 MAX_DENSE = 8
@@ -71,53 +68,9 @@ def _assign(stmt, env, into):
                 into[e.id] = v
 
 
-def _self_attrs(node):
-    """Names X of the ``self.X`` read in a function body, in source order."""
-    out = []
-    for sub in ast.walk(node):
-        if (isinstance(sub, ast.Attribute) and isinstance(sub.value, ast.Name) and sub.value.id == "self"
-                and sub.attr not in out):
-            out.append(sub.attr)
-    return out
-
-
-def _method(cls, name):
-    for stmt in cls.body:
-        if isinstance(stmt, ast.FunctionDef) and stmt.name == name:
-            return stmt
-    raise ValueError(f"gen_rk: {cls.name} has no method {name}")
-
-
-def _error_lists(cls):
-    """The coefficient lists of `error_sources`, in the order of the returned list (er0, er1 per component)."""
-    fn = _method(cls, "error_sources")
-    ret = [s for s in ast.walk(fn) if isinstance(s, ast.Return)]
-    if len(ret) != 1 or not isinstance(ret[0].value, ast.List):
-        raise ValueError(f"gen_rk: {cls.name}.error_sources must return one list of _lincomb(self.X, ...)")
-    names = []
-    for call in ret[0].value.elts:
-        arg = call.args[0] if isinstance(call, ast.Call) and call.args else None
-        if not (isinstance(arg, ast.Attribute) and isinstance(arg.value, ast.Name) and arg.value.id == "self"):
-            raise ValueError(f"gen_rk: {cls.name}.error_sources: expected _lincomb(self.X, names, j)")
-        names.append(arg.attr)
-    return names
-
-
-def _dense_list(cls):
-    """The attribute holding the dense-output rows (``for row in self.X`` in `dense_sources`)."""
-    fn = _method(cls, "dense_sources")
-    for sub in ast.walk(fn):
-        if isinstance(sub, ast.comprehension):
-            it = sub.iter
-            if isinstance(it, ast.Attribute) and isinstance(it.value, ast.Name) and it.value.id == "self":
-                return it.attr
-    raise ValueError(f"gen_rk: {cls.name}.dense_sources: expected a comprehension over self.X")
-
-
-def read_tableau(filename, class_name):
-    """The tableau of ``class_name`` in integrators/``filename``: a dict of name, order, error_order, n_stages,
-    A, B, C, errors (list of lists), dense (list of rows)."""
-    path = os.path.join(INTEGRATORS, filename)
+def read_tableau(class_name, path=SOURCE):
+    """The tableau of ``class_name`` in tableaux.py: a dict of name, order, error_order, n_stages, A, B, C,
+    errors (list of lists), dense (list of rows)."""
     with open(path, encoding="utf-8") as fh:
         tree = ast.parse(fh.read(), filename=path)
     env: dict = {}
@@ -137,8 +90,8 @@ def read_tableau(filename, class_name):
         if isinstance(stmt, (ast.Assign, ast.AnnAssign)) and stmt.value is not None:
             _assign(stmt, {**env, **attrs}, attrs)
     tab = {k: attrs[k] for k in ("name", "order", "error_order", "n_stages", "A", "B", "C")}
-    tab["error_names"] = _error_lists(cls)
-    tab["dense_name"] = _dense_list(cls)
+    tab["error_names"] = list(attrs["error_rows"])
+    tab["dense_name"] = attrs["dense_rows"]
     tab["errors"] = [attrs[n] for n in tab["error_names"]]
     tab["dense"] = attrs[tab["dense_name"]]
     tab["source"] = os.path.relpath(path, os.path.join(HERE, os.pardir, os.pardir)).replace(os.sep, "/")
@@ -146,7 +99,7 @@ def read_tableau(filename, class_name):
 
 
 def nonzero(coefs):
-    """(indices, values) of the terms `rk._lincomb` writes: the nonzero coefficients in index order."""
+    """(indices, values) of the terms of a combination: the nonzero coefficients in index order."""
     idx = [i for i, c in enumerate(coefs) if float(c) != 0.0]
     return idx, [float(coefs[i]) for i in idx]
 
@@ -186,25 +139,24 @@ def check(tab):
 def render(tableaux, compensated_sum: bool) -> str:
     out = ["/* rk_tableaux.h -- GENERATED by rocking_model/engine/gen_rk.py at build time: do not edit, do not commit.",
            " *",
-           " * The Runge-Kutta tableaux of the Python steppers, read from " +
-           ", ".join(t["source"] for t, _ in tableaux) + ",",
-           " * as C data: each combination sum_i c_i k_i lists its nonzero terms in index order, exactly the terms",
-           " * rk._lincomb writes into the generated Python (the C adds them in the same order). Included by rk_rk.c",
+           " * The Runge-Kutta tableaux, read from " +
+           ", ".join(sorted({t["source"] for t, _ in tableaux})) + ",",
+           " * as C data: each combination sum_i c_i k_i lists its nonzero terms in index order (the C adds them in",
+           " * that order). Included by rk_rk.c",
            " * only. Literals are hexadecimal (exact); the comments give the Python repr. */",
            "#ifndef RK_TABLEAUX_H", "#define RK_TABLEAUX_H", "",
            '#include "rk_rk.h"', "",
-           "/* 1: the building Python's sum() of floats is Neumaier-compensated (CPython >= 3.12), used by",
-           " * ExplicitRK._initial_step; 0: plain left-to-right addition (a -D on the command line overrides it,",
+           "/* 1: the building Python's sum() of floats is Neumaier-compensated (CPython >= 3.12), followed by",
+           " * the initial step size; 0: plain left-to-right addition (a -D on the command line overrides it,",
            " * for the test of both forms) */",
            "#ifndef RK_PY_SUM_COMPENSATED",
            f"#define RK_PY_SUM_COMPENSATED {1 if compensated_sum else 0}", "#endif", "",
-           "/* the error-norm and interpolant forms of rk_rk.c (the tableau classes' error_norm_source and",
-           " * interpolant_source) */",
+           "/* the error-norm and interpolant forms of rk_rk.c */",
            "#define RK_STYLE_DOP853 0", "#define RK_STYLE_DOPRI5 1", "",
            "/* limits this file was generated for (rk_rk.h must allow them) */",
            f"typedef char rk_tableaux_stages_fit[(RK_MAX_STAGES >= {MAX_STAGES}) ? 1 : -1];",
            f"typedef char rk_tableaux_dense_fit[(RK_MAX_DENSE >= {MAX_DENSE}) ? 1 : -1];", "",
-           "/** sum_i c[i] k_{idx[i]}: the nonzero terms of a combination, in the Python's order */",
+           "/** sum_i c[i] k_{idx[i]}: the nonzero terms of a combination, in index order */",
            "typedef struct rk_lincomb {", "    int n;", f"    int idx[{MAX_STAGES}];", f"    double c[{MAX_STAGES}];",
            "} rk_lincomb;", "",
            "struct rk_tableau {",
@@ -222,8 +174,7 @@ def render(tableaux, compensated_sum: bool) -> str:
            "    int n_dense;        /**< dense-output coefficient rows (dense_sources) */",
            f"    rk_lincomb D[{MAX_DENSE}];",
            "};", ""]
-    out += ["/* the data: in rk_rk.c only (which defines RK_TABLEAUX_DEFINE_DATA); the test entry points read the",
-            " * layout through rk_tableau_of */", "#ifdef RK_TABLEAUX_DEFINE_DATA", ""]
+    out += ["/* the data: in rk_rk.c only (which defines RK_TABLEAUX_DEFINE_DATA) */", "#ifdef RK_TABLEAUX_DEFINE_DATA", ""]
     for tab, style in tableaux:
         n_all = len(tab["A"])
         C = list(tab["C"])[:MAX_STAGES] + [0.0] * (MAX_STAGES - min(len(tab["C"]), MAX_STAGES))
@@ -254,8 +205,8 @@ def render(tableaux, compensated_sum: bool) -> str:
 def generate(path: str = OUTPUT) -> bool:
     """Write the header if its content changed; returns whether it was written."""
     tableaux = []
-    for filename, cls, style in TABLEAUX:
-        tab = read_tableau(filename, cls)
+    for cls, style in TABLEAUX:
+        tab = read_tableau(cls)
         check(tab)
         tableaux.append((tab, style))
     text = render(tableaux, compensated_sum=sys.version_info >= (3, 12))

@@ -1,11 +1,7 @@
 """The slave and its state machine: `RockingSlave`, the generic pythonfmu slave around a `Simulator` that
 the FMU scripts subclass (see the package docstring of `rocking_model.fmi` for the status of every call).
 
-Engine. The model FMUs (`ModelSlave`) run the compiled engine (`Simulator(engine="c")`); the environment
-variable ``ROCKING_FMU_ENGINE=python`` (`ENGINE_VARIABLE`, read when the simulator is built: at
-fmi2ExitInitializationMode and fmi2SetFMUstate) selects the Python reference engine instead, with the same
-results to the engine's pinning tolerance and the same state format. It is not an FMU parameter: the
-engine is a property of the installation, not of the model.
+Engine. The model FMUs (`ModelSlave`) run the compiled engine through a `Simulator`.
 
 Per-step path on the compiled engine (`RockingSlave._bind`): fmi2SetReal of the input is one range comparison,
 fmi2DoStep is one `Engine.advance` between the engine's checkpoint and commit (a refused step is rolled back
@@ -444,11 +440,11 @@ class RockingSlave(Fmi2Slave):
         """Set up the lean per-step path on the compiled engine of the simulator (`Simulator(engine="c")`):
         do_step is one advance of the engine between its checkpoint and commit, and the outputs are read from
         the engine when the importer asks for them (`rocking_model.engine`'s output_row, cached until the next
-        step), nothing copied per step. Any other simulator (the Python engine, a MotionSource) keeps the
+        step), nothing copied per step. Any other simulator (a MotionSource) keeps the
         checked path: outputs copied from ``outputs()`` after every step."""
         sim, eng = self._sim, None
         self._real_out = {}
-        if isinstance(sim, Simulator) and sim.engine == "c":
+        if isinstance(sim, Simulator):
             eng = sim.integrator._engine
             keys = [*eng.output_names, "contact", "impacts", "overturned", "friction_demand", "painleve"]
             pos = {k: i for i, k in enumerate(keys)}
@@ -831,27 +827,6 @@ def _check_value(name: str, type_: str, value):
     return value
 
 
-#: environment variable that chooses the engine of the model FMUs (`ModelSlave`): "c" (default, the compiled
-#: engine: each doStep one call into C) or "python" (the reference implementation); read when the simulator
-#: is built (fmi2ExitInitializationMode, fmi2SetFMUstate), not an FMU parameter
-ENGINE_VARIABLE = "ROCKING_FMU_ENGINE"
-
-
-def fmu_engine() -> str:
-    """The engine the model FMUs run: `ENGINE_VARIABLE` (unset or empty: the Simulator's default, "c"; or
-    "python")."""
-    import os
-
-    from ..engine import ENGINES
-    from ..simulation import DEFAULT_ENGINE
-
-    value = os.environ.get(ENGINE_VARIABLE, "").strip() or DEFAULT_ENGINE
-    if value not in ENGINES:
-        raise ValueError(f"environment variable {ENGINE_VARIABLE} = {value!r} is invalid; allowed values "
-                         f"{', '.join(sorted(ENGINES))} (unset: {DEFAULT_ENGINE})")
-    return value
-
-
 class ModelSlave(RockingSlave):
     """The FMU of a registered model (`rocking_model.models.MODELS`), its whole interface derived from the
     model's declarations: parameters (start values, units, ranges, descriptions), initial values, the solver
@@ -923,7 +898,7 @@ class ModelSlave(RockingSlave):
         try:
             model = cls(**{q.name: p[q.name] for q in cls.parameters() if q.fmu})
             # impact_log_size = 0: the FMU keeps no impact log (memory flat over any run; the count is kept)
-            return Simulator(model, t0=t0, impact_log_size=0, max_steps=max_steps, engine=fmu_engine(),
+            return Simulator(model, t0=t0, impact_log_size=0, max_steps=max_steps,
                              **options, **initial)
         except ArithmeticError as exc:
             # guard: a value inside its declared range whose derived quantities overflow (a subnormal number

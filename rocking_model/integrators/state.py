@@ -1,8 +1,7 @@
-"""What both integrators share about their state: the checks of a loaded plain-data state
-(`check_times`, `check_configuration`) and the snapshot an `advance` is rolled back to (`Checkpointed`)."""
+"""What both schemes share about their state: the check of a loaded plain-data state's impact times
+(`check_times`) and the snapshot an `advance` is rolled back to (`Checkpointed`)."""
 from __future__ import annotations
 
-import math
 
 
 class Checkpointed:
@@ -44,24 +43,3 @@ def check_times(state, key, times, t, impacts) -> list:
         if ti > t_max or (i and ti < times[i - 1]):
             raise ValueError(f"state field {key!r}: impact time {ti!r} is after t = {t!r} or out of order")
     return times
-
-
-def check_configuration(model, state, key, q, v, overturned, gap_tol) -> None:
-    """The full state (q, v) read from field ``key``: |phi| < pi/2 unless overturned, at rest if overturned,
-    corners not below the ground by more than gap_tol [m], and the outputs finite."""
-    phi = float(q[model.phi_index])
-    if not overturned and not abs(phi) < 0.5 * math.pi:
-        raise ValueError(f"state field {key!r}: |phi| = {abs(phi):g} rad reaches pi/2 but 'overturned' is "
-                         "False; allowed range (-pi/2, pi/2)")
-    if overturned and any(float(a) != 0.0 for a in v):
-        raise ValueError(f"state field {key!r}: the velocities must be 0 once 'overturned' is True (the pose "
-                         "reached at overturning is kept at rest); got a moving state")
-    gaps = model.gaps(q)
-    if not overturned and min(gaps) < -gap_tol:
-        raise ValueError(f"state field {key!r}: a base corner is {-min(gaps):g} m below the ground; allowed at "
-                         f"most {gap_tol:g} m")
-    out = model.outputs(q, v)
-    bad = [name for name, value in out.items() if not math.isfinite(value)]
-    if bad:
-        raise ValueError(f"state field {key!r} gives non-finite outputs ({', '.join(bad)}); the values are too "
-                         "large for the model")

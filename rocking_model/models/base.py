@@ -11,8 +11,10 @@ A model bundles, in the Siconos sense,
 - the reduced coordinates r of each contact mode (a set of closed contacts), with the embedding q = q(r),
   v = J(r) r_dot.
 
-The nonsmooth law (Newton impact, sticking) and the one-step problems (LCPs) live in `rocking_model.lcp` and
-`rocking_model.contact`; the integrators only talk to this interface.
+The simulations run in the compiled engine (rocking_model/engine/src: rk_rigid.c, rk_flexible.c implement the
+same model per kind, with the contact problems and both schemes); the classes here declare the models
+(parameters and their checks, initial values, outputs, derived quantities) and give their mechanics as numpy
+functions for analysis: the closed-form impact maps (`rocking_model.post_impact`) and the tests use them.
 
 Contract (in the style of scipy's ``OdeSolver``)
 -----------------------------------------------
@@ -39,22 +41,10 @@ A subclass may provide (the defaults here are generic and correct, the overrides
     step_limit                                  largest time-stepper step [s]; default inf
     dof_scales                                  scale of each coordinate for error control; default 1 for
                                                 phi, length_scale for the others
-    classical_impact_velocity(q, v_minus, mode) an impact rule replacing the impact LCP at a rocking impact;
-                                                default None (the LCP with Newton's law)
     reduced_acceleration, contact_forces        per mode, from the numpy interface (each takes ag, ag_v=0.0)
-    mode_functions, mode_outputs(_array)        float-level right-hand sides, event functions and outputs
     force_scale                                 scale of the contact forces [N]; default |f| at rest
-    force_totals_of(mode, ag)                   float-level (sum lambda_N, sum lambda_T) of a mode (the
-                                                friction demand and cone); default generic numpy
-    mode_closures(mode, ag)                     (rhs, monitors, totals) built together (shared work)
     SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
 
-The functions that take a GroundMotion ``ag`` (mode_closures, mode_functions, functions_of, force_totals_of)
-read its vertical component from ``ag.vertical`` (None: ag_v = 0; `vertical_of`, `effective_gravity`).
-
-The sliding modes (`rocking_model.modes.SLIDING`) need nothing more: their coordinates, right-hand sides and
-events are derived from the sticking modes' (`rocking_model.models.sliding`); the integrators reach every
-mode through `dofs_of`, `embed_any`, `reduce_any`, `functions_of`, `outputs_of` and `outputs_array_of`.
     fields()                                    declared parameters (name, unit, range, description):
                                                 the Python API, the CLI and the FMUs read them
 """
@@ -65,12 +55,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from .._ordered import inverse
-
-from ..contact import mode_forces
-from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, SLIDING, Mode, mode_from_closed
+from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, Mode, mode_from_closed
 from ..params import Param, declared_parameters, param
-from . import sliding
 
 #: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
 HALF_PI = 0.5 * math.pi
@@ -79,34 +65,6 @@ HALF_PI = 0.5 * math.pi
 PHI_0 = Param("phi_0", 0.0, "rad", "Initial rotation (positive: pivoting on the left corner), |phi_0| < pi/2",
               lo=-math.pi / 2, hi=math.pi / 2, lo_open=True, hi_open=True)
 PHI_DOT_0 = Param("phi_dot_0", 0.0, "rad/s", "Initial angular velocity", lo=-1e4, hi=1e4)
-
-
-def _zero(t: float) -> float:
-    return 0.0
-
-
-def vertical_of(ag):
-    """t -> ag_v(t) [m/s2] of the GroundMotion ``ag``: its vertical component (positive upward), its value when
-    constant, or 0.0 when it has none (``ag.vertical`` is None)."""
-    vert = ag.vertical
-    if vert is None:
-        return _zero
-    if vert.constant:
-        value = vert.value
-        return lambda t: value
-    return vert
-
-
-def effective_gravity(ag, g: float):
-    """(g_e0, vert) for closed forms under the effective gravity g_e = g + ag_v(t) [m/s2] of the GroundMotion
-    ``ag`` and the gravity ``g`` [m/s2]: vert None means the constant g_e = g_e0 (g itself without a vertical
-    component, so that g_e / g == 1.0 exactly; g + ag_v for a constant one), else g_e = g + vert(t)."""
-    vert = ag.vertical
-    if vert is None:
-        return g, None
-    if vert.constant:
-        return g + vert.value, None
-    return 0.0, vert
 
 
 def body_outputs(body: str, point: str) -> tuple:
@@ -272,11 +230,6 @@ class RockingModel(ABC):
         ag [m/s2] horizontal ground acceleration (+x), ag_v [m/s2] vertical (positive upward: gravity g becomes
         the effective gravity g + ag_v on every mass)."""
 
-    def inverse_mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q)^-1, shape (n, n); override with a closed form where there is one. (Gauss-Jordan in the C
-        engine's operation order: rocking_model/_ordered.py.)"""
-        return inverse(self.mass_matrix(q))
-
     def stiff_jacobians(self, q: np.ndarray, v: np.ndarray):
         """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f, treated implicitly by the time-stepper.
 
@@ -316,11 +269,6 @@ class RockingModel(ABC):
             object.__setattr__(self, "_rest_x", cached)
         return cached
 
-    def classical_impact_velocity(self, q: np.ndarray, v_minus: np.ndarray, mode) -> np.ndarray | None:
-        """Post-impact velocities of an impact rule that replaces the impact LCP when the open contact of a
-        rocking ``mode`` hits the ground; None (the default): the impact LCP with Newton's law decides."""
-        return None
-
     # ------------------------------------------------------------------ contact modes
     @abstractmethod
     def mode_dofs(self, mode: Mode) -> tuple[int, ...]:
@@ -351,14 +299,6 @@ class RockingModel(ABC):
         rhs = J.T @ (self.forces(q, v, ag, ag_v) - M @ jd)
         return np.linalg.solve(J.T @ M @ J, rhs)
 
-    def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
-        """Normal forces [N] of the closed corners of ``mode`` held closed (bilateral), shape (2,); ag, ag_v
-        [m/s2] as in `forces`.
-
-        Generic: the acceleration-level problem with the mode's corners forced closed; models may override
-        with a closed form."""
-        return mode_forces(self, mode, q, v, ag, ag_v)
-
     @property
     def work_note(self) -> str:
         """What drives the cost of a step of this model, for the messages of a refused step (e.g. a stiff
@@ -377,144 +317,12 @@ class RockingModel(ABC):
         """Largest Moreau-Jean step [s] the model tolerates (inf: no limit); the time-stepper sub-steps to it."""
         return math.inf
 
-    # ------------------------------------------------------------------ any mode, sliding ones included
-    # The models implement their sticking modes (above, closed forms); the sliding modes are generic
-    # (`rocking_model.models.sliding`). The event-driven scheme calls these.
-    def dofs_of(self, mode) -> tuple:
-        """`mode_dofs` of any mode."""
-        return sliding.slide_dofs(self, mode) if mode in SLIDING else self.mode_dofs(mode)
-
-    def embed_any(self, mode, r, r_dot) -> tuple[np.ndarray, np.ndarray]:
-        """`embed` of any mode."""
-        return sliding.slide_embed(self, mode, r, r_dot) if mode in SLIDING else self.embed(mode, r, r_dot)
-
-    def reduce_any(self, mode, q, v) -> tuple[np.ndarray, np.ndarray]:
-        """`reduce` of any mode."""
-        return sliding.slide_reduce(self, mode, q, v) if mode in SLIDING else self.reduce(mode, q, v)
-
-    def functions_of(self, mode, ag):
-        """(rhs, monitors, totals) of any mode: `mode_closures`, where with a finite mu a closed sticking mode
-        gets one more event function before the overturning margin, (mu sum lambda_N - |sum lambda_T|) /
-        force_scale, positive while the corners stick (the friction cone); a sliding mode's are those of
-        `sliding.slide_functions` and its `force_totals_of`."""
-        if mode in SLIDING:
-            return sliding.slide_functions(self, mode, ag) + (self.force_totals_of(mode, ag),)
-        rhs, monitors, totals = self.mode_closures(mode, ag)
-        if math.isinf(self.mu) or not self.closed_of(mode):
-            return rhs, monitors, totals
-        mu, F = self.mu, self.force_scale
-
-        def cone_monitors(t, y):
-            out = monitors(t, y)
-            lam_N, lam_T = totals(t, y)
-            return out[:-1] + [(mu * lam_N - abs(lam_T)) / F, out[-1]]
-        return rhs, cone_monitors, totals
-
-    def mode_closures(self, mode, ag):
-        """(rhs, monitors, totals) of the sticking ``mode``: `mode_functions` and, with closed corners,
-        `force_totals_of` (None in flight). Models override it to share work between the monitors and the
-        totals (the event-driven scheme evaluates both at the end of every step)."""
-        return self.mode_functions(mode, ag) + (self.force_totals_of(mode, ag) if self.closed_of(mode) else None,)
-
-    def force_totals_of(self, mode, ag):
-        """float-level (t, y) -> (sum lambda_N, sum lambda_T) [N] of the closed corners of ``mode`` (the
-        friction demand); generic numpy code, models may override with closed forms for sticking modes."""
-        a_of = (lambda t: ag.value) if ag.constant else ag
-        av_of = vertical_of(ag)
-        if mode in SLIDING:
-            k = len(sliding.slide_dofs(self, mode))
-            sigma, inv_mu = SLIDING[mode][1], 0.0 if math.isinf(self.mu) else 1.0 / self.mu
-
-            def slide_totals(t, y):
-                q, v = sliding.slide_embed(self, mode, y[:k], y[k:])
-                tau = float(np.sum(sliding.slide_motion(self, mode, q, v, a_of(t), av_of(t))[1]))
-                return inv_mu * tau, -sigma * tau
-            return slide_totals
-        k = len(self.mode_dofs(mode))
-
-        def totals(t, y):
-            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            return sliding.force_totals(self, mode, q, v, a_of(t), av_of(t))
-        return totals
-
-    def outputs_of(self, mode, y, shift: float = 0.0) -> dict:
-        """`mode_outputs` of any mode; ``shift`` [m]: the horizontal offset of a sticking mode's base."""
-        if mode in SLIDING:
-            k = len(y) // 2
-            return self.outputs(*sliding.slide_embed(self, mode, y[:k], y[k:]))
-        out = self.mode_outputs(mode, y)
-        if shift:
-            for name in self.SHIFTED_OUTPUTS:
-                out[name] += shift
-        return out
-
-    def outputs_array_of(self, mode, Y, shift=None) -> dict:
-        """`mode_outputs_array` of any mode; ``shift``: offsets per row (sticking modes)."""
-        if mode in SLIDING:
-            rows = [self.outputs_of(mode, list(y)) for y in Y]
-            return {name: np.array([r[name] for r in rows], dtype=float) for name in rows[0]} if rows else {}
-        out = self.mode_outputs_array(mode, Y)
-        if shift is not None and np.any(shift):
-            for name in self.SHIFTED_OUTPUTS:
-                out[name] = out[name] + shift
-        return out
-
-    # ------------------------------------------------------------------ float-level mode functions
+    # ------------------------------------------------------------------ scales
     @property
     def force_scale(self) -> float:
         """Scale of the contact forces [N] (the weight): normalises the force events."""
         q = self.rest_position()
         return float(np.linalg.norm(self.forces(q, np.zeros_like(q), 0.0)))
-
-    def mode_functions(self, mode: Mode, ag):
-        """(rhs, monitors) of ``mode`` under the ground motion ``ag`` (a GroundMotion), on lists of floats.
-
-        rhs(t, y) -> [r_dot..., r_ddot...] for the reduced state y = [r..., r_dot...];
-        monitors(t, y) -> [e_0, .., e_{n-1}, pi/2 - |phi|]: the event functions, positive inside the mode (the
-        last one is the overturning margin [rad]); e_i of a closed corner is its normal force / force_scale, of an
-        open corner a measure of its opening, positive while open (gap / length_scale; while rocking, the
-        tilt -s phi [rad] of the lifted corner, exact where the gap loses digits).
-
-        Generic version on top of the numpy interface; models override it with closed forms (the event-driven
-        scheme calls these some twenty times per step)."""
-        k = len(self.mode_dofs(mode))
-        closed = self.closed_of(mode)
-        nc = self.n_contacts
-        F, L, ip = self.force_scale, self.length_scale, self.phi_index
-        a_of = (lambda t: ag.value) if ag.constant else ag
-        av_of = vertical_of(ag)
-
-        def rhs(t, y):
-            if k == 0:
-                return []
-            r, rd = np.array(y[:k]), np.array(y[k:])
-            return list(y[k:]) + self.reduced_acceleration(mode, r, rd, a_of(t), av_of(t)).tolist()
-
-        def monitors(t, y):
-            q, v = self.embed(mode, np.array(y[:k]), np.array(y[k:]))
-            lam = self.contact_forces(mode, q, v, a_of(t), av_of(t)) if closed else None
-            g = self.gaps(q)
-            phi = float(q[ip])
-            out = []
-            for i in range(nc):
-                if i in closed:
-                    out.append(float(lam[i]) / F)
-                elif not closed:
-                    out.append(float(g[i]) / L)
-                else:
-                    out.append(-phi if mode == Mode.RIGHT else phi)
-            return out + [HALF_PI - abs(phi)]
-        return rhs, monitors
-
-    def mode_outputs(self, mode: Mode, y) -> dict[str, float]:
-        """`outputs` of the reduced state y = [r..., r_dot...] of ``mode``."""
-        k = len(y) // 2
-        return self.outputs(*self.embed(mode, np.array(y[:k], dtype=float), np.array(y[k:], dtype=float)))
-
-    def mode_outputs_array(self, mode: Mode, Y: np.ndarray) -> dict[str, np.ndarray]:
-        """`mode_outputs` of many reduced states at once: Y has shape (N, 2k); arrays of length N."""
-        rows = [self.mode_outputs(mode, list(y)) for y in Y]
-        return {name: np.array([r[name] for r in rows], dtype=float) for name in rows[0]} if rows else {}
 
     # ------------------------------------------------------------------ quantities
     @abstractmethod

@@ -4,7 +4,7 @@ Setting: the oscillator (`FlexibleOscillator`) rocks on one base corner (the *ol
 +1 right) and reaches phi = 0 with flexural state (u, u_dot) and rotation rate phi_dot^- (phi_dot^- < 0 on
 the left pivot, > 0 on the right one); the other corner (the *new* one, s_n = -s_o) hits the ground with
 normal velocity -V, V = 2 b |phi_dot^-|. Impact law: Newton (coefficient e_N) in the normal direction,
-sticking at every corner that takes an impulse (the impact LCP of `rocking_model.contact.impact`).
+sticking at every corner that takes an impulse (the impact LCP the engine solves).
 
 Derivation (by hand, from the structure of the impact LCP)
 ----------------------------------------------------------

@@ -32,10 +32,9 @@ import numpy as np
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
 from ..validation import check_real
-from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
+from .base import (PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param,
                    impact_law_param)
 from .declare import ENERGY, SLIP, Check, ClassicalImpact, Mechanics
-from .flexible_impact import classical_impact
 
 
 #: [rad/s] largest fixed-base circular frequency omega = sqrt(k_tilde/m_tilde) of the column (1.6 kHz).
@@ -432,13 +431,6 @@ class FlexibleOscillator(RockingModel):
     def rest_position(self):
         return np.zeros(4)
 
-    def classical_impact_velocity(self, q, v_minus, pivot):
-        """Post-impact velocities of the classical rule (``impact_rule = 1``) for an impact at phi = 0 while
-        rocking on ``pivot``; None when the LCP with Newton's law is the rule (the default)."""
-        if self.impact_rule == 0:
-            return None
-        return classical_impact(self, float(q[0]), float(v_minus[0]), float(v_minus[3]), pivot).v_plus
-
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, u_0=0.0, u_dot_0=0.0, **extra):
         self.check_initial_names(extra)
         phi_0, phi_dot_0, _, u_dot_0 = (p.check(value) for p, value in
@@ -487,159 +479,7 @@ class FlexibleOscillator(RockingModel):
             "energy": kin + pot,
         }
 
-    # ------------------------------------------------------------------ float-level mode functions
     @property
     def force_scale(self) -> float:
         """The weight M_t g [N]."""
         return self.M_t * self.g
-
-    def mode_functions(self, mode, ag):
-        """Closed forms of `RockingModel.mode_functions` in full contact, rocking and flight."""
-        return self.mode_closures(mode, ag)[:2]
-
-    def force_totals_of(self, mode, ag):
-        """Closed forms of `RockingModel.force_totals_of` in full contact and rocking (sticking): the x and y
-        rows of M v_dot - f."""
-        totals = self.mode_closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
-        return totals or super().force_totals_of(mode, ag)
-
-    def mode_closures(self, mode, ag):
-        """(rhs, monitors, totals) of ``mode`` in closed form under the effective gravity g_e = g + ag_v(t)
-        [m/s2] (`effective_gravity`) wherever gravity acts (Eq. 55's gravity terms and the weight M_t g_e that
-        the corners carry; the normalisation by the weight W = M_t g stays). Without a vertical component g_e is
-        the constant g itself: today's floating-point operations, bit for bit. While rocking the totals reuse
-        what the monitors computed at the same (t, y)."""
-        const = ag.constant
-        a0 = ag.value if const else 0.0
-        hor = ag.horizontal
-        mt, kt, c, C, D, g = self.m_tilde, self.k_tilde, self.c, self.C, self.D, self.g
-        A_h, Mt, b, J0 = self.A_h, self.M_t, self.b, self.J0
-        ge0, vert = effective_gravity(ag, g)          # vert None: g_e = ge0 at all t
-        W, We0 = Mt * g, Mt * ge0           # (Mt * g_e == W exactly for g_e = g)
-        if mode == Mode.FLIGHT:
-            # M(q) v_dot = f(q, v, ag) on floats: M_xx = M_yy = M_t and M_xy = 0, so x and y are condensed out
-            # (Schur complement) and the 2x2 system in (u, phi) is solved by Cramer's rule; about ten times
-            # cheaper than the generic numpy solve, which made a flight step the costliest unit of work
-            L = self.length_scale
-            a11 = mt - D * D / Mt
-
-            def rhs(t, y):
-                u, x, yc, phi, ud, xd, yd, w = y
-                a = a0 if const else hor(t)
-                ge = ge0 if vert is None else g + vert(t)
-                sp, cp = math.sin(phi), math.cos(phi)
-                Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-                ww = w * w
-                f_u = -c * ud - kt * u + mt * u * ww - D * cp * a - D * sp * ge
-                f_x = Myp * ww + 2.0 * D * sp * ud * w - Mt * a
-                f_y = -Mxp * ww - 2.0 * D * cp * ud * w - Mt * ge
-                f_p = -2.0 * mt * u * ud * w - Mxp * a - ge * Myp
-                a12 = -C - D * (cp * Mxp + sp * Myp) / Mt
-                a22 = J0 + mt * u * u - (Mxp * Mxp + Myp * Myp) / Mt
-                r1 = f_u - D * (cp * f_x + sp * f_y) / Mt
-                r2 = f_p - (Mxp * f_x + Myp * f_y) / Mt
-                det = a11 * a22 - a12 * a12
-                udd = (a22 * r1 - a12 * r2) / det
-                wd = (a11 * r2 - a12 * r1) / det
-                return [ud, xd, yd, w, udd, (f_x - D * cp * udd - Mxp * wd) / Mt,
-                        (f_y - D * sp * udd - Myp * wd) / Mt, wd]
-
-            def monitors(t, y):
-                yc, phi = y[2], y[3]
-                bs = b * math.sin(phi)
-                return [(yc - bs) / L, (yc + bs) / L, HALF_PI - abs(phi)]
-            return rhs, monitors, None
-        if mode == Mode.FULL:
-            def rhs(t, y):
-                u, ud = y
-                return [ud, (-c * ud - kt * u - D * (a0 if const else hor(t))) / mt]
-
-            def monitors(t, y):
-                u, ud = y
-                a = a0 if const else hor(t)
-                ge = ge0 if vert is None else g + vert(t)
-                udd = (-c * ud - kt * u - D * a) / mt
-                # phi row of M v_dot - f at phi = 0: b (lambda_R - lambda_L) = -C u_dd - (A_h ag - g_e D u); the
-                # corners carry the effective weight M_t g_e
-                d = (-C * udd - A_h * a + ge * D * u) / b
-                We = Mt * ge
-                return [0.5 * (We - d) / W, 0.5 * (We + d) / W, HALF_PI]
-
-            def totals(t, y):
-                u, ud = y
-                a = a0 if const else hor(t)
-                return (We0 if vert is None else Mt * (g + vert(t))), D * (-c * ud - kt * u - D * a) / mt + Mt * a
-            return rhs, monitors, totals
-        s = pivot_sign(mode)
-        sb = s * b
-        sbM = sb * Mt
-        K0 = J0 + Mt * b * b
-        pivot_first = s < 0
-
-        def accel(u, phi, ud, w, a, ge):
-            sp, cp = math.sin(phi), math.cos(phi)
-            K = K0 + mt * u * u - 2.0 * sb * D * u
-            E = mt * u - sb * D
-            f_u = -c * ud - kt * u - ge * D * sp - D * cp * a + E * w * w
-            f_p = -2.0 * E * ud * w - ge * (D * u - sbM) * cp + ge * A_h * sp + a * (A_h * cp + (D * u - sbM) * sp)
-            det = mt * K - C * C
-            return (K * f_u + C * f_p) / det, (C * f_u + mt * f_p) / det, sp, cp
-
-        def rhs(t, y):
-            u, phi, ud, w = y
-            udd, wd, _, _ = accel(u, phi, ud, w, a0 if const else hor(t), ge0 if vert is None else g + vert(t))
-            return [ud, w, udd, wd]
-
-        last = [None, None, None]         # (t, y, (ag, u_dd, phi_dd, sin, cos, pivot force)) of the last monitors
-
-        def monitors(t, y):
-            u, phi, ud, w = y
-            a = a0 if const else hor(t)
-            ge = ge0 if vert is None else g + vert(t)
-            udd, wd, sp, cp = accel(u, phi, ud, w, a, ge)
-            # pivot force = y row of M v_dot - f (the tangential direction is horizontal), with the effective
-            # weight M_t g_e
-            ydd = -sb * cp * wd + sb * sp * w * w
-            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            lam = D * sp * udd + Mt * ydd + Myp * wd + Mxp * w * w + 2.0 * D * cp * ud * w + Mt * ge
-            last[0], last[1], last[2] = t, y, (a, udd, wd, sp, cp, lam)
-            margin = HALF_PI - abs(phi)
-            return [lam / W, -s * phi, margin] if pivot_first else [-s * phi, lam / W, margin]
-
-        def totals(t, y):
-            if not (last[1] is y and last[0] == t):
-                monitors(t, y)            # (fills ``last``)
-            a, udd, wd, sp, cp, lam_N = last[2]
-            u, phi, ud, w = y
-            ww = w * w
-            Mxp, Myp = -(A_h * cp + D * u * sp), -A_h * sp + D * u * cp
-            xdd = sb * sp * wd + sb * cp * ww
-            lam_T = D * cp * udd + Mt * xdd + Mxp * wd - Myp * ww - 2.0 * D * sp * ud * w + Mt * a
-            return lam_N, lam_T
-        return rhs, monitors, totals
-
-    def mode_outputs_array(self, mode, Y):
-        Y = np.asarray(Y, dtype=float)
-        z = np.zeros(Y.shape[0])
-        if mode == Mode.FULL:
-            args = (Y[:, 0], z, z, z, Y[:, 1], z, z, z)
-        elif mode == Mode.FLIGHT:
-            args = tuple(Y.T)
-        else:
-            s = pivot_sign(mode)
-            u, phi, ud, w = Y.T
-            sp, cp = np.sin(phi), np.cos(phi)
-            b = self.b
-            args = (u, s * b * (1.0 - cp), -s * b * sp, phi, ud, s * b * sp * w, -s * b * cp * w, w)
-        return self._outputs(*args, sin=np.sin, cos=np.cos)
-
-    def mode_outputs(self, mode, y):
-        if mode == Mode.FULL:
-            return self._outputs(y[0], 0.0, 0.0, 0.0, y[1], 0.0, 0.0, 0.0)
-        if mode == Mode.FLIGHT:
-            return self._outputs(*y)
-        s = pivot_sign(mode)
-        u, phi, ud, w = y
-        sp, cp = math.sin(phi), math.cos(phi)
-        b = self.b
-        return self._outputs(u, s * b * (1.0 - cp), -s * b * sp, phi, ud, s * b * sp * w, -s * b * cp * w, w)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..modes import Mode, pivot_sign
 from ..params import Param, check_parameters, param
-from .base import (HALF_PI, PHI_0, PHI_DOT_0, RockingModel, body_outputs, effective_gravity, friction_param,
+from .base import (PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param,
                    impact_law_param)
 from .declare import ENERGY, SLIP, Mechanics
 
@@ -248,130 +248,6 @@ class RigidBlock(RockingModel):
         out = np.zeros(2)
         out[0 if s < 0 else 1] = m * (y_dd + g)
         return out
-
-    # ------------------------------------------------------------------ float-level mode functions
-    def mode_functions(self, mode, ag):
-        """Closed forms of `RockingModel.mode_functions` (rocking: Housner's equation and the pivot force)."""
-        return self.mode_closures(mode, ag)[:2]
-
-    def force_totals_of(self, mode, ag):
-        """Closed forms of `RockingModel.force_totals_of` for the sticking modes: Newton's law of the centroid,
-        sum lambda_T = m (x_dd + ag), sum lambda_N = m (y_dd + g)."""
-        totals = self.mode_closures(mode, ag)[2] if mode in (Mode.FULL, Mode.LEFT, Mode.RIGHT) else None
-        return totals or super().force_totals_of(mode, ag)
-
-    def mode_closures(self, mode, ag):
-        """(rhs, monitors, totals) in closed form under the effective gravity g_e = g + ag_v(t) [m/s2]
-        (`effective_gravity`); the normalisations by the weight m g stay. Without a vertical component g_e is
-        the constant g itself, g_e / g == 1.0 and (1.0 s) x == s x exactly: today's results bit for bit. While
-        rocking the totals reuse what the monitors computed at the same (t, y)."""
-        m, g, b, h = self.m, self.g, self.b, self.h
-        const = ag.constant
-        a0 = ag.value if const else 0.0
-        hor = ag.horizontal
-        ge0, vert = effective_gravity(ag, g)          # vert None: g_e = ge0 at all t
-        if mode == Mode.FULL:
-            seen = [None, 0.0]            # (t, ag) of the last monitors call
-            c0, W0 = 0.5 * (ge0 / g), m * ge0
-
-            def rhs(t, y):
-                return []
-
-            def monitors(t, y):
-                a = a0 if const else hor(t)
-                seen[0], seen[1] = t, a
-                # the corners' normal forces / (m g): 0.5 g_e / g -+ 0.5 ag h / (b g)
-                d = 0.5 * a * h / b / g
-                c = c0 if vert is None else 0.5 * ((g + vert(t)) / g)
-                return [c + d, c - d, HALF_PI]
-
-            def totals(t, y):
-                # vertical and horizontal equilibrium: the effective weight m g_e, and the sticking force m ag
-                return (W0 if vert is None else m * (g + vert(t)),
-                        m * (a0 if const else seen[1] if seen[0] == t else hor(t)))
-            return rhs, monitors, totals
-        if mode == Mode.FLIGHT:
-            def rhs(t, y):
-                return [y[3], y[4], y[5], -(a0 if const else hor(t)), -(ge0 if vert is None else g + vert(t)), 0.0]
-
-            def monitors(t, y):
-                yc, phi = y[1], y[2]
-                bs, hc = b * math.sin(phi), h * math.cos(phi)
-                L = self._R
-                return [(yc - bs - hc) / L, (yc + bs - hc) / L, HALF_PI - abs(phi)]
-            return rhs, monitors, None
-        s = pivot_sign(mode)
-        p2, al = self._p * self._p, self._alpha
-        pivot_first = s < 0
-        gr0 = ge0 / g                     # g_e / g: the restoring moment's factor 1 + ag_v / g
-        sr0 = gr0 * s
-        last = [None, None, None]         # (t, y, (ag, phi_dd, sin, cos, pivot force / m g)) of the last monitors
-
-        def rhs(t, y):
-            x = al + s * y[0]
-            sr = sr0 if vert is None else (g + vert(t)) / g * s
-            return [y[1], p2 * ((a0 if const else hor(t)) / g * math.cos(x) + sr * math.sin(x))]
-
-        def monitors(t, y):
-            phi, w = y
-            a = a0 if const else hor(t)
-            gr = gr0 if vert is None else (g + vert(t)) / g
-            x = al + s * phi
-            acc = p2 * (a / g * math.cos(x) + gr * s * math.sin(x))
-            sp, cp = math.sin(phi), math.cos(phi)
-            # vertical Newton's law of the centroid, divided by the weight: lambda_N / (m g) = y_dd / g + g_e / g
-            lam = ((-s * b * cp - h * sp) * acc + (s * b * sp - h * cp) * w * w) / g + gr
-            last[0], last[1], last[2] = t, y, (a, acc, sp, cp, lam)
-            margin = HALF_PI - abs(phi)
-            return [lam, -s * phi, margin] if pivot_first else [-s * phi, lam, margin]
-
-        def totals(t, y):
-            if not (last[1] is y and last[0] == t):
-                monitors(t, y)            # (fills ``last``)
-            a, acc, sp, cp, lam = last[2]
-            w = y[1]
-            x_dd = (s * b * sp - h * cp) * acc + (s * b * cp + h * sp) * w * w
-            return m * g * lam, m * (x_dd + a)
-        return rhs, monitors, totals
-
-    def mode_outputs_array(self, mode, Y):
-        Y = np.asarray(Y, dtype=float)
-        n = Y.shape[0]
-        if mode == Mode.FULL:
-            z = np.zeros(n)
-            return {name: z.copy() for name in ("phi", "phi_dot", "x", "y", "x_dot", "y_dot", "slip", "energy")}
-        if mode == Mode.FLIGHT:
-            x, yc, phi, xd, yd, w = Y.T
-            yc = yc - self.h
-            s = np.where(phi > 0.0, -1.0, 1.0)          # the lower corner
-            slip = x + s * self.b * (np.cos(phi) - 1.0) + self.h * np.sin(phi)
-        else:
-            s = pivot_sign(mode)
-            phi, w = Y[:, 0], Y[:, 1]
-            sp, cp = np.sin(phi), np.cos(phi)
-            b, h = self.b, self.h
-            x, yc = s * b * (1.0 - cp) - h * sp, -s * b * sp + h * cp - h
-            xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
-            slip = np.zeros(n)
-        kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
-        return {"phi": phi, "phi_dot": w, "x": x, "y": yc, "x_dot": xd, "y_dot": yd, "slip": slip,
-                "energy": kin + self.m * self.g * yc}
-
-    def mode_outputs(self, mode, y):
-        if mode == Mode.FULL:
-            return {"phi": 0.0, "phi_dot": 0.0, "x": 0.0, "y": 0.0, "x_dot": 0.0, "y_dot": 0.0, "slip": 0.0,
-                    "energy": 0.0}
-        if mode == Mode.FLIGHT:
-            return self.outputs(y[:3], y[3:])
-        s = pivot_sign(mode)
-        phi, w = y
-        sp, cp = math.sin(phi), math.cos(phi)
-        b, h = self.b, self.h
-        yc = -s * b * sp + h * cp - h
-        xd, yd = (s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w
-        kin = 0.5 * (self.m * (xd * xd + yd * yd) + self._I_c * w * w)
-        return {"phi": phi, "phi_dot": w, "x": s * b * (1.0 - cp) - h * sp, "y": yc, "x_dot": xd, "y_dot": yd,
-                "slip": 0.0, "energy": kin + self.m * self.g * yc}
 
     # ------------------------------------------------------------------ quantities
     def rest_position(self):
