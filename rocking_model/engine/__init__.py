@@ -109,6 +109,21 @@ _NAMES: dict = {}
 _F64 = np.dtype(np.float64)
 
 
+def kernel_call(cls, params: list, fn: str, mode: int = 0, a=None, b=None, ag: float = 0.0, ag_v: float = 0.0):
+    """One function of the model kernel of ``cls`` (generated from its declaration) on parameters ``params``
+    (floats in declared order): `rocking_model._engine.model`; a model declared after the build is compiled
+    and added first (`rocking_model.engine.plugin`)."""
+    if cls not in _KERNELS_READY:
+        from .plugin import ensure
+        ensure(cls)
+        _KERNELS_READY.add(cls)
+    return _extension().model(cls.__name__, params, fn, mode, a, b, ag, ag_v)
+
+
+#: the model classes whose kernels the engine knows
+_KERNELS_READY: set = set()
+
+
 def _floats(x) -> list:
     """``x`` as a list of floats (a float64 array's tolist(): the same values without a numpy scalar each)."""
     if type(x) is np.ndarray and x.dtype is _F64:

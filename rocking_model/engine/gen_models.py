@@ -729,6 +729,7 @@ class ModelCode:
             "force_scale": self.D.symbol(mech.force_scale, "force_scale"),
         }
         step = None if mech.step_limit is None else self.D.symbol(mech.step_limit, "step")
+        self.named = [(name, self.D.symbol(e, name)) for name, e in mech.derived.items()]
         checks = []
         for chk in mech.checks:
             cond = self.D.symbol(sp.Piecewise((1, chk.fails), (0, True)), "check")
@@ -762,11 +763,21 @@ class ModelCode:
         lines.append("    return RK_OK;\n}\n")
         return "\n".join(lines)
 
+    def _emit_named(self) -> str:
+        """The declared derived quantities: names and places in m->d (a parameter itself: -1 - its index)."""
+        P = self.prefix
+        order = {s: i for i, (s, _) in enumerate(self.D.order)}
+        params = {self.psym[n]: i for i, n in enumerate(self.pnames)}
+        idx = [order[s] if s in order else -1 - params[s] for _, s in self.named]
+        return (f"static const char *const {P}_NAMED[{max(1, len(idx))}] = "
+                f"{{{', '.join(_c_string(n) for n, _ in self.named) or 'NULL'}}};\n"
+                f"static const int {P}_NAMED_INDEX[{max(1, len(idx))}] = {{{', '.join(map(str, idx)) or '0'}}};\n")
+
     def _emit_ops(self, n_shifted) -> str:
         P, cls = self.prefix, self.cls
         mech = self.mech
         opt = lambda cond, name: f"{P}_{name}" if cond else "NULL"  # noqa: E731
-        return (f"const rk_model_ops {P}_ops = {{\n"
+        return self._emit_named() + (f"const rk_model_ops {P}_ops = {{\n"
                 f"    {_c_string(self.kind)}, {_c_string(cls.__name__)},\n"
                 f"    {self.n}, {self.nc}, 10,\n"
                 f"    {self.phi_i}, {self.slide_i}, {self.lift_i},\n"
@@ -784,7 +795,8 @@ class ModelCode:
                 f"    {P}_rest_position, {P}_energy, {P}_outputs, {P}_initial_state,\n"
                 f"    {opt(mech.classical_impact is not None, 'classical_impact_velocity')}, "
                 f"{opt(mech.work_note is not None, 'work_note')},\n"
-                f"    {P}_mode_monitor_one\n}};\n")
+                f"    {P}_mode_monitor_one,\n"
+                f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX\n}};\n")
 
 
 # ------------------------------------------------------------------------------------------------ the file

@@ -11,52 +11,45 @@ A model bundles, in the Siconos sense,
 - the reduced coordinates r of each contact mode (a set of closed contacts), with the embedding q = q(r),
   v = J(r) r_dot.
 
-The simulations run in the compiled engine (rocking_model/engine/src: rk_rigid.c, rk_flexible.c implement the
-same model per kind, with the contact problems and both schemes); the classes here declare the models
-(parameters and their checks, initial values, outputs, derived quantities) and give their mechanics as numpy
-functions for analysis: the closed-form impact maps (`rocking_model.post_impact`) and the tests use them.
+A model is declared once, in its own file (RigidBlock: rigid_block.py, FlexibleOscillator:
+flexible_oscillator.py): its parameters, initial values and outputs (`rocking_model.params.Param`) and its
+mechanics (``mechanics``: kinetic energy, first moment of mass, elastic energy, dissipation, contact points;
+`rocking_model.models.declare`). The engine's C kernels are generated from that declaration
+(rocking_model/engine/gen_models.py); every numeric method of this class (mass matrix, forces, contact
+relation, embedding of the contact modes, initial state, outputs, derived quantities) reads the same kernels.
 
 Contract (in the style of scipy's ``OdeSolver``)
 -----------------------------------------------
-A subclass must provide:
+A subclass (a frozen dataclass) must provide:
 
+    kind                        its registry name (`rocking_model.models.register_model`)
+    parameters                  dataclass fields made by `rocking_model.params.param`, among them e_N,
+                                impact_law, mu and g (`impact_law_param`, `friction_param`)
     dof_names, phi_index        names of q and the index of the rotation phi (overturning: |phi| = pi/2)
-    slide_index, lift_index     indices of the base's horizontal and vertical translations (sliding moves the
-                                first; their rows of M a - f carry the total tangential and normal forces)
-    e_N, g, mu                  coefficient of restitution [1], gravity [m/s2], friction coefficient [1]
-                                (inf: the paper's sticking law)
-    mass_matrix(q), forces(q, v, ag, ag_v=0.0)
-    gaps(q), contact_jacobians(q), contact_drift(q, v), contact_abscissae(q)
-    mode_dofs(mode), embed(mode, r, r_dot), mode_jacobian(mode, r, r_dot)
-    rest_position(), energy(q, v), outputs(q, v), initial_state(**initial)
-    length_scale [m], time_scale [s]
+    slide_index, lift_index     indices of the base's horizontal and vertical translations
+    INITIAL                     the initial values: phi_0, phi_dot_0 (`PHI_0`, `PHI_DOT_0`) and, for any other
+                                coordinate c, c_0 and c_dot_0 (they set the initial mode's reduced state)
+    OUTPUTS                     the outputs (`Param`s; `body_outputs` for the usual ones)
+    mechanics(sp, p, q, v)      a `rocking_model.models.declare.Mechanics` (sympy, at build time)
 
-A subclass may provide (the defaults here are generic and correct, the overrides are faster or add a rule):
+A subclass may provide:
 
-    n_contacts = 2                              number of contacts
-    mode_of(closed), closed_of(mode)            the contact mode of a set of closed contacts and back
-                                                (default: `Mode`, the four modes of two corners)
-    inverse_mass_matrix(q)                      default: inv(M(q))
-    stiff_jacobians(q, v)                       (K, C) of a stiff linear part of f; default None
-    step_limit                                  largest time-stepper step [s]; default inf
-    dof_scales                                  scale of each coordinate for error control; default 1 for
-                                                phi, length_scale for the others
-    reduced_acceleration, contact_forces        per mode, from the numpy interface (each takes ag, ag_v=0.0)
-    force_scale                                 scale of the contact forces [N]; default |f| at rest
-    SHIFTED_OUTPUTS                             outputs that move with the base's horizontal offset
+    SHIFTED_OUTPUTS             outputs that move with the base's horizontal offset (default x, slip)
+    work_note                   what drives the cost of a step, for the messages of a refused step
+    fmu_name, title             its FMU's name and a title
 
-    fields()                                    declared parameters (name, unit, range, description):
-                                                the Python API, the CLI and the FMUs read them
+Everything else (mass matrix, forces, contact relation, the contact modes' embedding and dynamics, initial
+state, outputs, scales, derived quantities) comes from the kernel generated from the declaration.
 """
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
+from abc import ABC
 
 import numpy as np
 
 from ..modes import CLOSED, MODE_DESCRIPTIONS, OVERTURNED, OVERTURNED_DESCRIPTION, Mode, mode_from_closed
-from ..params import Param, declared_parameters, param
+from ..params import Param, check_parameters, declared_parameters, param
 
 #: [rad] the overturning angle: |phi| = pi/2 ends the motion (the last event function is HALF_PI - |phi|)
 HALF_PI = 0.5 * math.pi
@@ -216,71 +209,110 @@ class RockingModel(ABC):
         """The largest value of the output ``contact`` (`OVERTURNED`, after the contact modes' codes)."""
         return OVERTURNED
 
+    # ------------------------------------------------------------------ the kernel
+    # Every quantity below is computed by the model's C kernel, generated from its declaration
+    # (``mechanics``, rocking_model.models.declare): the formulas live in the declaration alone.
+    def __post_init__(self):
+        check_parameters(self)
+        # the kernel's own checks (parameter combinations the declaration refuses) and derived quantities
+        info = self._kernel("info")
+        object.__setattr__(self, "_info", info)
+
+    def _param_values(self) -> list:
+        values = self.__dict__.get("_values")
+        if values is None:
+            values = [float(getattr(self, p.name)) for p in self.parameters()]
+            object.__setattr__(self, "_values", values)
+        return values
+
+    def _kernel(self, fn: str, mode=0, a=None, b=None, ag: float = 0.0, ag_v: float = 0.0):
+        from ..engine import kernel_call
+        return kernel_call(type(self), self._param_values(), fn, int(mode), a, b, float(ag), float(ag_v))
+
+    def __getattr__(self, name: str):
+        # the declared derived quantities (R, alpha, p, ...) read as attributes
+        if not name.startswith("_"):
+            info = self.__dict__.get("_info")
+            if info is not None and name in info["derived"]:
+                return info["derived"][name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    @property
+    def derived(self) -> dict:
+        """The declared derived quantities of this instance (name -> value, SI units)."""
+        return dict(self._info["derived"])
+
+    @staticmethod
+    def _vec(x) -> list:
+        return [float(a) for a in np.asarray(x, dtype=float).ravel()]
+
     # ------------------------------------------------------------------ dynamical system
-    @abstractmethod
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M(q), shape (n, n)."""
+        n = self.n_dof
+        return np.array(self._kernel("mass_matrix", 0, self._vec(q))).reshape(n, n)
 
-    # Every caller passes ag_v (0.0 without a vertical component), so a model must take it. There is no shim
-    # calling forces(q, v, ag) for models written before ag_v: such a model would run where ag_v = 0 and break
-    # only under a vertical motion, deep inside a contact problem; a TypeError at its first call is honest.
-    @abstractmethod
+    def inverse_mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q)^-1, shape (n, n)."""
+        n = self.n_dof
+        return np.array(self._kernel("inverse_mass_matrix", 0, self._vec(q))).reshape(n, n)
+
     def forces(self, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
         """Non-contact generalized forces f(q, v, ag, ag_v), shape (n,), so that M q_ddot = f + contact forces;
         ag [m/s2] horizontal ground acceleration (+x), ag_v [m/s2] vertical (positive upward: gravity g becomes
         the effective gravity g + ag_v on every mass)."""
+        return np.array(self._kernel("forces", 0, self._vec(q), self._vec(v), ag, ag_v))
 
     def stiff_jacobians(self, q: np.ndarray, v: np.ndarray):
-        """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f, treated implicitly by the time-stepper.
-
-        None when f has no stiff part (the rigid block)."""
-        return None
+        """(K, C) = (-df/dq, -df/dv) of the stiff linear part of f (the Hessians of the elastic energy and of the
+        dissipation), treated implicitly by the time-stepper; None when f has none (the rigid block)."""
+        out = self._kernel("stiff_jacobians", 0, self._vec(q), self._vec(v))
+        if out is None:
+            return None
+        n = self.n_dof
+        return np.array(out[0]).reshape(n, n), np.array(out[1]).reshape(n, n)
 
     # ------------------------------------------------------------------ contact relation
-    @abstractmethod
     def gaps(self, q: np.ndarray) -> np.ndarray:
         """Normal gaps g_N of the contacts [m], shape (n_contacts,)."""
+        return np.array(self._kernel("gaps", 0, self._vec(q)))
 
-    @abstractmethod
     def contact_jacobians(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(W_N, W_T), each shape (n, n_contacts): normal and tangential velocity of contact i is W[:, i] . v."""
+        W_N, W_T = self._kernel("contact_jacobians", 0, self._vec(q))
+        shape = (self.n_dof, self.n_contacts)
+        return np.array(W_N).reshape(shape), np.array(W_T).reshape(shape)
 
-    @abstractmethod
     def contact_drift(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(a_N, a_T), each shape (n_contacts,): the terms (d/dt W)^T v of the contact accelerations."""
+        a_N, a_T = self._kernel("contact_drift", 0, self._vec(q), self._vec(v))
+        return np.array(a_N), np.array(a_T)
 
-    @abstractmethod
     def contact_abscissae(self, q: np.ndarray) -> np.ndarray:
         """Horizontal positions of the contacts relative to the ground [m], shape (n_contacts,)."""
+        return np.array(self._kernel("contact_abscissae", 0, self._vec(q)))
 
     def slip(self, q: np.ndarray) -> float:
         """Base sliding displacement [m]: the horizontal displacement of the lower corner from its rest
         position (0 while the corners stick; continuous through rocking, flight and landing, as the lower
         corner is the pivot, the one that lands, and the corners swap at phi = 0 where both agree)."""
-        g = self.gaps(q)
-        i = int(np.argmin(g))
-        return float(self.contact_abscissae(q)[i] - self._rest_abscissae[i])
-
-    @property
-    def _rest_abscissae(self) -> np.ndarray:
-        cached = self.__dict__.get("_rest_x")
-        if cached is None:
-            cached = self.contact_abscissae(self.rest_position())
-            object.__setattr__(self, "_rest_x", cached)
-        return cached
+        return self._kernel("slip", 0, self._vec(q))
 
     # ------------------------------------------------------------------ contact modes
-    @abstractmethod
     def mode_dofs(self, mode: Mode) -> tuple[int, ...]:
         """Indices in q of the reduced coordinates r integrated in ``mode``."""
+        return tuple(self._kernel("mode_dofs", mode))
 
-    @abstractmethod
     def embed(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Full (q, v) from the reduced state of ``mode`` (closed contacts stuck to the ground)."""
+        """Full (q, v) from the reduced state of ``mode`` (closed contacts stuck to the ground at their rest
+        abscissae)."""
+        q, v = self._kernel("embed", mode, self._vec(r), self._vec(r_dot))
+        return np.array(q), np.array(v)
 
-    @abstractmethod
     def mode_jacobian(self, mode: Mode, r: np.ndarray, r_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(J, J_dot r_dot): v = J r_dot and v_dot = J r_ddot + J_dot r_dot for ``mode``."""
+        J, jd = self._kernel("mode_jacobian", mode, self._vec(r), self._vec(r_dot))
+        return np.array(J).reshape(self.n_dof, -1) if J else np.zeros((self.n_dof, 0)), np.array(jd)
 
     def reduce(self, mode: Mode, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Reduced state of ``mode`` read from a full state that satisfies the mode's constraints."""
@@ -291,13 +323,15 @@ class RockingModel(ABC):
                              ag_v: float = 0.0) -> np.ndarray:
         """r_ddot of ``mode``: (J^T M J) r_ddot = J^T (f - M J_dot r_dot) (Lagrange on the constrained system);
         ag, ag_v [m/s2] as in `forces`."""
-        if len(r) == 0:
+        k = len(r)
+        if k == 0:
             return np.zeros(0)
-        q, v = self.embed(mode, r, r_dot)
-        J, jd = self.mode_jacobian(mode, r, r_dot)
-        M = self.mass_matrix(q)
-        rhs = J.T @ (self.forces(q, v, ag, ag_v) - M @ jd)
-        return np.linalg.solve(J.T @ M @ J, rhs)
+        dy = self._kernel("mode_rhs", mode, self._vec(r) + self._vec(r_dot), None, ag, ag_v)
+        return np.array(dy[k:])
+
+    def contact_forces(self, mode: Mode, q: np.ndarray, v: np.ndarray, ag: float, ag_v: float = 0.0) -> np.ndarray:
+        """Normal forces [N] of the closed contacts of ``mode`` held closed (0 for the open ones)."""
+        return np.array(self._kernel("contact_forces", mode, self._vec(q), self._vec(v), ag, ag_v))
 
     @property
     def work_note(self) -> str:
@@ -305,53 +339,60 @@ class RockingModel(ABC):
         column's frequency); "" when nothing particular."""
         return ""
 
+    # ------------------------------------------------------------------ scales
     @property
-    def dof_scales(self) -> tuple:
-        """Scale of each coordinate of q for the error control of the smooth phases: 1 [rad] for phi,
-        length_scale [m] for the others (velocities are scaled by 1 / time_scale on top)."""
-        L = self.length_scale
-        return tuple(1.0 if i == self.phi_index else L for i in range(self.n_dof))
+    def length_scale(self) -> float:
+        """Characteristic length for tolerances [m]."""
+        return self._info["length_scale"]
+
+    @property
+    def time_scale(self) -> float:
+        """Characteristic time of the rocking motion, 1/p [s]."""
+        return self._info["time_scale"]
+
+    @property
+    def force_scale(self) -> float:
+        """Scale of the contact forces [N] (the weight): normalises the force events."""
+        return self._info["force_scale"]
 
     @property
     def step_limit(self) -> float:
         """Largest Moreau-Jean step [s] the model tolerates (inf: no limit); the time-stepper sub-steps to it."""
-        return math.inf
+        return self._info["step_limit"]
 
-    # ------------------------------------------------------------------ scales
     @property
-    def force_scale(self) -> float:
-        """Scale of the contact forces [N] (the weight): normalises the force events."""
-        q = self.rest_position()
-        return float(np.linalg.norm(self.forces(q, np.zeros_like(q), 0.0)))
+    def dof_scales(self) -> tuple:
+        """Scale of each coordinate of q for the error control of the smooth phases: 1 [rad] for phi,
+        length_scale [m] for the others (velocities are scaled by 1 / time_scale on top)."""
+        return tuple(self._info["dof_scales"])
 
     # ------------------------------------------------------------------ quantities
-    @abstractmethod
     def rest_position(self) -> np.ndarray:
         """q at rest in full contact."""
+        return np.array(self._kernel("rest_position"))
 
-    @abstractmethod
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic + potential energy relative to rest, in the ground frame [J]."""
+        return self._kernel("energy", 0, self._vec(q), self._vec(v))
 
-    @abstractmethod
     def outputs(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
         """Named outputs of a full state (the FMU output names)."""
+        values = self._kernel("outputs", 0, self._vec(q), self._vec(v))
+        return dict(zip((p.name for p in self.OUTPUTS), values))
 
-    @property
-    @abstractmethod
-    def length_scale(self) -> float:
-        """Characteristic length for tolerances [m]."""
-
-    @property
-    @abstractmethod
-    def time_scale(self) -> float:
-        """Characteristic time of the rocking motion, 1/p [s]."""
-
-    @abstractmethod
-    def initial_state(self, phi_0: float = 0.0, phi_dot_0: float = 0.0, **extra) -> tuple[Mode, np.ndarray, np.ndarray]:
-        """(mode, q, v) of an initial condition; a non-zero tilt starts on the corresponding pivot.
-
-        Raises ValueError naming the variable and its allowed range for unphysical values."""
+    def initial_state(self, **initial) -> tuple[Mode, np.ndarray, np.ndarray]:
+        """(mode, q, v) of the initial values (the keywords of `INITIAL`); a non-zero tilt starts on the
+        corresponding pivot. Raises ValueError naming the variable and its allowed range for unphysical values."""
+        names = {p.name for p in self.INITIAL}
+        self.check_initial_names([k for k in initial if k not in names])
+        # numbers go to the kernel, which checks their ranges (some depend on the parameters: the declaration's
+        # initial_bounds); anything else is converted or refused by its declaration's message
+        values = []
+        for p in self.INITIAL:
+            x = initial.get(p.name, p.default)
+            values.append(float(x) if isinstance(x, (int, float)) and not isinstance(x, bool) else float(p.check(x)))
+        mode, q, v = self._kernel("initial_state", 0, values)
+        return Mode(mode), np.array(q), np.array(v)
 
     def mode_of_initial_state(self, phi_0: float, phi_dot_0: float) -> Mode:
         """Mode of an initial tilt: phi > 0 (or phi = 0 rotating positive) pivots on the left corner."""

@@ -8,20 +8,13 @@ counter-clockwise; phi > 0 pivots on the left corner. Corner i sits at body coor
 """
 from __future__ import annotations
 
-import functools
-import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-import numpy as np
-
-from ..modes import Mode, pivot_sign
-from ..params import Param, check_parameters, param
-from .base import (PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param,
-                   impact_law_param)
+from ..modes import Mode
+from ..params import Param, param
+from .base import PHI_0, PHI_DOT_0, RockingModel, body_outputs, friction_param, impact_law_param
 from .declare import ENERGY, SLIP, Mechanics
-
-_S = (-1.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -55,13 +48,19 @@ class RigidBlock(RockingModel):
 
     @staticmethod
     def mechanics(sp, p, q, v) -> Mechanics:
-        """The block's mechanics for the engine's code generator (`rocking_model.models.declare`)."""
+        """The block's mechanics, from which the engine's kernels are generated (`rocking_model.models.declare`).
+
+        Derived quantities (attributes of an instance): R = sqrt(b^2 + h^2) [m] the half-diagonal, alpha =
+        atan(b/h) [rad] the slenderness, I_c = m R^2/3 and I_O = 4/3 m R^2 [kg m2] the moments of inertia about
+        the centroid and a corner, p = sqrt(3 g/(4 R)) [rad/s] the frequency parameter, housner_r =
+        1 - 3/2 sin^2(alpha) [1] Housner's coefficient of restitution."""
         x, y, phi = q
         x_dot, y_dot, phi_dot = v
         b, h, m, g = p.b, p.h, p.m, p.g
         R = sp.sqrt(b ** 2 + h ** 2)
         I_c = m * R ** 2 / 3
         p_freq = sp.sqrt(3 * g / (4 * R))
+        alpha = sp.atan2(b, h)
         # corner s (-1 left, +1 right) at body coordinates (s b, -h)
         corners = [(x + s * b * sp.cos(phi) + h * sp.sin(phi), y + s * b * sp.sin(phi) - h * sp.cos(phi))
                    for s in (-1, 1)]
@@ -70,211 +69,15 @@ class RigidBlock(RockingModel):
             first_moment=(m * x, m * y),
             contacts=corners,
             rest=(0, h, 0),
-            derived={"R": R, "alpha": sp.atan2(b, h), "p": p_freq},
+            derived={"R": R, "alpha": alpha, "p": p_freq, "I_c": I_c, "I_O": 4 * I_c,
+                     "housner_r": 1 - sp.Rational(3, 2) * b ** 2 / R ** 2},
             length_scale=R, time_scale=1 / p_freq, force_scale=m * g,
             outputs={"phi": phi, "phi_dot": phi_dot, "x": x, "y": y - h, "x_dot": x_dot, "y_dot": y_dot,
                      "slip": SLIP, "energy": ENERGY},
         )
 
-    def __post_init__(self):
-        check_parameters(self)
-        # derived parameters, computed once (the integrators read them in their inner loops)
-        # (a frozen dataclass: written into the instance's dict, as object.__setattr__ would, in one call)
-        R = math.hypot(self.b, self.h)
-        self.__dict__.update(_R=R, _alpha=math.atan2(self.b, self.h), _I_c=self.m * (R * R) / 3.0,
-                             _p=math.sqrt(3.0 * self.g / (4.0 * R)))
-
-    # the mass matrix and its inverse, made on first use (the compiled engine never reads them)
-    @functools.cached_property
-    def _M(self) -> np.ndarray:
-        m = self.m
-        return np.array(((m, 0.0, 0.0), (0.0, m, 0.0), (0.0, 0.0, self._I_c)))
-
-    @functools.cached_property
-    def _Minv(self) -> np.ndarray:
-        return np.array(((1.0 / self.m, 0.0, 0.0), (0.0, 1.0 / self.m, 0.0), (0.0, 0.0, 1.0 / self._I_c)))
-
-    # ------------------------------------------------------------------ derived parameters
-    @property
-    def R(self) -> float:
-        """Half-diagonal sqrt(b^2 + h^2) [m]."""
-        return self._R
-
-    @property
-    def alpha(self) -> float:
-        """Slenderness angle atan(b/h) [rad]."""
-        return self._alpha
-
-    @property
-    def I_c(self) -> float:
-        """Centroidal moment of inertia m R^2 / 3 [kg m2]."""
-        return self._I_c
-
-    @property
-    def I_O(self) -> float:
-        """Moment of inertia about a corner 4/3 m R^2 [kg m2]."""
-        return 4.0 * self._I_c
-
-    @property
-    def p(self) -> float:
-        """Frequency parameter sqrt(3 g / (4 R)) [rad/s]."""
-        return self._p
-
-    @property
-    def force_scale(self) -> float:
-        """The weight m g [N]."""
-        return self.m * self.g
-
-    @property
-    def housner_r(self) -> float:
-        """Housner's coefficient of restitution 1 - 1.5 sin^2(alpha) [1]."""
-        return 1.0 - 1.5 * math.sin(self.alpha) ** 2
-
-    @property
-    def length_scale(self) -> float:
-        return self.R
-
-    @property
-    def time_scale(self) -> float:
-        return 1.0 / self.p
-
-    # ------------------------------------------------------------------ dynamical system
-    def mass_matrix(self, q):
-        return self._M
-
-    def inverse_mass_matrix(self, q):
-        return self._Minv
-
-    def forces(self, q, v, ag, ag_v=0.0):
-        """[N]: ground frame: inertial force -m ag along x, gravity and the inertial force of the vertical
-        ground acceleration, -m (g + ag_v), along y (ag, ag_v [m/s2]; ag_v positive upward)."""
-        return np.array([-self.m * ag, -self.m * (self.g + ag_v), 0.0])
-
-    # ------------------------------------------------------------------ contact relation
-    def gaps(self, q):
-        y, phi = q[1], q[2]
-        sp, cp = math.sin(phi), math.cos(phi)
-        return np.array([y + s * self.b * sp - self.h * cp for s in _S])
-
-    def contact_jacobians(self, q):
-        phi = float(q[2])
-        last = self.__dict__.get("_jac_last")
-        if last is not None and last[0] == phi:
-            return last[1]                 # an event asks for them several times at the same state
-        sp, cp = math.sin(phi), math.cos(phi)
-        b, h = self.b, self.h
-        W_N = np.array([[0.0, 0.0], [1.0, 1.0], [-b * cp + h * sp, b * cp + h * sp]])
-        W_T = np.array([[1.0, 1.0], [0.0, 0.0], [b * sp + h * cp, -b * sp + h * cp]])
-        W_N.flags.writeable = W_T.flags.writeable = False      # shared by the callers
-        object.__setattr__(self, "_jac_last", (phi, (W_N, W_T)))
-        return W_N, W_T
-
-    def contact_abscissae(self, q):
-        x, phi = float(q[0]), float(q[2])
-        bc, hs = self.b * math.cos(phi), self.h * math.sin(phi)
-        return np.array([x - bc + hs, x + bc + hs])
-
-    def contact_drift(self, q, v):
-        phi, w = q[2], v[2]
-        sp, cp = math.sin(phi), math.cos(phi)
-        b, h = self.b, self.h
-        a_N = np.array([(-s * b * sp + h * cp) * w * w for s in _S])
-        a_T = np.array([(-s * b * cp - h * sp) * w * w for s in _S])
-        return a_N, a_T
-
-    # ------------------------------------------------------------------ contact modes
-    def mode_dofs(self, mode):
-        if mode == Mode.FULL:
-            return ()
-        if mode == Mode.FLIGHT:
-            return (0, 1, 2)
-        return (2,)
-
-    def embed(self, mode, r, r_dot):
-        if mode == Mode.FULL:
-            return np.array([0.0, self.h, 0.0]), np.zeros(3)
-        if mode == Mode.FLIGHT:
-            return np.array(r, dtype=float), np.array(r_dot, dtype=float)
-        s = pivot_sign(mode)
-        phi, w = float(r[0]), float(r_dot[0])
-        sp, cp = math.sin(phi), math.cos(phi)
-        b, h = self.b, self.h
-        q = np.array([s * b * (1.0 - cp) - h * sp, -s * b * sp + h * cp, phi])
-        v = np.array([(s * b * sp - h * cp) * w, (-s * b * cp - h * sp) * w, w])
-        return q, v
-
-    def mode_jacobian(self, mode, r, r_dot):
-        if mode == Mode.FULL:
-            return np.zeros((3, 0)), np.zeros(3)
-        if mode == Mode.FLIGHT:
-            return np.eye(3), np.zeros(3)
-        s = pivot_sign(mode)
-        phi, w = float(r[0]), float(r_dot[0])
-        sp, cp = math.sin(phi), math.cos(phi)
-        b, h = self.b, self.h
-        J = np.array([[s * b * sp - h * cp], [-s * b * cp - h * sp], [1.0]])
-        jd = np.array([(s * b * cp + h * sp) * w * w, (s * b * sp - h * cp) * w * w, 0.0])
-        return J, jd
-
     def rocking_acceleration(self, phi: float, ag: float, s: int, ag_v: float = 0.0) -> float:
-        """phi_ddot [rad/s2] on pivot s (-1 left, +1 right):
-        p^2 [(ag/g) cos(alpha + s phi) + (1 + ag_v/g) s sin(alpha + s phi)], ag and ag_v [m/s2] (ag_v positive
-        upward: the effective gravity g + ag_v scales the restoring moment)."""
-        a = self._alpha + s * phi
-        # ((g + ag_v) / g) is exactly 1 for ag_v = 0: the same result as without the vertical component
-        return self._p * self._p * ((ag / self.g) * math.cos(a) + ((self.g + ag_v) / self.g) * s * math.sin(a))
-
-    def reduced_acceleration(self, mode, r, r_dot, ag, ag_v=0.0):
-        if mode == Mode.FULL:
-            return np.zeros(0)
-        if mode == Mode.FLIGHT:
-            return np.array([-ag, -(self.g + ag_v), 0.0])
-        return np.array([self.rocking_acceleration(float(r[0]), ag, pivot_sign(mode), ag_v)])
-
-    def contact_forces(self, mode, q, v, ag, ag_v=0.0):
-        m, g = self.m, self.g + ag_v       # the effective gravity
-        if mode == Mode.FULL:
-            # vertical and moment equilibrium with the horizontal sticking force m ag at y = -h
-            d = 0.5 * m * ag * self.h / self.b
-            return np.array([0.5 * m * g + d, 0.5 * m * g - d])
-        if mode == Mode.FLIGHT:
-            return np.zeros(2)
-        # vertical Newton's law of the centroid: lambda_N = m (y_ddot + g)
-        s = pivot_sign(mode)
-        phi, w = float(q[2]), float(v[2])
-        acc = self.rocking_acceleration(phi, ag, s, ag_v)
-        y_dd = (-s * self.b * math.cos(phi) - self.h * math.sin(phi)) * acc + \
-            (s * self.b * math.sin(phi) - self.h * math.cos(phi)) * w * w
-        out = np.zeros(2)
-        out[0 if s < 0 else 1] = m * (y_dd + g)
-        return out
-
-    # ------------------------------------------------------------------ quantities
-    def rest_position(self):
-        return np.array([0.0, self.h, 0.0])
-
-    def initial_state(self, phi_0=0.0, phi_dot_0=0.0, **extra):
-        self.check_initial_names(extra)
-        p_phi, p_phi_dot = self.INITIAL
-        phi_0, phi_dot_0 = p_phi.check(phi_0), p_phi_dot.check(phi_dot_0)
-        mode = self.mode_of_initial_state(phi_0, phi_dot_0)
-        if mode == Mode.FULL:
-            q, v = self.embed(mode, (), ())       # (full contact: no reduced coordinates)
-        else:
-            q, v = self.embed(mode, (phi_0,), (phi_dot_0,))
-        return mode, q, v
-
-    def energy(self, q, v):
-        kin = 0.5 * (self.m * (v[0] * v[0] + v[1] * v[1]) + self.I_c * (v[2] * v[2]))
-        return kin + self.m * self.g * (q[1] - self.h)
-
-    def outputs(self, q, v):
-        return {
-            "phi": float(q[2]), "phi_dot": float(v[2]),
-            "x": float(q[0]), "y": float(q[1] - self.h),
-            "x_dot": float(v[0]), "y_dot": float(v[1]),
-            # the lower corner's displacement (the left one, s = -1, for phi > 0), as `slip`
-            "slip": float(q[0]) + (-1.0 if q[2] > 0.0 else 1.0) * self.b * (math.cos(q[2]) - 1.0)
-            + self.h * math.sin(q[2]),
-            "energy": float(self.energy(q, v)),
-        }
+        """phi_ddot [rad/s2] rocking on pivot s (-1 left, +1 right) at rotation phi [rad] under ag, ag_v [m/s2]:
+        p^2 [(ag/g) cos(alpha + s phi) + (1 + ag_v/g) s sin(alpha + s phi)] (the kernel's rocking mode)."""
+        mode = Mode.LEFT if s < 0 else Mode.RIGHT
+        return float(self.reduced_acceleration(mode, [phi], [0.0], ag, ag_v)[0])

@@ -150,6 +150,10 @@ typedef struct rk_model_ops {
      *  contact forces (i < n_contacts: a gap; i == n_contacts: the overturning margin), bit for bit the value
      *  mode_monitors writes; returns 1 with *gi set, 0 where only mode_monitors has it. */
     int (*mode_monitor_one)(const rk_model *m, int mode, const double *y, int i, double *gi);
+    /* ---------------------------------------------------------------- named derived quantities */
+    int n_named;                     /**< the declaration's derived quantities (R, alpha, p, ...) */
+    const char *const *named;        /**< their names */
+    const int *named_index;          /**< their places in rk_model.d */
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
