@@ -737,6 +737,96 @@ static rk_status ed_enter(rk_engine *e, const double *q, const double *v, double
     return ed_set_state(e, mode, q, v2, 1, err);
 }
 
+/** The state of contact c that follows the zero of its normal force in a mode that keeps it closed: open where
+ *  flight is consistent, else sliding against the tangential force it carried (lam_T; the limit mu -> inf of
+ *  the cone rule); the other candidates first tried in their states of the mode. *mode -1: neither is an exact
+ *  solution of the acceleration LCP (contact.uplift's problem, solved with these first trials). */
+static rk_status ed_released_mode(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, int c,
+                                  double lam_T, int *mode, rk_error *err)
+{
+    const rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    int n = m->ops->n_contacts, nd = m->ops->n_dof, i, j, k, trial, n_trials;
+    int sliding[RK_MAX_CONTACTS], hint[RK_MAX_CONTACTS];
+    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
+    double b_N[RK_MAX_CONTACTS], b_T[RK_MAX_CONTACTS], U_T[RK_MAX_CONTACTS], f[RK_MAX_DOF], acc[RK_MAX_DOF];
+    rk_set cand = rk_closed_candidates(m, q, v, s->gap_tol, s->v_tol), closed = rk_closed_of(m, s->mode);
+    rk_lcp_problem p;
+    rk_lcp_solution sol;
+    *mode = -1;
+    if (!RK_IN(cand, c))
+        return RK_OK;
+    m->ops->contact_jacobians(m, q, W_N, W_T);
+    m->ops->contact_drift(m, q, v, b_N, b_T);
+    rk_model_inverse_mass(m, q, Minv);
+    m->ops->forces(m, q, v, ag_t, av_t, f);
+    for (i = 0; i < nd; i++) {
+        double a = 0.0;
+        for (j = 0; j < nd; j++)
+            a += Minv[i * nd + j] * f[j];
+        acc[i] = a;
+    }
+    ed_wtx(m, W_T, v, U_T);
+    for (i = 0; i < n; i++)
+        sliding[i] = RK_IN(cand, i) && fabs(U_T[i]) > s->v_tol ? (U_T[i] > 0.0 ? 1 : -1) : 0;
+    memset(&p, 0, sizeof p);
+    p.n_dof = nd;
+    p.n_contacts = n;
+    p.Minv = Minv;
+    p.W_N = W_N;
+    p.W_T = W_T;
+    p.v_free = acc;
+    p.b_N = b_N;
+    p.b_T = b_T;
+    p.candidates = cand;
+    p.rtol = e->options.tolerances.lcp_exact;
+    p.mu = m->mu;
+    p.sliding = sliding;
+    p.hint_states = hint;
+    /* open first; sliding only from a sticking state (a sliding contact's options are open or its slip) */
+    n_trials = rk_mode_sliding(m, s->mode) || sliding[c] ? 1 : 2;
+    for (trial = 0; trial < n_trials; trial++) {
+        int want = RK_OPEN;
+        for (i = 0, k = 0; i < n; i++) {
+            if (!RK_IN(cand, i))
+                continue;
+            if (i == c)
+                hint[k] = want = trial == 0 ? RK_OPEN : lam_T > 0.0 ? RK_SLIDE_NEG : RK_SLIDE_POS;
+            else if (sliding[i])
+                hint[k] = sliding[i] > 0 ? RK_SLIDE_POS : RK_SLIDE_NEG;
+            else
+                hint[k] = RK_IN(closed, i) ? RK_STICK : RK_OPEN;
+            k++;
+        }
+        ED_TRY(rk_solve_friction_lcp(&p, &sol, err));
+        if (sol.exact && sol.states[c] == want && !rk_lcp_painleve(&sol)) {
+            *mode = m->ops->mode_of(m, sol.active, rk_solution_sigma(&sol, n));
+            return RK_OK;
+        }
+    }
+    return RK_OK;
+}
+
+/** `_enter` at the zero of the normal force of the closed contact c (a release event). There every state of c
+ *  carries no normal force, so the acceleration LCP is degenerate and its first exact solution may be the
+ *  branch that ends there (the friction LCP accepts a normal force down to -lcp_exact of its scale): kept, the
+ *  force would go on into tension with its event function at or below -event_tol, neither armed nor watched
+ *  by the next segment. The force crossed zero going down, so the continuation is another state of c. */
+static rk_status ed_release(rk_engine *e, const double *q, const double *v, double ag_t, double av_t, double t,
+                            int c, double lam_T, rk_error *err)
+{
+    rk_ed_state *s = ED(e);
+    int mode, changed, alt;
+    double v2[RK_MAX_DOF];
+    ED_TRY(ed_decide(e, q, v, ag_t, av_t, t, -1, &mode, v2, &changed, err));
+    if (mode == s->mode && !changed) {
+        ED_TRY(ed_released_mode(e, q, v, ag_t, av_t, c, lam_T, &alt, err));
+        if (alt >= 0)
+            mode = alt;
+    }
+    return ed_set_state(e, mode, q, v2, 1, err);
+}
+
 /** `_impact` */
 static rk_status ed_impact(rk_engine *e, const double *q_in, const double *v, double t, double ag_t, double av_t,
                            rk_error *err)
@@ -817,7 +907,7 @@ static void ed_note_percussions(rk_engine *e, const double *q, const double *v_m
 }
 
 /** `_handle` */
-static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error *err)
+static rk_status ed_handle(rk_engine *e, int kind, int idx, double t, ed_fn *f, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     double q[RK_MAX_DOF], v[RK_MAX_DOF], a, av;
@@ -841,6 +931,11 @@ static rk_status ed_handle(rk_engine *e, int kind, double t, ed_fn *f, rk_error 
         ED_TRYF(f, ed_totals(f, t, s->y, lam));
         ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
         ED_TRY(ed_enter(e, q, v, a, av, t, lam[1] > 0.0 ? RK_SLIDE_NEG : RK_SLIDE_POS, err));
+    } else if (kind == ED_RELEASE) {
+        double lam[2];
+        ED_TRYF(f, ed_totals(f, t, s->y, lam));
+        ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
+        ED_TRY(ed_release(e, q, v, a, av, t, idx, lam[1], err));
     } else {
         ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
         ED_TRY(ed_enter(e, q, v, a, av, t, -1, err));
@@ -1141,7 +1236,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         ed_note_ratio(e, d_prev);
     }
     if (ed_lands_now(e, kinds, ev.n, g_prev)) {
-        ED_TRY(ed_handle(e, ED_IMPACT, s->t, &f, err));
+        ED_TRY(ed_handle(e, ED_IMPACT, -1, s->t, &f, err));
         *event = 1;
         return RK_OK;
     }
@@ -1221,7 +1316,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
                     ED_TRY(ed_demand_peak(e, &f, t_old, d_prev, te, d_e, 0, err));
                 ed_note_ratio(e, d_e);
             }
-            ED_TRY(ed_handle(e, kinds[idx], te, &f, err));
+            ED_TRY(ed_handle(e, kinds[idx], idx, te, &f, err));
             *event = 1;
             return RK_OK;
         }
