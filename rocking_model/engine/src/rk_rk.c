@@ -378,7 +378,8 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
     min_step = 10.0 * fabs(nextafter(t, INFINITY) - t);
     h_abs = py_min(s->h_abs, s->max_step);
     for (;;) {
-        if (h_abs < min_step)
+        if (!(h_abs >= min_step))       /* NaN too (an initial step from an overflowed derivative): the loop
+                                         * then ends at the smallest step with the non-finite report */
             h_abs = min_step;
         h = h_abs;
         t_new = t + h;
