@@ -36,8 +36,10 @@ if os.path.exists(GENERATOR):
 
 # the model kernels: rocking_model/engine/gen_models.py writes src/rk_models_gen.c from the models' declarations
 # (sympy, at build time; the file is rewritten only when a declaration or the generator changed)
+# main() rather than run_name="__main__": the script's command line takes sys.argv[1] as the output path, and
+# here that is setuptools' command (egg_info, bdist_wheel, ...)
 sys.path.insert(0, HERE)
-runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"), run_name="__main__")
+runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"))["main"]()
 
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
 #: the test entry points of the parts (rocking_model/engine/py/py_*.c), linked into the same module
