@@ -5,7 +5,7 @@
     rocking simulate --record RSN6_IMPVALL.I_I-ELC180.AT2 --scale 1.5 --scheme moreau_jean
     rocking simulate --record H.AT2 --vertical UP.AT2 --vertical-scale 1.2   (vertical ag_v, positive upward)
     rocking ensemble --pulse sine --amplitude-ratios 1:6:11 --frequency-ratios 1:10:10 --workers 2
-    rocking build-fmu [--dest dist]          (source checkout only)
+    rocking build-fmu [--dest dist]          (needs a C compiler and the Python headers)
     rocking benchmark [--quick] [--ensemble] (source checkout only)
 
 Only argument handling and reporting live here; the physics is in `rocking_model.simulation`. Bad input
@@ -318,15 +318,11 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_build_fmu(args) -> int:
-    import importlib.util
+    from .fmi.build import main as build_main
 
-    root = _repo_root()
-    spec = importlib.util.spec_from_file_location("_rocking_build_fmu", root / "build_fmu.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    # the same entry point as `python build_fmu.py`: FMUs and their cross-check folders
+    # the same entry point as `python build_fmu.py` (a checkout's): FMUs and their cross-check folders
     argv = ["--dest", args.dest] + (["--no-cross-check"] if args.no_cross_check else []) + list(args.names)
-    return mod.main(argv)
+    return build_main(argv, prog="rocking build-fmu")
 
 
 def cmd_benchmark(args, extra: list[str]) -> int:
@@ -492,11 +488,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--force", action="store_true", help="overwrite existing output files (refused otherwise)")
     g.add_argument("--no-plot", action="store_true", help="skip the PNG (no matplotlib needed)")
 
-    b = sub.add_parser("build-fmu", help="build and validate the FMUs (source checkout)")
+    b = sub.add_parser("build-fmu", help="build and validate the FMUs (needs a C compiler)")
     b.add_argument("--dest", default="dist", help="output directory (default dist/)")
     b.add_argument("--no-cross-check", action="store_true",
                    help="do not write the cross-check folders (dest/cross-check), as python build_fmu.py")
-    b.add_argument("names", nargs="*", help="FMU names (default: all in fmu_src/)")
+    b.add_argument("names", nargs="*", help="FMU names (default: all)")
 
     k = sub.add_parser("benchmark", help="run the benchmark suite (python -m benchmarks; source checkout)",
                        description="Run python -m benchmarks (or, with --ensemble, benchmarks/ensemble_bench.py); "

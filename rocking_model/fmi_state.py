@@ -4,7 +4,7 @@ An FMU state (``fmi2SerializeFMUstate``) is a file that travels between tools an
 never run code: the payload is JSON (numbers, booleans, null, strings, lists and objects), parsed by
 `json.loads` with a bounded size and nesting, never by pickle or any other loader that can build objects.
 
-In an FMU these bytes follow the binary's own header (fmi_binary/fmi2_common.c, shared by both FMU binaries:
+In an FMU these bytes follow the binary's own header (rocking_model/fmi/binary/fmi2_common.c, shared by both FMU binaries:
 the communication time, the instance state, the fmi2Terminated flag, the last step status and a CRC-32 over its header and these bytes),
 so that a corrupted byte anywhere in ``fmi2SerializeFMUstate``'s output is refused.
 

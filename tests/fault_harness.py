@@ -72,14 +72,14 @@ PWNED = "pwned"
 
 
 #: the magic that starts the self-contained FMUs' own state payload (a binary record of the slave's fields
-#: and the engine snapshot, fmi_binary/standalone/fmi2_engine.c), behind the same binary header; version 2
+#: and the engine snapshot, rocking_model/fmi/binary/standalone/fmi2_engine.c), behind the same binary header; version 2
 #: since the input ag_v (one rate per input), as rocking_model.fmi.standalone.STATE_PAYLOAD_MAGIC
 STANDALONE_PAYLOAD_MAGIC = b"rocking engine FMU state v2\n"
 
 
 def slave_bytes(data: bytes) -> bytes:
     """The slave's own state format inside a serialized FMU state (after the binary's header: the
-    communication time, the FMI state fields and the CRC-32, written by fmi_binary/fmi2_common.c for both kinds
+    communication time, the FMI state fields and the CRC-32, written by rocking_model/fmi/binary/fmi2_common.c for both kinds
     of FMU)."""
     from rocking_model.fmi_state import MAGIC
 
@@ -103,7 +103,7 @@ def decode_payload(payload: bytes) -> dict:
     return decode_state(payload)
 
 
-#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_common.c: magic 22,
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (rocking_model/fmi/binary/fmi2_common.c: magic 22,
 #: time 8, three int32 fields), and the header's size
 SERIAL_CRC_OFFSET = 42
 SERIAL_HEADER_SIZE = SERIAL_CRC_OFFSET + 4
@@ -2359,7 +2359,7 @@ Run it: `bash run.sh test tests/test_fault_suite.py`; one case by hand: `python 
 --list`, then `--case <id> --config <fmus.json>`. The session prints the classes tried and passing, the
 longest case and the longest single `fmi2DoStep`.
 
-## Statuses (FMI 2.0 §2.1.3, the project's binaries: `fmi_binary/fmi2_common.c` shared by `fmi2_cs.c` and `standalone/fmi2_engine.c`)
+## Statuses (FMI 2.0 §2.1.3, the project's binaries: `rocking_model/fmi/binary/fmi2_common.c` shared by `fmi2_cs.c` and `standalone/fmi2_engine.c`)
 
 * **fmi2Error** for an invalid argument, value or call sequence, or a rejected FMU state: nothing of the call
   is applied; the instance is in the error state, where the getters, the status queries, `fmi2SetFMUstate`,
@@ -2385,7 +2385,7 @@ _PAGE_TAIL = """
 
 The suite was first written against pythonfmu 0.7's prebuilt wrapper, which failed several classes (SIGSEGV for
 `é # [ %` in the resource path, GUID not checked, no input derivatives, fmi2Fatal for a string that is not
-UTF-8, aborts at process exit); the project's own binary (`fmi_binary/`) replaced it and passes every class.
+UTF-8, aborts at process exit); the project's own binary (`rocking_model/fmi/binary/`) replaced it and passes every class.
 The classes `declared`, `inputderiv`, `corrupt` and `range` were added with the faults they found fixed: a
 minimum of `mu` (1e-3), input derivatives set before initialization measured from the start time, a CRC-32
 over the whole serialized state, and the declared range of `max_steps` checked.

@@ -1,4 +1,4 @@
-"""The project's FMU binary (fmi_binary/, issue 13) beyond single-instance use: it compiles without warnings,
+"""The project's FMU binary (rocking_model/fmi/binary/, issue 13) beyond single-instance use: it compiles without warnings,
 exports only the FMI functions and no Python symbol is left for the loader; two different FMUs with 4 threads
 in one process give the results of a sequential run; sys.path and the interpreter survive instantiation,
 freeing and unloading; a C host under valgrind makes no invalid memory access in the binary."""
@@ -39,8 +39,8 @@ def fmus(built_fmus):
 def test_binary_compiles_without_warnings(tmp_path):
     include = sysconfig.get_paths()["include"]
     cmd = [CC, "-fsyntax-only", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", f"-I{HEADERS}",
-           f"-I{include}", f"-I{ROOT / 'fmi_binary'}", '-DFMI_PYTHON_LIBRARY="libpython.so"',
-           '-DFMI_PYTHON_EXECUTABLE="python3"', *map(str, sorted((ROOT / "fmi_binary").glob("*.c")))]
+           f"-I{include}", f"-I{ROOT / 'rocking_model' / 'fmi' / 'binary'}", '-DFMI_PYTHON_LIBRARY="libpython.so"',
+           '-DFMI_PYTHON_EXECUTABLE="python3"', *map(str, sorted((ROOT / "rocking_model" / "fmi" / "binary").glob("*.c")))]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
 

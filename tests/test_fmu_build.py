@@ -46,3 +46,22 @@ def test_run_sh_says_what_each_phase_does(tmp_path):
     assert None not in phases and phases == sorted(phases), proc.stdout
     calls = log.read_text().splitlines()
     assert [c.split()[0] for c in calls] == ["-m", "-m", "build_fmu.py", "examples/demo.py"], calls
+
+
+def test_fmu_src_scripts_are_the_packages_wrappers(build_module):
+    """fmu_src/ holds one thin script per FMU, exactly the text the build writes from the package's registry
+    (`rocking_model.fmi.build.fmu_script`): the slave classes live in the package alone, and a checkout
+    builds what an installed package builds."""
+    from rocking_model.fmi.fmus import FMUS
+
+    scripts = {p.stem: p.read_text() for p in (ROOT / "fmu_src").glob("*.py")}
+    assert sorted(scripts) == sorted(FMUS)
+    for name, text in scripts.items():
+        assert text == build_module.fmu_script(name), f"fmu_src/{name}.py differs from fmu_script({name!r})"
+
+
+def test_unknown_fmu_name_is_one_clear_error(build_module, tmp_path, capsys):
+    assert build_module.main(["--dest", str(tmp_path), "--no-cross-check", "NoSuchFmu"]) == 1
+    err = capsys.readouterr().err
+    assert "build_fmu: FAILED: no FMU named ['NoSuchFmu']; the FMUs are FlexibleRockingOscillator" in err
+    assert not list(tmp_path.iterdir())

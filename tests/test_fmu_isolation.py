@@ -96,7 +96,7 @@ def two_versions(tmp_path_factory):
     # a copy of the project whose package differs: built by its own build_fmu.py, in another process
     copy = tmp / "copy"
     copy.mkdir()
-    for name in ("build_fmu.py", "fmu_src", "rocking_model", "fmi_binary"):
+    for name in ("build_fmu.py", "fmu_src", "rocking_model"):
         src = ROOT / name
         (shutil.copytree(src, copy / name, ignore=shutil.ignore_patterns("__pycache__"))
          if src.is_dir() else shutil.copy2(src, copy / name))

@@ -152,7 +152,7 @@ def test_state_taken_before_initialization_and_after_an_error(fmus):
     inst.free()
 
 
-#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (fmi_binary/fmi2_common.c)
+#: [bytes] offset of the CRC-32 in the binary's header of a serialized state (rocking_model/fmi/binary/fmi2_common.c)
 CRC_OFFSET = 42
 
 

@@ -362,7 +362,7 @@ def test_state_carries_ag_v_and_its_rate(fmus, kind):
 
 
 def _with_crc(data: bytes) -> bytes:
-    """A serialized state with the CRC-32 of the binary's header recomputed (fmi_binary/fmi2_common.h)."""
+    """A serialized state with the CRC-32 of the binary's header recomputed (rocking_model/fmi/binary/fmi2_common.h)."""
     head, payload = data[:42], data[46:]
     return head + struct.pack("<I", zlib.crc32(payload, zlib.crc32(head))) + payload
 

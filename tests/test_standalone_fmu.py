@@ -1,5 +1,5 @@
 """The self-contained FMUs (issue 22): dist/standalone/<Name>.fmu, the compiled C engine under the C FMI layer
-fmi_binary/standalone/fmi2_engine.c, with no Python at all.
+rocking_model/fmi/binary/standalone/fmi2_engine.c, with no Python at all.
 
 - the modelDescription is the pythonfmu FMU's (same variables, references, units, ranges, starts,
   descriptions) with needsExecutionTool = false; fmpy validates it;

@@ -43,7 +43,7 @@ What the base class provides:
 * ``fmi2Reset``: the pythonfmu 0.7 C wrapper re-creates the Python object (start values, not initialized);
   :meth:`RockingSlave.reset` does the same in place for direct use of the class.
 
-Status of every FMI call. The FMUs run the project's own binary (``fmi_binary/``, see its ``fmi2_cs.c``),
+Status of every FMI call. The FMUs run the project's own binary (``rocking_model/fmi/binary/``, see its ``fmi2_cs.c``),
 which calls these pythonfmu methods directly: an exception is fmi2Error (its text goes to the importer's
 logger, the instance is in the error state until fmi2Reset or fmi2SetFMUstate), ``do_step`` returning False
 is fmi2Discard, a warning logged during the call is fmi2Warning. The binary checks the call sequence, NULL
@@ -68,8 +68,8 @@ the same checks here serve direct users of the class. Hence:
 Messages are queued with `RockingSlave.log`; the binary passes each one to the importer's logger as data
 (``"%s"``): errors and warnings always, the others only with logging on.
 
-Each FMU bundles the package under the digest of its sources (``build_fmu.py``), so FMUs built from other
-versions and a host's own ``rocking_model`` can live in one process.
+Each FMU bundles the package under the digest of its sources (``rocking_model.fmi.build``), so FMUs built
+from other versions and a host's own ``rocking_model`` can live in one process.
 
 Modules (one concern each): `variables` (the variable table, units, pythonfmu variable classes, the
 variables derived from a model's declarations), `slave` (the slave and its state machine), the state format

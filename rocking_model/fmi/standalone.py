@@ -1,7 +1,7 @@
 """Self-contained FMUs (issue 22): what the C FMI layer over the compiled engine needs from the Python
 declarations, generated at build time from the same declarations the pythonfmu FMUs use (one source).
 
-From the FMU script's slave class (e.g. ``fmu_src/RigidRockingBlock.py``, a `ModelSlave`):
+From the FMU's slave class (e.g. `rocking_model.fmi.fmus.RigidRockingBlock`, a `ModelSlave`):
 
 - `model_description`: the modelDescription.xml of the standalone FMU, which is the pythonfmu FMU's own XML
   (`RockingSlave.to_xml`: the same variables, value references, units, ranges, start values, descriptions)
@@ -12,7 +12,7 @@ From the FMU script's slave class (e.g. ``fmu_src/RigidRockingBlock.py``, a `Mod
 - `build_description`: sources/buildDescription.xml (FMI 3.0 / 2.0.4 style);
 - `documentation`: documentation/index.html, the table of the variables.
 
-Only this module and the C sources in ``fmi_binary/standalone`` know of each other; the C code reads nothing
+Only this module and the C sources in ``rocking_model/fmi/binary/standalone`` know of each other; the C code reads nothing
 at run time (no resources, no Python)."""
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ import uuid
 from typing import List, Tuple
 from xml.etree.ElementTree import Element, SubElement, tostring
 
-#: C role codes of the variables (fmi_binary/standalone/fmi2_engine.c reads them)
+#: C role codes of the variables (binary/standalone/fmi2_engine.c reads them)
 ROLES = ("RK_ROLE_PARAM", "RK_ROLE_INITIAL", "RK_ROLE_SCHEME", "RK_ROLE_DT_MAX", "RK_ROLE_TOLERANCE",
          "RK_ROLE_MAX_STEPS", "RK_ROLE_INPUT", "RK_ROLE_OUTPUT", "RK_ROLE_CONTACT", "RK_ROLE_IMPACTS",
          "RK_ROLE_OVERTURNED", "RK_ROLE_FRICTION_DEMAND", "RK_ROLE_PAINLEVE")
@@ -36,7 +36,7 @@ _CAUS = {"parameter": "RK_PARAMETER", "input": "RK_INPUT", "output": "RK_OUTPUT"
 
 #: the C sources of a standalone FMU besides the engine's (rocking_model/engine/src): the FMI layer, with the
 #: FMI plumbing (fmi2_common) and the resource-URI check it shares with the pythonfmu FMUs' binary (paths
-#: relative to fmi_binary/)
+#: relative to rocking_model/fmi/binary, package data)
 FMI_SOURCES = ("standalone/fmi2_engine.c", "fmi2_common.c", "fmi2_common.h", "uri.c", "uri.h")
 
 
@@ -218,7 +218,7 @@ def documentation(slave) -> str:
 
 
 # ---------------------------------------------------------------------------------------------- FMU states
-#: the slave part of a standalone FMU's serialized state (fmi_binary/standalone/fmi2_engine.c, encode_slave);
+#: the slave part of a standalone FMU's serialized state (binary/standalone/fmi2_engine.c, encode_slave);
 #: version 2: one (has_rate, rate, rate_t) per Real input (version 1, a single input, is refused: its GUID is
 #: that of another build anyway)
 STATE_PAYLOAD_MAGIC = b"rocking engine FMU state v2\n"

@@ -7,7 +7,7 @@
  * either (numpy cannot be re-initialized, and the host may load the FMU again).
  *
  * Only the types come from Python.h; every call goes through `py` (the macros Py_INCREF/Py_DECREF would
- * reference libpython's symbols directly: use py.IncRef / py.DecRef). build_fmu.py links with
+ * reference libpython's symbols directly: use py.IncRef / py.DecRef). The FMU build links with
  * -Wl,--no-undefined, so a direct reference cannot slip in. */
 #ifndef FMI_BINARY_PYAPI_H
 #define FMI_BINARY_PYAPI_H

@@ -5,7 +5,7 @@
 
 #include "platform.h"
 
-/* recorded by build_fmu.py: the libpython and the python executable of the build environment */
+/* recorded by the FMU build (rocking_model/fmi/build.py): the libpython and the python executable of the build environment */
 #ifndef FMI_PYTHON_LIBRARY
 #error "define FMI_PYTHON_LIBRARY (the path of the shared libpython the FMU was built against)"
 #endif

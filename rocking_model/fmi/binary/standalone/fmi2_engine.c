@@ -2,7 +2,7 @@
  * Python at all. C99 + libm.
  *
  * The FMI calls (the state machine, the argument checks, the statuses, the messages, the FMU states) are
- * fmi_binary/fmi2_common.c's, written once for this binary and fmi2_cs.c (the binary of the pythonfmu FMUs;
+ * ../fmi2_common.c's, written once for this binary and fmi2_cs.c (the binary of the pythonfmu FMUs;
  * per-call state masks after modelica/Reference-FMUs); this file has fmi2Instantiate and their hooks
  * (fmi2c_backend_*): the slave's part (rocking_model/fmi/slave.py: RockingSlave / ModelSlave), written here
  * in C with the same checks and texts. The variables come from rk_fmu_vars.h, GENERATED at build time by
@@ -291,7 +291,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     /* the FMU reads no resources, but a location that is not a file URI is refused as the project's other
-     * binary refuses it (fmi_binary/uri.c, the same messages) */
+     * binary refuses it (../uri.c, the same messages) */
     char resources[4096];
     if (fmi2c_resource_folder(functions, instanceName, fmuResourceLocation, resources, sizeof resources,
                               is_directory, NULL, NULL) != 0)

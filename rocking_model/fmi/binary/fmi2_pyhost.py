@@ -1,4 +1,4 @@
-"""Python side of the FMU binary (fmi_binary/fmi2_cs.c): finds the slave class in the FMU's resources and
+"""Python side of the FMU binary (fmi2_cs.c, next to it): finds the slave class in the FMU's resources and
 creates the slave. Copied into every FMU's resources as ``fmi2_pyhost.py``; the binary loads it under a name
 unique to its contents (``_fmi2_pyhost_<sha256>``), so FMUs built by other versions can share a process.
 
@@ -6,7 +6,7 @@ Once the slave exists, the binary calls the slave's pythonfmu methods directly (
 ``do_step``, ...); this module only serves fmi2Instantiate, fmi2Reset and fmi2FreeInstance.
 
 The FMU's resources hold, besides the slave script and what it bundles, ``fmi2_pyhost.json`` (written by
-``build_fmu.py``)::
+``rocking_model/fmi/build.py``)::
 
     {"guid": "{...}", "slave_module": "RigidRockingBlock", "slave_class": "RigidRockingBlock",
      "site_packages": ["/path/of/the/build/environment/site-packages", ...]}
