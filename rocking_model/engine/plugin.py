@@ -60,10 +60,19 @@ def _engine_sources() -> list:
     return sorted(p for p in SRC.glob("*.c") if p.name != "rk_models_gen.c")
 
 
-def source_of(cls) -> str:
-    """The C of the model's kernels (generated from its declaration) and its export."""
+def source_of(cls, export: bool = True) -> str:
+    """The C of the model's kernels (generated from its declaration), with the library's export."""
     from . import gen_models
-    return gen_models.generate([cls]) + EXPORT
+    return gen_models.generate([cls]) + (EXPORT if export else "")
+
+
+def built_in(cls) -> bool:
+    """Whether ``cls``'s kernels are compiled into the extension (a model of the package)."""
+    from .. import _engine
+    global _BUILT_IN
+    if _BUILT_IN is None:
+        _BUILT_IN = _engine.kinds()
+    return f"'{cls.kind}'" in _BUILT_IN and cls not in _LOADED
 
 
 def build(cls, dest: Path | None = None) -> Path:
@@ -101,12 +110,7 @@ def ensure(cls) -> None:
     """Make the engine know ``cls``'s kind: built in, already added, or generated, compiled and added now."""
     from .. import _engine
 
-    global _BUILT_IN
-    if cls in _LOADED:
-        return
-    if _BUILT_IN is None:
-        _BUILT_IN = _engine.kinds()
-    if f"'{cls.kind}'" in _BUILT_IN:
+    if cls in _LOADED or built_in(cls):
         return
     if not hasattr(cls, "mechanics"):
         raise ValueError(f"model {cls.__name__} declares no mechanics(): the engine cannot run it "

@@ -485,8 +485,18 @@ def build_standalone_one(fmu, dest: Path) -> Path:
     slave = standalone.slave_instance(slave_class)
     dest = Path(dest)
     engine_files = _engine_sources()
+    # a model declared outside the package: its own kernels, generated from its declaration (sympy), replace
+    # the package's in the FMU's sources
+    model_class = getattr(slave_class, "model_class", None)
+    own_kernels = None
+    if model_class is not None:
+        from ..engine import plugin
+        if not plugin.built_in(model_class):
+            own_kernels = plugin.source_of(model_class, export=False).encode()
+    kernels_name = "rk_models_gen.c"
     fmi_files = [FMI_BINARY / f for f in standalone.FMI_SOURCES]
-    digest = b"".join(p.name.encode() + b"\0" + p.read_bytes() for p in engine_files + fmi_files)
+    digest = b"".join(p.name.encode() + b"\0" + (own_kernels if own_kernels is not None and p.name == kernels_name
+                                                   else p.read_bytes()) for p in engine_files + fmi_files)
     c_sources = sorted(p.name for p in engine_files + fmi_files if p.suffix == ".c")
     xml, guid = standalone.model_description(slave, c_sources, digest)
     folder, suffix = _binary_platform()
@@ -496,7 +506,10 @@ def build_standalone_one(fmu, dest: Path) -> Path:
         src = Path(tmp) / "sources"
         src.mkdir()
         for p in engine_files + fmi_files:
-            shutil.copy2(p, src / p.name)
+            if own_kernels is not None and p.name == kernels_name:
+                (src / p.name).write_bytes(own_kernels)
+            else:
+                shutil.copy2(p, src / p.name)
         for h in FMI2_HEADERS:
             shutil.copy2(fmi_headers() / h, src / h)
         (src / "rk_fmu_vars.h").write_text(standalone.vars_header(slave, guid))
@@ -542,6 +555,29 @@ def build_standalone(dest="dist", names=None) -> list[Path]:
         dest = Path.cwd() / dest
     wanted = registered_fmu_names()
     return [build_standalone_one(name, dest / STANDALONE_DIR) for name in fmu_names(names) if name in wanted]
+
+
+def build_script(script: Path, dest="dist") -> Path:
+    """The pythonfmu FMU of an FMU script of one's own (a `ModelSlave` subclass named like the file, whose
+    model may be declared in the same file): built and validated into ``dest``. Its model's kernels, if the
+    model is not one of the package's, are compiled on the FMU's first use on the host (sympy and a C compiler
+    there)."""
+    script, dest = Path(script).resolve(), Path(dest).resolve()
+    dest.mkdir(parents=True, exist_ok=True)
+    alias = f"{PACKAGE.name}_{package_digest()}"
+    with tempfile.TemporaryDirectory(prefix="rocking_fmu_") as tmp:
+        package_copy = Path(tmp) / alias
+        shutil.copytree(PACKAGE, package_copy, ignore=_IGNORE)
+        (Path(tmp) / "scripts").mkdir()
+        binary = compile_binary(Path(tmp))
+        sys.path.insert(0, tmp)
+        try:
+            return build_one(bundled_script(script, alias, Path(tmp) / "scripts"), dest, package_copy, binary)
+        finally:
+            sys.path.remove(tmp)
+            for name in [m for m in sys.modules if m == alias or m.startswith(alias + ".")]:
+                del sys.modules[name]
+            sys.modules.pop(script.stem, None)
 
 
 def build_all(dest="dist", names=None, cross_check=False) -> list[Path]:

@@ -5,8 +5,7 @@ checkout's ``python build_fmu.py``) builds, from an installed package as from a 
   every parameter's default, unit, range and description in `rocking_model.models.rigid_block`.
 - `FlexibleRockingOscillator`: the flexible rocking oscillator (Giouvanidis & Dimitrakopoulos 2017, appendix);
   `rocking_model.models.flexible_oscillator` (defaults: its representative laboratory specimen).
-  Both run the compiled engine (one call into C per doStep); ROCKING_FMU_ENGINE=python selects the Python
-  reference engine (rocking_model.fmi.slave).
+  Both run the compiled engine (one call into C per doStep).
 - `GroundMotionSource`: outputs a horizontal ground acceleration ag(t) and a vertical one ag_v(t) (positive
   upward; 0 without a vertical component), no inputs. The motion is chosen from the parameters by
   `rocking_model.cosim.ground_motion_from_parameters` -- the pulse by
