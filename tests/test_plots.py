@@ -23,7 +23,11 @@ def test_rigid_response_plot_labels_sit_in_legends():
     fig = response_figure(res, motion, alpha=block.alpha, g=block.g)
     try:
         axes = fig.axes
-        assert len(axes) == 3
+        # a slip panel only where the base slid: here the pivot slides for a moment at the lift-off of the
+        # overturning fall (the zero of its force, where neither sticking nor flight is consistent)
+        slid = bool(np.any(np.asarray(res.values["slip"])))
+        assert len(axes) == 3 + slid
+        axes = [ax for ax in axes if ax.get_ylabel() != "slip [m]"]
         assert all(not ax.texts for ax in axes), [t.get_text() for ax in axes for t in ax.texts]
         assert any("tan" in s and "uplift" in s for s in _labels(axes[1]))
         assert any(s.startswith("overturned at") for s in _labels(axes[0]))
