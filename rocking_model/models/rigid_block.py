@@ -256,7 +256,11 @@ class RigidBlock(RockingModel):
     def initial_state(self, phi_0=0.0, phi_dot_0=0.0, **extra):
         self.check_initial_names(extra)
         p_phi, p_phi_dot = self.INITIAL
-        phi_0, phi_dot_0 = p_phi.check(phi_0), p_phi_dot.check(phi_dot_0)
+        # (a value the check would return unchanged skips it: the common case of every run)
+        if not p_phi.accepts_as_is(phi_0):
+            phi_0 = p_phi.check(phi_0)
+        if not p_phi_dot.accepts_as_is(phi_dot_0):
+            phi_dot_0 = p_phi_dot.check(phi_dot_0)
         mode = self.mode_of_initial_state(phi_0, phi_dot_0)
         if mode == Mode.FULL:
             q, v = self.embed(mode, (), ())       # (full contact: no reduced coordinates)
