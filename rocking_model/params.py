@@ -137,12 +137,18 @@ def declared_parameters(cls) -> tuple:
     return out
 
 
+#: class -> (name, accepts_as_is, Param) of its declared parameters (every model built reads them)
+_CHECKS: dict = {}
+
+
 def check_parameters(obj) -> None:
     """Check (and convert) every declared parameter of the dataclass instance ``obj`` in place (a value that
     `Param.accepts_as_is` is left as it is, without the call into the checks)."""
     d = obj.__dict__
-    for p in declared_parameters(type(obj)):
-        name = p.name
+    checks = _CHECKS.get(type(obj))
+    if checks is None:
+        checks = _CHECKS[type(obj)] = tuple((p.name, p.accepts_as_is, p) for p in declared_parameters(type(obj)))
+    for name, accepts, p in checks:
         value = d[name] if name in d else getattr(obj, name)
-        if not p.accepts_as_is(value):
+        if not accepts(value):
             object.__setattr__(obj, name, p.check(value))

@@ -78,6 +78,9 @@ def _with_vertical(horizontal: GroundMotion, ag_v) -> TwoComponentMotion:
 #: the accepted values of ``Simulator(on_report=...)``
 _ON_REPORT = {"warn": "warn", "raise": "raise", "ignore": "ignore"}
 
+#: the model classes already seen to be RockingModel subclasses (a set lookup instead of the ABC's isinstance)
+_MODEL_TYPES: set = set()
+
 #: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
 #: event-driven, the base's offset; states of version 1 are refused by their version)
 STATE_VERSION = 2
@@ -136,8 +139,10 @@ class Simulator:
                  method: str = "DOP853", impact_log_size: int | None = 10000,
                  max_steps: int | None = MAX_STEPS, tolerances: ContactTolerances = DEFAULT_TOLERANCES,
                  on_report: str = "warn", engine: str = DEFAULT_ENGINE, **initial):
-        if not isinstance(model, RockingModel):
-            raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
+        if type(model) not in _MODEL_TYPES:
+            if not isinstance(model, RockingModel):
+                raise ValueError(f"model must be a RockingModel (RigidBlock, FlexibleOscillator), got {model!r}")
+            _MODEL_TYPES.add(type(model))
         self.model = model
         self.scheme = check_choice("scheme", scheme, SCHEMES)
         t0 = check_real("t0", t0)

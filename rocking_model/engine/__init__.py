@@ -94,7 +94,7 @@ def _sampled(names, modes, values, impacts, overturned) -> tuple:
     cols = list(values)               # the row views, made at once
     out = dict(zip(names, cols))
     out["friction_demand"] = cols[-2]
-    out["painleve"] = cols[-1].astype(np.int64)
+    out["painleve"] = cols[-1].astype(_I64)
     return modes, out, impacts, overturned
 
 
@@ -107,6 +107,8 @@ _NAMES: dict = {}
 
 #: numpy's float64 descriptor (an identity test: a dtype's == parses its other side first)
 _F64 = np.dtype(np.float64)
+_I64 = np.dtype(np.int64)
+_BOOL = np.dtype(bool)
 
 
 def kernel_call(cls, params: list, fn: str, mode: int = 0, a=None, b=None, ag: float = 0.0, ag_v: float = 0.0):
@@ -405,13 +407,14 @@ class CompiledIntegrator(Integrator):
     def sample(self, times, ag, max_steps: int | None = None, hold: bool = False):
         """`Integrator.sample`; hold: ag (and ag_v) held at each interval's start instead (simulate's
         hold="zoh": the results of a `Simulator.advance` per interval under the number ag(t_k), in one call)."""
-        if type(times) is not np.ndarray or times.dtype != np.float64 or not times.flags.c_contiguous:
+        if type(times) is not np.ndarray or times.dtype is not _F64 or not times.flags.c_contiguous:
             times = np.ascontiguousarray(times, dtype=float)
         n = times.size + 1
         names = self._names
-        ints = np.empty((2, n), dtype=np.int64)                     # modes and impacts: one block
-        values = np.empty((len(names) + 2, n), dtype=float)        # one row per output (columns=True)
-        overturned = np.empty(n, dtype=bool)
+        # (the dtypes as descriptors: np.empty converts a type argument on every call)
+        ints = np.empty((2, n), _I64)                       # modes and impacts: one block
+        values = np.empty((len(names) + 2, n), _F64)       # one row per output (columns=True)
+        overturned = np.empty(n, _BOOL)
         spec = motion_spec(ag)
         vspec = None if ag.vertical is None else motion_spec(ag.vertical)
         ident = 0 if ag.constant else self._identity(ag)

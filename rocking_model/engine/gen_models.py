@@ -579,10 +579,15 @@ class ModelCode:
                 rdd = f"    double rdd[{max(k, 1)}];\n    (void)rdd;\n" + self._with_names(names, lambda md=md: self._rdd_code(md))
                 targets = [(f"g[{c}]", md["lam"][c] / Fs) for c in CLOSED[mode]]
                 forces = self._with_names(names, lambda t=targets: self._block(t, keep=True))
+                # the open gaps as monitor_one writes them, from the sines and cosines the acceleration computed
+                # (a call would evaluate its own sine: the compiler cannot merge it with the sincos above)
+                gaps = [self._with_names(names, lambda md=md, c=c: self._block([(f"g[{c}]", md["gaps"][c] / L)],
+                                                                               keep=True))
+                        for c in range(nc) if c not in CLOSED[mode]]
                 tot = self._with_names(names, lambda md=md: self._block(
                     [("totals[0]", md["totals"][0]), ("totals[1]", md["totals"][1])], "        ", keep=True))
-                lines.insert(0, rdd + "\n" + forces)
-                lines.append(f"    if (totals != NULL) {{\n{tot}\n    }}")
+                lines = [rdd + "\n" + forces] + gaps + [f"    {P}_mode_monitor_one(m, mode, y, {nc}, &g[{nc}]);",
+                                                       f"    if (totals != NULL) {{\n{tot}\n    }}"]
             cases[mode] = "\n".join(lines)
         s.append(f"static void {P}_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, "
                  "double *g, double *totals)\n{\n    (void)ag; (void)ag_v; (void)totals;\n" + self._switch(cases) + "\n}\n")

@@ -130,6 +130,11 @@ typedef struct ed_fn {
     /** the model's own rhs of a non-sliding mode (what rk_mode_rhs calls there; NULL: through rk_mode_rhs) */
     void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
+    /** memo_n > 0: ed_G computes the totals too and keeps them for the last (t, y[memo_n]) it saw, which ed_totals
+     *  reads there (the dip search and the demand peak both evaluate the middle of a step); 0: off */
+    int memo_n;
+    int memo_valid;
+    double memo_t, memo_y[RK_MAX_Y], memo_lam[2];
 } ed_fn;
 
 /** a motion evaluated without side effects or failure (no Python callback inside) */
@@ -153,6 +158,8 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     f->pure = f->constant || (ed_motion_pure(ag) && (ag_v == NULL || ed_motion_pure(ag_v)));
     f->mode_rhs = rk_mode_sliding(&e->model, mode) ? NULL : e->model.ops->mode_rhs;
     rk_error_clear(&f->err);
+    f->memo_n = 0;
+    f->memo_valid = 0;
 }
 
 /** (ag(t), ag_v(t)) called directly (the Python's ag(t) at an event; a callback's failure and message kept);
@@ -211,6 +218,16 @@ static rk_status ed_G(void *ctx, double t, const double *y, double *g)
     rk_status st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
+    if (f->memo_n > 0) {
+        /* the totals from the same kernel call (G does not depend on whether they are asked for) */
+        int has = 0;
+        f->memo_lam[0] = f->memo_lam[1] = NAN;
+        rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, f->memo_lam, &has);
+        f->memo_valid = 1;
+        f->memo_t = t;
+        memcpy(f->memo_y, y, sizeof(double) * (size_t)f->memo_n);
+        return RK_OK;
+    }
     rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL);
     return RK_OK;
 }
@@ -246,7 +263,13 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
 {
     double a, av, g[RK_MAX_EVENTS];
     int has = 0;
-    rk_status st = ed_ag(f, t, &a, &av);
+    rk_status st;
+    if (f->memo_valid && t == f->memo_t && memcmp(y, f->memo_y, sizeof(double) * (size_t)f->memo_n) == 0) {
+        lam[0] = f->memo_lam[0];
+        lam[1] = f->memo_lam[1];
+        return RK_OK;
+    }
+    st = ed_ag(f, t, &a, &av);
     if (st != RK_OK)
         return st;
     lam[0] = lam[1] = NAN;
@@ -1229,6 +1252,9 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     /* the friction demand: at the segment's start, at step ends, at its peak inside a step, at the event
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
     peaks = has_totals && !rk_mode_sliding(m, mode);
+    /* (a motion with a callback is called as often as before: no memo) */
+    if (peaks && f.pure && k > 0)
+        f.memo_n = 2 * k;
     /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
     ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 2 * k, g_prev, has_totals ? lam : NULL));
     if (has_totals) {

@@ -295,33 +295,61 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
     return RK_OK;
 }
 
+/* sum_i c_i K[idx_i][j] for every component j < n at once (rk._lincomb per component: the same products and
+ * left-to-right sums, the terms read once for all components); 0.0 where there are no terms */
+static inline void lincomb_all(const rk_lincomb *lc, double K[][RK_MAX_Y], int n, double *acc)
+{
+    int i, j;
+    if (lc->n == 0) {
+        for (j = 0; j < n; j++)
+            acc[j] = 0.0;
+        return;
+    }
+    for (j = 0; j < n; j++)
+        acc[j] = lc->c[0] * K[lc->idx[0]][j];
+    for (i = 1; i < lc->n; i++) {
+        const double c = lc->c[i], *row = K[lc->idx[i]];
+        for (j = 0; j < n; j++)
+            acc[j] = acc[j] + c * row[j];
+    }
+}
+
+#if defined(__GNUC__)
+#define RK_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define RK_ALWAYS_INLINE inline
+#endif
+
 /* rk._Compiled.rk_step: the stages, y_new, f_new = f(t_new, y_new), the error estimates and the tableau's
- * error norm; K[s][j] receives the n_stages stages */
-static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, double *y_new,
-                         double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
+ * error norm; K[s][j] receives the n_stages stages. Inlined with n a constant where the state size is known
+ * (attempt_2: one degree of freedom, the rigid block's rocking modes), so that the component loops unroll */
+static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, int n, double t, double h, double t_new,
+                                            double *y_new, double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
 {
     const rk_tableau *tab = s->tab;
     const double *y = s->y;
-    double arg[RK_MAX_Y], sc[RK_MAX_Y], er[2][RK_MAX_Y];
+    double arg[RK_MAX_Y], sc[RK_MAX_Y], er[2][RK_MAX_Y], acc[RK_MAX_Y];
     double err;
-    int n = s->n, ns = tab->n_stages, st_i, j, m;
+    int ns = tab->n_stages, st_i, j, m;
     rk_status st;
-    memcpy(K[0], s->f, sizeof(double) * (size_t)n);
+    for (j = 0; j < n; j++)
+        K[0][j] = s->f[j];
     for (st_i = 1; st_i < ns - 1; st_i++) {
+        lincomb_all(&tab->A[st_i], K, n, acc);
         for (j = 0; j < n; j++)
-            arg[j] = y[j] + h * lincomb(&tab->A[st_i], K, j);
+            arg[j] = y[j] + h * acc[j];
         st = call_rhs(s, t + tab->C[st_i] * h, arg, K[st_i], errp);
         if (st != RK_OK)
             return st;
     }
+    lincomb_all(&tab->B, K, n, acc);
     for (j = 0; j < n; j++)
-        y_new[j] = y[j] + h * lincomb(&tab->B, K, j);
+        y_new[j] = y[j] + h * acc[j];
     st = call_rhs(s, t_new, y_new, K[ns - 1], errp);
     if (st != RK_OK)
         return st;
     for (m = 0; m < tab->n_errors; m++)
-        for (j = 0; j < n; j++)
-            er[m][j] = lincomb(&tab->E[m], K, j);
+        lincomb_all(&tab->E[m], K, n, er[m]);
     /* mixed error scale atol_j + rtol max(|y_j|, |y_new_j|) */
     for (j = 0; j < n; j++)
         sc[j] = s->atol[j] + py_max(fabs(y[j]), fabs(y_new[j])) * s->rtol;
@@ -346,15 +374,27 @@ static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, 
         }
     } else {
         /* |h| sqrt(sum p_j^2 / n) */
-        double acc = 0.0;
+        double acc2 = 0.0;
         for (j = 0; j < n; j++) {
             double p = er[0][j] / sc[j];
-            acc = acc + p * p;
+            acc2 = acc2 + p * p;
         }
-        err = fabs(h) * sqrt(acc / n);
+        err = fabs(h) * sqrt(acc2 / n);
     }
     *err_norm = err;
     return RK_OK;
+}
+
+static rk_status attempt_2(const rk_stepper *s, double t, double h, double t_new, double *y_new,
+                           double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
+{
+    return attempt_n(s, 2, t, h, t_new, y_new, K, err_norm, errp);
+}
+
+static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, double *y_new,
+                         double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
+{
+    return attempt_n(s, s->n, t, h, t_new, y_new, K, err_norm, errp);
 }
 
 rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
@@ -388,7 +428,7 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
             h = t_new - t;
             h_abs = fabs(h);
         }
-        st = attempt(s, t, h, t_new, y_new, K, &e, err);
+        st = n == 2 ? attempt_2(s, t, h, t_new, y_new, K, &e, err) : attempt(s, t, h, t_new, y_new, K, &e, err);
         if (st != RK_OK)
             return st;
         if (e < 1.0 || h_abs <= min_step) {
