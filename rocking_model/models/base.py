@@ -44,6 +44,7 @@ state, outputs, scales, derived quantities) comes from the kernel generated from
 from __future__ import annotations
 
 import math
+import operator
 from abc import ABC
 
 import numpy as np
@@ -108,6 +109,29 @@ def impact_law_param():
 #: message of a misspelt keyword)
 SOLVER_KEYWORDS = ("scheme", "dt_max", "tolerance", "theta", "zeno_tol", "t0", "method", "impact_log_size",
                    "max_steps", "tolerances", "on_report")
+
+
+class _Info:
+    """What the kernel says of one parameter set: scales, derived quantities, the default initial state."""
+
+    __slots__ = ("length_scale", "time_scale", "force_scale", "step_limit", "dof_scales", "derived", "start")
+
+    def __init__(self, info: dict):
+        self.length_scale = info["length_scale"]
+        self.time_scale = info["time_scale"]
+        self.force_scale = info["force_scale"]
+        self.step_limit = info["step_limit"]
+        self.dof_scales = tuple(info["dof_scales"])
+        self.derived = info["derived"]
+        self.start = None
+
+
+#: class -> the attrgetter of its declared parameters; (class, values) -> _Info (bounded)
+_VALUES: dict = {}
+_INFO: dict = {}
+_CACHE_SIZE = 4096
+#: rocking_model.engine.kernel_call, imported on first use
+_KERNEL_CALL = [None]
 
 
 class RockingModel(ABC):
@@ -214,33 +238,45 @@ class RockingModel(ABC):
     # (``mechanics``, rocking_model.models.declare): the formulas live in the declaration alone.
     def __post_init__(self):
         check_parameters(self)
-        # the kernel's own checks (parameter combinations the declaration refuses) and derived quantities
-        info = self._kernel("info")
-        object.__setattr__(self, "_info", info)
+        # the kernel's own checks (parameter combinations the declaration refuses), scales and derived
+        # quantities: one call per distinct parameter set (a study builds many equal models)
+        cls = type(self)
+        getter = _VALUES.get(cls)
+        if getter is None:
+            getter = _VALUES[cls] = operator.attrgetter(*(p.name for p in cls.parameters()))
+        values = getter(self)
+        key = (cls, values)
+        info = _INFO.get(key)
+        if info is None:
+            info = _Info(self._kernel("info", a=None, values=values))
+            if len(_INFO) >= _CACHE_SIZE:
+                _INFO.clear()
+            _INFO[key] = info
+        self.__dict__["_info"] = info
 
-    def _param_values(self) -> list:
-        values = self.__dict__.get("_values")
-        if values is None:
-            values = [float(getattr(self, p.name)) for p in self.parameters()]
-            object.__setattr__(self, "_values", values)
-        return values
+    def _param_values(self) -> tuple:
+        return _VALUES[type(self)](self)
 
-    def _kernel(self, fn: str, mode=0, a=None, b=None, ag: float = 0.0, ag_v: float = 0.0):
-        from ..engine import kernel_call
-        return kernel_call(type(self), self._param_values(), fn, int(mode), a, b, float(ag), float(ag_v))
+    def _kernel(self, fn: str, mode=0, a=None, b=None, ag: float = 0.0, ag_v: float = 0.0, values=None):
+        call = _KERNEL_CALL[0]
+        if call is None:
+            from ..engine import kernel_call
+            call = _KERNEL_CALL[0] = kernel_call
+        return call(type(self), self._param_values() if values is None else values, fn, int(mode), a, b,
+                    float(ag), float(ag_v))
 
     def __getattr__(self, name: str):
         # the declared derived quantities (R, alpha, p, ...) read as attributes
         if not name.startswith("_"):
             info = self.__dict__.get("_info")
-            if info is not None and name in info["derived"]:
-                return info["derived"][name]
+            if info is not None and name in info.derived:
+                return info.derived[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def derived(self) -> dict:
         """The declared derived quantities of this instance (name -> value, SI units)."""
-        return dict(self._info["derived"])
+        return dict(self._info.derived)
 
     @staticmethod
     def _vec(x) -> list:
@@ -343,28 +379,28 @@ class RockingModel(ABC):
     @property
     def length_scale(self) -> float:
         """Characteristic length for tolerances [m]."""
-        return self._info["length_scale"]
+        return self._info.length_scale
 
     @property
     def time_scale(self) -> float:
         """Characteristic time of the rocking motion, 1/p [s]."""
-        return self._info["time_scale"]
+        return self._info.time_scale
 
     @property
     def force_scale(self) -> float:
         """Scale of the contact forces [N] (the weight): normalises the force events."""
-        return self._info["force_scale"]
+        return self._info.force_scale
 
     @property
     def step_limit(self) -> float:
         """Largest Moreau-Jean step [s] the model tolerates (inf: no limit); the time-stepper sub-steps to it."""
-        return self._info["step_limit"]
+        return self._info.step_limit
 
     @property
     def dof_scales(self) -> tuple:
         """Scale of each coordinate of q for the error control of the smooth phases: 1 [rad] for phi,
         length_scale [m] for the others (velocities are scaled by 1 / time_scale on top)."""
-        return tuple(self._info["dof_scales"])
+        return self._info.dof_scales
 
     # ------------------------------------------------------------------ quantities
     def rest_position(self) -> np.ndarray:
@@ -383,6 +419,12 @@ class RockingModel(ABC):
     def initial_state(self, **initial) -> tuple[Mode, np.ndarray, np.ndarray]:
         """(mode, q, v) of the initial values (the keywords of `INITIAL`); a non-zero tilt starts on the
         corresponding pivot. Raises ValueError naming the variable and its allowed range for unphysical values."""
+        if not initial:
+            start = self._info.start
+            if start is None:
+                mode, q, v = self._kernel("initial_state", 0, [float(p.default) for p in self.INITIAL])
+                start = self._info.start = (Mode(mode), q, v)
+            return start[0], np.array(start[1]), np.array(start[2])
         names = {p.name for p in self.INITIAL}
         self.check_initial_names([k for k in initial if k not in names])
         # numbers go to the kernel, which checks their ranges (some depend on the parameters: the declaration's
