@@ -10,11 +10,10 @@ outputs read after each step, through
   outputs written into arrays): the record integrated as given (linear between its samples), not held, so its
   steps and impacts differ slightly from the held runs';
 - `Simulator(engine="c").advance(t, ag)` and `outputs()` (the Python API);
-- `simulate(..., hold="zoh", engine="c")` (whole run);
-- the Python engine's `Simulator.advance` loop (the reference, for the ratio and the agreement).
+- `simulate(..., hold="zoh", engine="c")` (whole run).
 
-The compiled variants of a case run in interleaved rounds (`_interleaved`: 15 rounds in a full run, each one run of
-every variant), the fastest run of each reported; the Python engine runs once.
+The variants of a case run in interleaved rounds (`_interleaved`: 15 rounds in a full run, each one run of
+every variant), the fastest run of each reported.
 
 Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flexible oscillator under the
 record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
@@ -27,8 +26,8 @@ the rigid block's C loop (`Engine.sample`) and raw loop per communication step, 
 Cold start: in a fresh interpreter (median of several), to the end of the first 0.01 s step of the record
 scene's rigid block, through
 
-- the low-level API: `from rocking_model._engine import Engine` (the extension module alone: neither numpy nor
-  the Python engine is imported), `Engine("rigid", params)`, `advance`, `outputs`;
+- the low-level API: `from rocking_model._engine import Engine` (the extension module alone: numpy is not
+  imported), `Engine("rigid", params)`, `advance`, `outputs`;
 - `Simulator(engine="c")`: from `import numpy` (listed apart: the Python API needs it) and
   `from rocking_model import RigidBlock, Simulator`.
 
@@ -185,15 +184,13 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
             sim = Simulator(make(), scheme, engine="c", **kw)
             return sim, _raw_run(sim, times, ag)
 
-        def api(engine):
-            def run():
-                sim = Simulator(make(), scheme, engine=engine, **kw)
-                phis = []
-                for tk, ak in zip(times, ag):
-                    sim.advance(tk, ak)
-                    phis.append(sim.outputs()["phi"])
-                return sim, phis
-            return run
+        def api():
+            sim = Simulator(make(), scheme, engine="c", **kw)
+            phis = []
+            for tk, ak in zip(times, ag):
+                sim.advance(tk, ak)
+                phis.append(sim.outputs()["phi"])
+            return sim, phis
 
         def sampled():
             # one call into C for the whole record (Engine.sample: the C loop over the communication steps);
@@ -203,31 +200,27 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
             return sim, _sample_run(sim, np.asarray(times), spec)
 
         best = _interleaved({
-            "raw": raw, "sampled": sampled, "api": api("c"),
+            "raw": raw, "sampled": sampled, "api": api,
             "simulate": lambda: simulate(make(), (t[:n + 1], a[:n + 1] * scale), n * dt, scheme=scheme, hold="zoh",
                                          engine="c", **kw)}, repeats)
         (sim_raw, phi_raw), t_raw = best["raw"]
         (sim_smp, _), t_smp = best["sampled"]
         (sim_c, phi_c), t_api = best["api"]
         res_sim, t_sim = best["simulate"]
-        (sim_py, phi_py), t_py = _best(api("python"), 1)
         n_internal = int(sim_c.integrator.n_steps)
         row = {"kind": kind, "scheme": scheme, "settings": kw, "steps": n, "dt": dt, "pga_g": 0.4 * scale,
                "impacts": int(sim_c.outputs()["impacts"]), "internal_steps": n_internal,
-               "raw": t_raw, "api": t_api, "simulate": t_sim, "python": t_py, "sample": t_smp,
+               "raw": t_raw, "api": t_api, "simulate": t_sim, "sample": t_smp,
                "raw_us": t_raw / n * 1e6, "api_us": t_api / n * 1e6, "simulate_us": t_sim / n * 1e6,
                "sample_us": t_smp / n * 1e6, "sample_impacts": int(sim_smp.outputs()["impacts"]),
-               "python_us": t_py / n * 1e6, "python_over_raw": t_py / t_raw, "python_over_api": t_py / t_api,
                "raw_us_per_internal_step": t_raw / max(1, n_internal) * 1e6,
-               "max_dphi_c_python": float(np.max(np.abs(np.array(phi_c) - np.array(phi_py)))),
                "max_dphi_raw_api": float(np.max(np.abs(np.array(phi_raw) - np.array(phi_c)))),
-               "python_impacts": int(sim_py.outputs()["impacts"]),
                "max_abs_phi": float(np.max(np.abs(phi_c)))}
         out.append(row)
         print(f"[compiled] {kind} {scheme}: raw {row['raw_us']:.2f} us/step, Engine.sample {row['sample_us']:.2f}, "
               f"API {row['api_us']:.2f}, simulate "
-              f"{row['simulate_us']:.2f}, Python {row['python_us']:.1f} ({row['python_over_raw']:.0f}x raw); "
-              f"{row['impacts']} impacts; |dphi| C-Python {row['max_dphi_c_python']:.1e}", flush=True)
+              f"{row['simulate_us']:.2f}; {row['impacts']} impacts; |dphi| raw-API {row['max_dphi_raw_api']:.1e}",
+              flush=True)
     return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}
 
 

@@ -147,15 +147,13 @@ def cold_start(fmu_path, repeats: int = 3) -> dict:
 
 
 def engine_rows(fmus: dict, null, t, ag, dt, cases, rounds: int = 7) -> dict:
-    """Per-step cost of the model FMUs on each engine (ROCKING_FMU_ENGINE = "c", the default, and "python", the
-    reference) against the do-nothing FMU, all driven by `Master.run` in interleaved rounds in one process (the
-    minimum of the rounds: the least disturbed by other load). ``cases``: {label: (FMU name, start values)}.
-    Returns {"null_us": ..., label: {"c_us", "python_us", "ratio_c", "ratio_python", "phi_err_c"}}: µs per
+    """Per-step cost of the model FMUs (the compiled engine) against the do-nothing FMU, all driven by
+    `Master.run` in interleaved rounds in one process (the minimum of the rounds: the least disturbed by other
+    load). ``cases``: {label: (FMU name, start values)}.
+    Returns {"null_us": ..., label: {"c_us", "ratio_c", "phi_err_c"}}: µs per
     communication step (setReal + doStep + getReal) and the largest |phi| difference from the zero-order-hold
     run of `simulate` at tolerance 1e-12 (compiled engine) [rad]. A start value "ag_scale" (not an FMU
     variable) scales the record for that case."""
-    import os
-
     from rocking_model import FlexibleOscillator, RigidBlock, simulate
 
     models = {"RigidRockingBlock": RigidBlock, "FlexibleRockingOscillator": FlexibleOscillator}
@@ -164,22 +162,12 @@ def engine_rows(fmus: dict, null, t, ag, dt, cases, rounds: int = 7) -> dict:
     n = len(ag) - 1
     times = {"null": []}
     phis = {}
-    previous = os.environ.get("ROCKING_FMU_ENGINE")
-    try:
-        for _ in range(rounds):
-            times["null"].append(m0.run(ag, dt, output="y")[0])
-            for label, (name, sv) in cases.items():
-                scaled = ag * sv.get("ag_scale", 1.0)
-                for engine in ("c", "python"):
-                    os.environ["ROCKING_FMU_ENGINE"] = engine    # read when the FMU builds its simulator
-                    el, phi = masters[name].run(scaled, dt, {k: v for k, v in sv.items() if k != "ag_scale"})
-                    times.setdefault((label, engine), []).append(el)
-                    phis[(label, engine)] = phi
-    finally:
-        if previous is None:
-            os.environ.pop("ROCKING_FMU_ENGINE", None)
-        else:
-            os.environ["ROCKING_FMU_ENGINE"] = previous
+    for _ in range(rounds):
+        times["null"].append(m0.run(ag, dt, output="y")[0])
+        for label, (name, sv) in cases.items():
+            scaled = ag * sv.get("ag_scale", 1.0)
+            el, phis[label] = masters[name].run(scaled, dt, {k: v for k, v in sv.items() if k != "ag_scale"})
+            times.setdefault(label, []).append(el)
     null_us = min(times["null"]) / n * 1e6
     out = {"null_us": null_us, "steps": n, "rounds": rounds}
     for label, (name, sv) in cases.items():
@@ -187,17 +175,14 @@ def engine_rows(fmus: dict, null, t, ag, dt, cases, rounds: int = 7) -> dict:
         scheme = "event_driven" if sv.get("scheme", 1) == 1 else "moreau_jean"
         ref = simulate(models[name](**model_kw), (t, ag * sv.get("ag_scale", 1.0)), t_end=float(t[-1]), scheme=scheme, output_interval=dt,
                        hold="zoh", tolerance=1e-12, dt_max=sv.get("dt_max", 0.0), engine="c")
-        row = {}
-        for engine in ("c", "python"):
-            us = min(times[(label, engine)]) / n * 1e6
-            row[f"{engine}_us"], row[f"ratio_{engine}"] = us, us / null_us
-        row["phi_err_c"] = float(np.max(np.abs(phis[(label, "c")] - ref["phi"])))
-        out[label] = row
+        us = min(times[label]) / n * 1e6
+        out[label] = {"c_us": us, "ratio_c": us / null_us,
+                      "phi_err_c": float(np.max(np.abs(phis[label] - ref["phi"])))}
     return out
 
 
 def main(argv=None) -> int:
-    """Per-step cost of the FMUs on each engine against the do-nothing FMU (`engine_rows`) on the benchmark
+    """Per-step cost of the FMUs against the do-nothing FMU (`engine_rows`) on the benchmark
     record (the first --duration seconds, 10 ms steps); prints one line per case."""
     import argparse
 
@@ -230,7 +215,7 @@ def main(argv=None) -> int:
     for label in cases:
         r = res[label]
         print(f"  {label:<34} C {r['c_us']:6.2f} µs ({r['ratio_c']:.2f}x null, max|phi err| {r['phi_err_c']:.1e} "
-              f"rad)   Python engine {r['python_us']:6.2f} µs ({r['ratio_python']:.1f}x)")
+              "rad)")
     return 0
 
 
