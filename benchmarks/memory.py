@@ -2,8 +2,7 @@
 the end of each repetition) advanced through `Simulator` in 0.01 s communication steps, as the FMU does.
 The resident set size is sampled after every 30 s of simulated time.
 
-Run in a fresh interpreter (`python -m benchmarks.memory [minutes] [scheme] [engine]`, engine "python" or
-"c") so that the RSS is not inflated by the rest of the benchmark; prints one JSON line.
+Run in a fresh interpreter (`python -m benchmarks.memory [minutes] [scheme]`, the compiled engine) so that the RSS is not inflated by the rest of the benchmark; prints one JSON line.
 """
 from __future__ import annotations
 
@@ -25,7 +24,7 @@ def rss_mib() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def main(minutes: float = 10.0, scheme: str = "event_driven", engine: str = "c") -> dict:
+def main(minutes: float = 10.0, scheme: str = "event_driven") -> dict:
     from rocking_model import RigidBlock, Simulator
     from rocking_model.ground_motion import ConstantMotion
 
@@ -36,7 +35,7 @@ def main(minutes: float = 10.0, scheme: str = "event_driven", engine: str = "c")
     dt = 0.01
     n_rep = max(1, int(round(minutes * 60 / period)))
     settings = {"tolerance": 1e-6} if scheme == "event_driven" else {"dt_max": 2e-3}
-    sim = Simulator(RigidBlock(**RECORD_BLOCK), scheme, engine=engine, **settings)
+    sim = Simulator(RigidBlock(**RECORD_BLOCK), scheme, engine="c", **settings)
     gc.collect()
     samples = [{"t": 0.0, "rss_mib": rss_mib(), "impacts": 0, "wall": 0.0}]
     t0 = time.perf_counter()
@@ -50,7 +49,7 @@ def main(minutes: float = 10.0, scheme: str = "event_driven", engine: str = "c")
         samples.append({"t": k * dt, "rss_mib": rss_mib(), "impacts": int(out["impacts"]),
                         "wall": time.perf_counter() - t0, "phi": out["phi"], "contact": out["contact"]})
     ed = sim.integrator
-    return {"scheme": scheme, "engine": engine, "settings": settings, "simulated_s": k * dt, "wall_s": time.perf_counter() - t0,
+    return {"scheme": scheme, "engine": "c", "settings": settings, "simulated_s": k * dt, "wall_s": time.perf_counter() - t0,
             "samples": samples, "impact_times_len": len(sim.impact_times),
             "impact_log_len": len(getattr(ed, "impact_log", [])), "overturned": bool(sim.outputs()["overturned"])}
 
@@ -59,5 +58,4 @@ if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     minutes = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
     scheme = sys.argv[2] if len(sys.argv) > 2 else "event_driven"
-    engine = sys.argv[3] if len(sys.argv) > 3 else "c"
-    print(json.dumps(main(minutes, scheme, engine)))
+    print(json.dumps(main(minutes, scheme)))

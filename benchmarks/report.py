@@ -351,11 +351,13 @@ def _targets(res):
                     + (f"; the compiled Moreau-Jean does not reach {nr} of them" if nr else ""),
                     "yes" if len(met) == len(ratios_cmj) else "**no**"))
     out += _compiled_targets(res)
-    m, ok = summary(ratios_b, 5.0)
-    out.append(("Python engine's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
-                "level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
-    m, ok = summary(ratios_s, 10.0)
-    out.append(("Python engine ≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
+    if ratios_b:           # results written before the Python engine's removal
+        m, ok = summary(ratios_b, 5.0)
+        out.append(("Python engine's best scheme ≥ 5× faster than the solve_ivp baseline at equal max error, every "
+                    "level 1e-2 … 1e-8 rad (rigid scenes)", m, ok))
+    if ratios_s:
+        m, ok = summary(ratios_s, 10.0)
+        out.append(("Python engine ≥ 10× faster than Siconos' Moreau-Jean at equal error", m, ok))
     fmu = res.get("fmu", {})
     for key, name in (("rigid", "rigid"), ("flexible", "flexible")):
         c = fmu.get(key, {})
@@ -376,8 +378,8 @@ def _targets(res):
             if good:
                 lab, r = min(good, key=lambda x: x[1]["ratio_c"])
                 m = (f"{fr(r['ratio_c'])} the do-nothing FMU ({r['c_us']:.2f} µs vs {group['null_us']:.2f} µs per "
-                     f"step, fastest of {group['rounds']} interleaved rounds; {lab}, error {fe(r['phi_err_c'])}; "
-                     f"the Python engine's FMU {fr(r['ratio_python'])})")
+                     f"step, fastest of {group['rounds']} interleaved rounds; {lab}, error {fe(r['phi_err_c'])}"
+                     + (f"; the Python engine's FMU {fr(r['ratio_python'])}" if "ratio_python" in r else "") + ")")
                 ok = "yes" if r["ratio_c"] <= c["target"] else f"**no** ({r['ratio_c'] / c['target']:.2f}× over)"
         pga = c.get("pga_g", 0.4)
         out.append((f"FMU ({name}) over the {fmu.get('duration', 30):g} s record"
@@ -393,7 +395,7 @@ def _targets(res):
             out.append((f"cold start < 0.5 s ({name}: instantiate → first step, fresh interpreter)", ft(v),
                         "yes" if v < 0.5 else f"**no** ({v / 0.5:.1f}×)"))
     mem = res.get("memory", {})
-    if "samples" in mem:
+    if "samples" in mem and mem != res.get("memory_c"):      # one run since the Python engine's removal
         s = mem["samples"]
         r0, r1 = s[1]["rss_mib"], s[-1]["rss_mib"]
         growth = (r1 - r0) / max(s[-1]["t"] - s[1]["t"], 1e-9) * 60 * 1024
@@ -476,7 +478,7 @@ def _compiled_targets(res):
                     f"impact log bounded at {mem['impact_log_len']} rows)",
                     "yes" if r1 <= r0 * 1.005 else "**no**"))
     ens = res.get("ensemble", {})
-    if "best" in ens:
+    if "best_over_python" in ens:          # results written before the Python engine's removal
         v = ens["best_over_python"]
         out.append(("ensembles ≥ 50× the cases per second of the Python engine's serial run "
                     "(docs/performance/ensemble.md)",
@@ -497,26 +499,28 @@ def _compiled_section(res, w):
     ps = comp.get("per_step", {})
     if ps.get("rows"):
         r0 = ps["rows"][0]
+        old = any("python_us" in r for r in ps["rows"])     # results written before the Python engine's removal
         w(f"The first {r0['steps'] * r0['dt']:g} s of the synthetic record (`benchmarks.scenes.synthetic_record`) in "
           f"{r0['dt']:g} s communication steps ({r0['steps']} steps), `ag` held over each step, the outputs read after "
           "each (`benchmarks/compiled_bench.py`; the fastest of 15 interleaved rounds, each round one run of every variant "
-          "below, 3 rounds in a quick run; the Python engine one run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
+          "below, 3 rounds in a quick run). *Raw*: the loop `Engine.advance(t, ag, 0, max_steps)` + "
           "`Engine.output_row()` on `rocking_model._engine.Engine`; *Engine.sample*: one call over the record, the C loop "
           "over the communication steps (the record integrated as given, linear between samples, not held); *API*: `Simulator(engine=\"c\").advance(t, ag)` + "
-          "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record; *Python*: the "
-          "`Simulator.advance` loop on the Python engine. |Δφ|: max difference of φ after each step between the "
-          "compiled and the Python engine (same algorithm, same steps).")
+          "`outputs()`; *simulate*: `simulate(..., hold=\"zoh\", engine=\"c\")` over the whole record"
+          + ("; *Python*: the `Simulator.advance` loop on the Python engine (removed since), |Δφ| its max difference "
+             "of φ after each step from the compiled engine (same algorithm, same steps)" if old else "") + ".")
         w("")
         w("| model | scheme, settings | record PGA | impacts | raw [µs/step] | Engine.sample [µs/step] | API [µs/step] | "
-          "simulate [µs/step] | Python [µs/step] | Python / raw | internal steps | raw per internal step [µs] | "
-          "max |Δφ| C vs Python [rad] |")
-        w("|" + " --- |" * 13)
+          "simulate [µs/step] | " + ("Python [µs/step] | Python / raw | " if old else "")
+          + "internal steps | raw per internal step [µs] |" + (" max |Δφ| C vs Python [rad] |" if old else ""))
+        w("|" + " --- |" * (13 if old else 10))
         for r in ps["rows"]:
             smp = f"{r['sample_us']:.2f}" if "sample_us" in r else "–"
+            py = (f"{r['python_us']:.1f} | {fr(r['python_over_raw'])} | " if "python_us" in r else "– | – | ") if old else ""
+            dphi = (f" {fe(r['max_dphi_c_python'])} |" if "max_dphi_c_python" in r else " – |") if old else ""
             w(f"| {r['kind']} | {r['scheme']}, {fsetting(r['settings'])} | {r['pga_g']:.2g} g | {r['impacts']} | "
-              f"{r['raw_us']:.2f} | {smp} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {r['python_us']:.1f} | "
-              f"{fr(r['python_over_raw'])} | {r['internal_steps']} | {r['raw_us_per_internal_step']:.2f} | "
-              f"{fe(r['max_dphi_c_python'])} |")
+              f"{r['raw_us']:.2f} | {smp} | {r['api_us']:.2f} | {r['simulate_us']:.2f} | {py}"
+              f"{r['internal_steps']} | {r['raw_us_per_internal_step']:.2f} |{dphi}")
         w("")
     proto = comp.get("prototype", {})
     if "sample_us" in proto:
@@ -561,9 +565,10 @@ def _ensemble_section(res, w):
         w("")
         return
     w(f"`benchmarks/ensemble_bench.py` (its page: [ensemble.md](performance/ensemble.md)): {ens['cases']} one-sine "
-      f"pulse cases on the compiled engine, best {ens['best']:.0f} cases/s, {ens['best_over_python']:.0f}× the "
-      f"Python engine's serial run ({ens['python_serial']:.0f} cases/s on its first {ens['python_cases']} cases); "
-      f"compiled serially {ens['compiled_serial']:.0f} cases/s.")
+      f"pulse cases on the compiled engine, best {ens['best']:.0f} cases/s"
+      + (f", {ens['best_over_python']:.0f}× the Python engine's serial run ({ens['python_serial']:.0f} cases/s on "
+         f"its first {ens['python_cases']} cases)" if "best_over_python" in ens else "")
+      + f"; serially {ens['compiled_serial']:.0f} cases/s.")
     w("")
 
 
@@ -751,9 +756,11 @@ def _fmu_section(res, w):
         w("")
         b = c.get("best")
         if b:
+            py = (f"{ft(c['python_same_settings'])} on the Python engine (removed since), "
+                  if "python_same_settings" in c else "")
             w(f"Cheapest setting at error ≤ 1e-4: {b['label']}. The same run through the Python API "
-              f"(`simulate(..., hold='zoh')`): {ft(c['python_same_settings'])} on the Python engine, "
-              f"{ft(c.get('c_same_settings'))} on the compiled one; end-to-end `fmpy.simulate_fmu` "
+              f"(`simulate(..., hold='zoh', engine='c')`): {py}{ft(c.get('c_same_settings'))} on the compiled "
+              "engine; end-to-end `fmpy.simulate_fmu` "
               f"(FMU already extracted): {ft(c['simulate_fmu'])} vs {ft(c['simulate_fmu_null'])} for the do-nothing "
               "FMU.")
             w("")
@@ -762,20 +769,23 @@ def _fmu_section(res, w):
         w(f"FMUs on each engine failed: {failure_line(eng['error'])}")
         w("")
     elif eng:
-        w("**The FMUs on each engine** (`benchmarks/fmu_bench.py` `engine_rows`: the same fmpy loop, the FMU's engine "
-          "chosen by `ROCKING_FMU_ENGINE` = c, the default, or python, the reference; each FMU and the do-nothing FMU "
-          "in interleaved rounds, the fastest round of each; error: max |φ| difference from `simulate(..., "
-          "hold='zoh', tolerance=1e-12)`)")
+        # results written before the Python engine's removal also hold its FMU rows (python_us, ratio_python)
+        old = any("python_us" in r for group in eng.values() for r in group.values() if isinstance(r, dict))
+        w("**The FMUs against the do-nothing FMU** (`benchmarks/fmu_bench.py` `engine_rows`: the same fmpy loop, "
+          "each FMU and the do-nothing FMU in interleaved rounds, the fastest round of each; error: max |φ| "
+          "difference from `simulate(..., hold='zoh', tolerance=1e-12)`)")
         w("")
-        w("| FMU setting | steps | do-nothing FMU [µs/step] | compiled engine [µs/step] | × do-nothing | Python engine "
-          "[µs/step] | × do-nothing | max |φ err| compiled [rad] |")
-        w("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        w("| FMU setting | steps | do-nothing FMU [µs/step] | compiled engine [µs/step] | × do-nothing | "
+          + ("Python engine [µs/step] | × do-nothing | " if old else "") + "max |φ err| compiled [rad] |")
+        w("| --- | --- | --- | --- | --- | " + ("--- | --- | " if old else "") + "--- |")
         for group in eng.values():
             for label, r in group.items():
                 if not isinstance(r, dict):
                     continue
+                py = (f"{r['python_us']:.2f} | {fr(r['ratio_python'])} | " if old and "python_us" in r
+                      else "– | – | " if old else "")
                 w(f"| {label} | {group['steps']} | {group['null_us']:.2f} | {r['c_us']:.2f} | {fr(r['ratio_c'])} | "
-                  f"{r['python_us']:.2f} | {fr(r['ratio_python'])} | {fe(r['phi_err_c'])} |")
+                  f"{py}{fe(r['phi_err_c'])} |")
         w("")
     cold = fmu.get("cold", {})
     if cold:
