@@ -39,8 +39,8 @@ def fr(r) -> str:
 
 
 def shown_label(label: str) -> str:
-    """A contender's label as the pages show it: "package ..." (the results' name of the Python engine's runs)
-    as "Python engine ...", next to "compiled ..."."""
+    """A contender's label as the pages show it: "package ..." (in results written before the Python engine's
+    removal, the name of its runs) as "Python engine ...", next to "compiled ..."."""
     return "Python engine" + label[len("package"):] if label.startswith("package ") else label
 
 
@@ -264,8 +264,8 @@ def write_report(res, docs: Path) -> Path:
       f"{res.get('second_pass_rounds', 1)} interleaved rounds, the minimum taken over all their runs: both sides of a "
       "ratio of the speed target are sampled at the same times, so a slow phase of the shared machine slows both), "
       "`time.perf_counter` around the "
-      "whole public call (`simulate(...)` for the package, the model built inside, on the Python engine and on the "
-      "compiled one with `engine=\"c\"`; the full restart loop for the baseline; the stepping loop incl. model set-up for Siconos; the "
+      "whole public call (`simulate(...)` for the package, the model built inside, on the "
+      "compiled engine with `engine=\"c\"`; the full restart loop for the baseline; the stepping loop incl. model set-up for Siconos; the "
       "stepping loop for the FMUs).")
     if res.get("skipped"):
         w("- Skipped: " + "; ".join(f"{k}: {v}" for k, v in res["skipped"].items()))
@@ -627,8 +627,8 @@ def _scenes_section(res, w, imgs):
     w("")
     w("Time each contender needs for a given max |φ − φ_ref| (linear interpolation in log-log on its "
       "work-precision front; *≤* = its cheapest run is already below the level, so the time is an upper bound; "
-      "n/r = not reached by any setting). *C* = the compiled engine (`simulate(..., engine=\"c\")`), *Python* = the "
-      "Python engine (the reference implementation, `engine=\"python\"`), each at its best scheme at that level; "
+      "n/r = not reached by any setting). *C* = the compiled engine (`simulate(..., engine=\"c\")`) at its best scheme at "
+      "that level (*Python*, in results written before its removal: the former Python engine); "
       "ratio = the other's time / that engine's time (> 1: the engine is faster); *Siconos / C MJ* compares the two "
       "Moreau-Jean implementations.")
     w("")
@@ -907,7 +907,7 @@ def _method_section(w):
       "a soft and a stiff column.")
     w("- Errors: |φ(T) − φ_ref(T)|; max over the 0.01 s grid of |φ − φ_ref| (the headline measure); max error of "
       "the first three impact times; for the flexible oscillator also the top displacement.")
-    w("- Contenders: `simulate(...)` on each engine (the compiled one, `engine=\"c\"`, and the Python reference) with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
+    w("- Contenders: `simulate(..., engine=\"c\")` with each scheme over a sweep (dt_max for Moreau-Jean, tolerance for the "
       "event-driven scheme); a solve_ivp baseline (`benchmarks/baseline.py`: Housner's single-DOF equation, DOP853, "
       "terminal events for impact and overturning, Housner's r at each impact, restart loop, the same Zeno "
       "threshold; for the record also with max_step = the sampling step); Siconos' MoreauJeanOSI + "

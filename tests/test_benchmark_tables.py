@@ -44,3 +44,16 @@ def test_compiled_targets_read_the_per_step_cold_start_memory_and_ensemble_figur
     # ensembles 60x
     assert [ok for _, _, ok in rows] == ["yes", "**no** (1.2×)", "yes", "**no** (4.0×)", "yes"], rows
     assert "0.40 µs raw engine loop" in rows[2][1] and "60×" in rows[4][1]
+
+
+def test_equal_error_and_targets_without_the_removed_python_engine():
+    """Results since the Python engine's removal: no "package" family, its ratios and targets left out."""
+    entries = [_e("c_event_driven", "compiled event-driven", 1e-4, 1e-9),
+               _e("baseline", "solve_ivp DOP853", 2e-2, 1e-9)]
+    row = equal_error(entries)["1e-03"]
+    assert "package" not in row and "ratio_baseline" not in row and "ratio_c_package" not in row
+    assert math.isclose(row["ratio_c_baseline"], 200.0)
+    res = {"scenes": {"s": {"name": "s", "kind": "rigid", "equal_error": {"1e-03": row}}},
+           "ensemble": {"best": 9000.0, "compiled_serial": 4000.0, "best_over_serial": 2.25}}
+    names = [name for name, _, _ in report._targets(res)]
+    assert not any("Python engine" in n for n in names), names
