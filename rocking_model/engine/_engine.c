@@ -1,9 +1,6 @@
-/* _engine.c -- the CPython extension module rocking_model._engine (part E).
- *
- * Skeleton by the architect: version(), api_version() and create_and_free(kind, params, initial=None), which
- * creates an engine and frees it, raising the exception that matches the C status (ValueError, NotImplementedError,
- * MemoryError, RuntimeError). Part E adds the Engine type (DESIGN.md, part E). Only the limited, stable part of
- * the C API is used (no per-step Python object is created on the hot paths).
+/* _engine.c -- the CPython extension module rocking_model._engine: the Engine type (the C API of
+ * src/rk_engine.h) and the model functions (model, add_model, kinds, model_kinds). Only the limited, stable part
+ * of the C API is used (no per-step Python object is created on the hot paths).
  *
  * Why hand-written rather than a binding tool: the hot calls (Engine creation, sample, advance, outputs) cost a
  * pulse simulate (the rigid block under a sine pulse, 4 s, ~58 us) 11.7-12.6 % more when bound with cffi in API
