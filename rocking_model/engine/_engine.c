@@ -7,7 +7,7 @@
  * mode (same engine sources and flags, one C shim per creation and per sample: benchmarks/compiled_bench.py,
  * binding_ab, 300 interleaved rounds in one process, load average 3.7 on 2 shared cores), more than the 10 % a
  * tool may cost; per call, cffi's advance took ~0.86 us against 0.14 us here, output_dict ~2.5 us against 0.3 us.
- * The cold calls (state dicts, snapshots, reports, model_kinds, motion_eval) are the part a tool could take. */
+ * The cold calls (state dicts, snapshots, reports, model_kinds) are the part a tool could take. */
 
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -1635,110 +1635,6 @@ static PyObject *py_api_version(PyObject *self, PyObject *args)
     return PyLong_FromLong(rk_engine_api_version());
 }
 
-static PyObject *py_create_and_free(PyObject *self, PyObject *args, PyObject *kwargs)
-{
-    static char *kwlist[] = {"kind", "params", "initial", NULL};
-    const char *kind;
-    PyObject *params_obj, *initial_obj = Py_None;
-    double params[RK_MAX_PARAMS], initial[RK_MAX_INITIAL];
-    int n_params, n_initial;
-    rk_error err;
-    rk_engine *e;
-    (void)self;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "sO|O", kwlist, &kind, &params_obj, &initial_obj))
-        return NULL;
-    if (read_doubles(params_obj, "params", params, RK_MAX_PARAMS, &n_params) < 0
-        || read_doubles(initial_obj, "initial", initial, RK_MAX_INITIAL, &n_initial) < 0)
-        return NULL;
-    e = rk_engine_create(kind, params, n_params, initial, n_initial, NULL, &err);
-    if (e == NULL)
-        return raise_status(err.status, err.message);
-    rk_engine_free(e);
-    Py_RETURN_NONE;
-}
-
-/** motion_eval(spec, times) -> (values, breakpoints, continuous): rk_motion_eval, next_breakpoint and
- *  continuous_at at each time, in order on one motion (its interval cache carried from one time to the next,
- *  as the Python object's): the pinning entry point of tests/test_engine_api.py. */
-static PyObject *py_motion_eval(PyObject *self, PyObject *args)
-{
-    PyObject *spec, *times_obj, *values = NULL, *bps = NULL, *cont = NULL, *fast, *vspec = Py_None, *vvals = NULL;
-    motion_holder h;
-    Py_ssize_t i, n;
-    int idx, vidx = -1;
-    rk_motion *mv = NULL;
-    (void)self;
-    if (!PyArg_ParseTuple(args, "OO|O", &spec, &times_obj, &vspec))
-        return NULL;
-    memset(&h, 0, sizeof(h));
-    idx = parse_motion(&h, spec, 0);
-    if (idx >= 0 && vspec != Py_None)
-        vidx = parse_motion(&h, vspec, 0);
-    if (idx < 0 || (vspec != Py_None && vidx < 0)) {
-        holder_release(&h);
-        return NULL;
-    }
-    if (vidx >= 0)
-        mv = &h.m[vidx];
-    fast = PySequence_Fast(times_obj, "times must be a sequence");
-    if (fast == NULL) {
-        holder_release(&h);
-        return NULL;
-    }
-    n = PySequence_Fast_GET_SIZE(fast);
-    values = PyList_New(n);
-    bps = PyList_New(n);
-    cont = PyList_New(n);
-    if (mv != NULL)
-        vvals = PyList_New(n);
-    if (values == NULL || bps == NULL || cont == NULL || (mv != NULL && vvals == NULL))
-        goto fail;
-    for (i = 0; i < n; i++) {
-        double t = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(fast, i)), x;
-        int failed = 0;
-        char msg[RK_MSG_LEN];
-        if (t == -1.0 && PyErr_Occurred())
-            goto fail;
-        x = rk_motion_eval(&h.m[idx], t, &failed, msg);
-        if (failed) {
-            holder_reraise(&h);
-            goto fail;
-        }
-        PyList_SET_ITEM(values, i, PyFloat_FromDouble(x));
-        if (mv != NULL) {
-            /* the pair (TwoComponentMotion): the vertical value, the pair's breakpoint and continuity */
-            double xv = rk_motion_eval(mv, t, &failed, msg);
-            if (failed) {
-                holder_reraise(&h);
-                goto fail;
-            }
-            PyList_SET_ITEM(vvals, i, PyFloat_FromDouble(xv));
-            PyList_SET_ITEM(bps, i, PyFloat_FromDouble(rk_motion_pair_next_breakpoint(&h.m[idx], mv, t)));
-            PyList_SET_ITEM(cont, i, PyBool_FromLong(rk_motion_pair_continuous_at(&h.m[idx], mv, t)));
-            if (holder_reraise(&h))
-                goto fail;
-            continue;
-        }
-        PyList_SET_ITEM(bps, i, PyFloat_FromDouble(rk_motion_next_breakpoint(&h.m[idx], t)));
-        PyList_SET_ITEM(cont, i, PyBool_FromLong(rk_motion_continuous_at(&h.m[idx], t)));
-        if (holder_reraise(&h))
-            goto fail;
-    }
-    Py_DECREF(fast);
-    holder_release(&h);
-    if (mv != NULL)
-        return Py_BuildValue("(NNNN)", values, bps, cont, vvals);
-    return Py_BuildValue("(NNN)", values, bps, cont);
-fail:
-    Py_DECREF(fast);
-    Py_XDECREF(vvals);
-    Py_XDECREF(values);
-    Py_XDECREF(bps);
-    Py_XDECREF(cont);
-    holder_release(&h);
-    return NULL;
-}
-
 /* ------------------------------------------------------------------------------------------ model functions */
 /* model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one function of a model's generated kernel
  * on an instance built from params (ValueError with the model's own message on bad parameters). The models'
@@ -1929,19 +1825,12 @@ static PyMethodDef methods[] = {
     {"model_kinds", py_model_kinds, METH_NOARGS, "model_kinds() -> the registered model kernels and their declarations."},
     {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
     {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
-    {"motion_eval", py_motion_eval, METH_VARARGS,
-     "motion_eval(spec, times, vspec=None) -> (ag, next_breakpoint, continuous_at) lists: the C ground motions "
-     "(tests); with vspec the pair's breakpoints and continuity and a fourth list, ag_v."},
-    {"create_and_free", (PyCFunction)(void (*)(void))py_create_and_free, METH_VARARGS | METH_KEYWORDS,
-     "create_and_free(kind, params, initial=None): create a C engine for model kind ('rigid', 'flexible') with "
-     "the declared parameters in order and free it; raises ValueError on bad input, NotImplementedError for a "
-     "part not written yet."},
     {NULL, NULL, 0, NULL}
 };
 
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "_engine",
-    "The compiled rocking engine (issue 21): see rocking_model/engine/DESIGN.md.", -1, methods,
+    "The compiled rocking engine: see rocking_model/engine/DESIGN.md.", -1, methods,
     NULL, NULL, NULL, NULL
 };
 
