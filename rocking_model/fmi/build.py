@@ -564,7 +564,8 @@ def build_script(script: Path, dest="dist") -> Path:
     there)."""
     script, dest = Path(script).resolve(), Path(dest).resolve()
     dest.mkdir(parents=True, exist_ok=True)
-    alias = f"{PACKAGE.name}_{package_digest()}"
+    # a bundled copy of its own name: the package's FMUs built later in the same process import theirs afresh
+    alias = f"{PACKAGE.name}_{package_digest()}_{script.stem.lower()}"
     with tempfile.TemporaryDirectory(prefix="rocking_fmu_") as tmp:
         package_copy = Path(tmp) / alias
         shutil.copytree(PACKAGE, package_copy, ignore=_IGNORE)
