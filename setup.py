@@ -34,8 +34,13 @@ if os.path.exists(GENERATOR):
 
 # the model kernels: rocking_model/engine/gen_models.py writes src/rk_models_gen.c from the models' declarations
 # (sympy, at build time; the file is rewritten only when a declaration or the generator changed)
+# (run with an argv of its own: it reads an output path from sys.argv[1], which under pip is setup.py's command)
 sys.path.insert(0, HERE)
-runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"), run_name="__main__")
+_argv, sys.argv = sys.argv, [sys.argv[0]]
+try:
+    runpy.run_path(os.path.join(HERE, "rocking_model", "engine", "gen_models.py"), run_name="__main__")
+finally:
+    sys.argv = _argv
 
 SOURCES = sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.c")))
 if sys.platform == "win32":
