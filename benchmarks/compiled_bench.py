@@ -407,11 +407,110 @@ def pulse_python_fraction(rounds: int = 300) -> dict:
     return out
 
 
+def binding_ab(rounds: int = 300, hand=None, tool=None) -> dict:
+    """The binding's cost, A/B in one process: the pulse scene `simulate(RigidBlock(b=0.2, h=1.0), SinePulse(0.4 g,
+    4 pi), 4.0)` with its engine bound by the hand-written extension (``hand``) against the cffi binding
+    (``tool``): the same engine sources and flags, motion and grid. Interleaved rounds (garbage collector off):
+    the whole simulate through each, and the binding's part alone (engine creation at the start state,
+    `Engine.sample` in columns over the grid, impact times, n_steps, free) through each. cost = (tool - hand) /
+    hand simulate, of the fastest runs and the median of the rounds' own differences.
+
+    ``hand`` and ``tool``: modules with the `Engine` API; by default the package's extension
+    ``rocking_model._engine`` (the hand-written glue) and `benchmarks.ffi_engine` (cffi, API mode: the module is
+    compiled on first use, about a minute, `benchmarks.ffi_binding`)."""
+    import importlib
+
+    import rocking_model.engine as engine_pkg
+    from rocking_model import RigidBlock, SinePulse, Simulator, simulate
+    from rocking_model.engine import motion_spec
+
+    if hand is None:
+        hand = importlib.import_module("rocking_model._engine")
+    if tool is None:
+        try:
+            tool = importlib.import_module("benchmarks.ffi_engine")
+        except Exception as exc:        # no cffi or no compiler: the A/B cannot run here
+            print(f"[compiled] binding A/B skipped: the cffi binding could not be built ({exc})", flush=True)
+            return {}
+    model_kw, A, w, t_end = {"b": 0.2, "h": 1.0}, 0.4 * 9.81, 4 * math.pi, 4.0
+    ref = simulate(RigidBlock(**model_kw), SinePulse(A, w), t_end)
+    grid = np.ascontiguousarray(ref.t[1:])
+    spec = motion_spec(SinePulse(A, w))
+    integ = Simulator(RigidBlock(**model_kw)).integrator
+
+    def whole(mod):
+        def run():
+            engine_pkg._EXTENSION = mod
+            t0 = time.perf_counter()
+            res = simulate(RigidBlock(**model_kw), SinePulse(A, w), t_end)
+            return time.perf_counter() - t0, res
+        return run
+
+    def binding(mod):
+        def run():
+            m = len(grid) + 1
+            t0 = time.perf_counter()
+            eng = integ._new_engine(mod)
+            ints = np.empty((2, m), np.int64)
+            values = np.empty((eng.n_outputs + 2, m))
+            over = np.empty(m, bool)
+            eng.sample(grid, spec, 10000, ints[0], values, ints[1], over, 0, None, True)
+            out = (eng.impact_times, eng.n_steps)
+            del eng
+            return time.perf_counter() - t0, out
+        return run
+
+    fns = {"simulate_hand": whole(hand), "simulate_tool": whole(tool), "binding_hand": binding(hand),
+           "binding_tool": binding(tool)}
+    saved = engine_pkg._EXTENSION
+    times: dict = {name: [] for name in fns}
+    results: dict = {}
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for _ in range(max(1, rounds)):
+            for name, fn in fns.items():
+                wall, results[name] = fn()
+                times[name].append(wall)
+    finally:
+        engine_pkg._EXTENSION = saved
+        if enabled:
+            gc.enable()
+    same = all(np.array_equal(results["simulate_hand"].values[k], results["simulate_tool"].values[k])
+               for k in results["simulate_hand"].values) and results["binding_hand"] == results["binding_tool"]
+    best = {name: min(ts) * 1e6 for name, ts in times.items()}
+
+    def median(xs):
+        xs = sorted(xs)
+        return xs[len(xs) // 2]
+
+    sim_diff = median([b - a for a, b in zip(times["simulate_hand"], times["simulate_tool"])]) * 1e6
+    bind_diff = median([b - a for a, b in zip(times["binding_hand"], times["binding_tool"])]) * 1e6
+    out = {"simulate_hand_us": best["simulate_hand"], "simulate_tool_us": best["simulate_tool"],
+           "binding_hand_us": best["binding_hand"], "binding_tool_us": best["binding_tool"],
+           "cost_simulate_fraction": (best["simulate_tool"] - best["simulate_hand"]) / best["simulate_hand"],
+           "cost_binding_fraction": (best["binding_tool"] - best["binding_hand"]) / best["simulate_hand"],
+           "cost_simulate_fraction_median": sim_diff / (median(times["simulate_hand"]) * 1e6),
+           "cost_binding_fraction_median": bind_diff / (median(times["simulate_hand"]) * 1e6),
+           "same_results": bool(same), "rounds": max(1, rounds), "outputs": len(grid) + 1,
+           "loadavg": os.getloadavg()}
+    print(f"[compiled] binding A/B on the pulse scene ({out['rounds']} interleaved rounds, fastest): simulate "
+          f"{out['simulate_hand_us']:.1f} us hand-written / {out['simulate_tool_us']:.1f} us cffi "
+          f"({100 * out['cost_simulate_fraction']:+.1f} %, median of the rounds' differences "
+          f"{100 * out['cost_simulate_fraction_median']:+.1f} %); the binding's calls "
+          f"{out['binding_hand_us']:.1f} / {out['binding_tool_us']:.1f} us "
+          f"({100 * out['cost_binding_fraction']:+.1f} % of simulate, median "
+          f"{100 * out['cost_binding_fraction_median']:+.1f} %); same results {out['same_results']}; load "
+          f"{out['loadavg'][0]:.2f}", flush=True)
+    return out
+
+
 def main(quick: bool = False) -> dict:
     return {"per_step": per_step(3 if quick else 15, 8.0 if quick else 30.0),
             "prototype": prototype_shaped(3 if quick else 15, 10.0 if quick else 40.0),
             "holds": holds_vs_lean(3 if quick else 15, 10.0 if quick else 40.0),
             "pulse_python": pulse_python_fraction(50 if quick else 300),
+            "binding_ab": binding_ab(50 if quick else 300),
             "cold": cold_start(2 if quick else 7)}
 
 
