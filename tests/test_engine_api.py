@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from c_motion import motion_eval
 from rocking_model import _engine
 from rocking_model.engine import CompiledIntegrator, motion_spec
 from rocking_model.ground_motion import (ConstantMotion, CosinePulse, FunctionMotion, LinearMotion, RectangularPulse,
@@ -72,7 +73,7 @@ def test_motions_equal_the_python_classes_bit_for_bit(gm):
     times += bps + [float(np.nextafter(b, 9.0)) for b in bps] + [float(np.nextafter(b, -9.0)) for b in bps]
     # the samples themselves, their neighbours and the ends: the interval cache and the bisection
     times += list(RECORD_T[::7]) + [np.nextafter(x, -1.0) for x in RECORD_T[::11]] + [RECORD_T[-1] + 1.0]
-    c = _engine.motion_eval(spec, times)
+    c = motion_eval(spec, times)
     p = _python_trace(gm, times)
     assert c[0] == p[0]
     assert c[1] == p[1]
@@ -84,13 +85,13 @@ def test_a_python_motion_runs_as_a_callback_with_its_breakpoints():
     spec = motion_spec(gm)
     assert spec[0] == "callback"
     times = _times(0.0, 3.0)
-    assert _engine.motion_eval(spec, times) == tuple(_python_trace(gm, times))
+    assert motion_eval(spec, times) == tuple(_python_trace(gm, times))
 
 
 def test_a_failing_callback_raises_the_python_exception():
     gm = FunctionMotion(lambda t: 1e9 if t > 0.5 else 0.0)
     with pytest.raises(ValueError, match=r"ag\(0\.75\) = 1e\+09 is out of range"):
-        _engine.motion_eval(motion_spec(gm), [0.25, 0.75])
+        motion_eval(motion_spec(gm), [0.25, 0.75])
 
 
 @settings(max_examples=60, derandomize=True, deadline=None)
@@ -98,18 +99,18 @@ def test_a_failing_callback_raises_the_python_exception():
        st.lists(st.floats(-10.0, 20.0), min_size=1, max_size=20))
 def test_pulses_agree_everywhere(A, w, t0, times):
     for gm in (SinePulse(A, w, t0), CosinePulse(A, w, t0), RickerPulse(A, w, t0), RectangularPulse(A, 1.0 / w, t0)):
-        assert _engine.motion_eval(motion_spec(gm), times) == tuple(_python_trace(gm, times)), type(gm).__name__
+        assert motion_eval(motion_spec(gm), times) == tuple(_python_trace(gm, times)), type(gm).__name__
 
 
 def test_bad_motion_specs_are_clear_errors():
     with pytest.raises(ValueError, match="strictly increasing"):
-        _engine.motion_eval(("sampled", np.array([0.0, 1.0, 1.0]), np.array([0.0, 1.0, 2.0])), [0.5])
+        motion_eval(("sampled", np.array([0.0, 1.0, 1.0]), np.array([0.0, 1.0, 2.0])), [0.5])
     with pytest.raises(ValueError, match="omega_p"):
-        _engine.motion_eval(("sine", 1.0, -2.0, 0.0), [0.5])
+        motion_eval(("sine", 1.0, -2.0, 0.0), [0.5])
     with pytest.raises(TypeError, match="float64"):
-        _engine.motion_eval(("sampled", np.array([0, 1, 2]), np.array([0.0, 1.0, 2.0])), [0.5])
+        motion_eval(("sampled", np.array([0, 1, 2]), np.array([0.0, 1.0, 2.0])), [0.5])
     with pytest.raises(ValueError, match="unknown kind"):
-        _engine.motion_eval(("cosine", 1.0), [0.5])
+        motion_eval(("cosine", 1.0), [0.5])
 
 
 # ---------------------------------------------------------------------------------------------- Engine, errors

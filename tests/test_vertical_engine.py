@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from c_motion import motion_eval
 from rocking_model import SampledMotion, Simulator, SinePulse, TwoComponentMotion, _engine
 from rocking_model.ground_motion import ConstantMotion, RectangularPulse
 from rocking_model.models import FlexibleOscillator, RigidBlock
@@ -164,7 +165,7 @@ def test_the_pair_of_motions_equals_two_component_motion(case):
             break
         bps.append(t)
     times += bps + [float(np.nextafter(b, 9.0)) for b in bps] + [float(np.nextafter(b, -9.0)) for b in bps]
-    values, nb, cont, vvalues = _engine.motion_eval(motion_spec(gm), times, vertical_spec(gm))
+    values, nb, cont, vvalues = motion_eval(motion_spec(gm), times, vertical_spec(gm))
     assert values == [float(gm(x)) for x in times]
     assert vvalues == [float(gm.vertical(x)) for x in times]
     assert nb == [float(gm.next_breakpoint(x)) for x in times]
