@@ -12,19 +12,19 @@ def test_version_is_the_package_version():
 
 def test_unknown_model_kind_is_a_value_error_naming_the_allowed_kinds():
     with pytest.raises(ValueError, match="allowed values 'rigid', 'flexible'"):
-        _engine.create_and_free("cylinder", [1.0])
+        _engine.Engine("cylinder", [1.0])
 
 
 def test_params_must_be_numbers():
     with pytest.raises(TypeError, match="params"):
-        _engine.create_and_free("rigid", ["b"])
+        _engine.Engine("rigid", ["b"])
 
 
 def test_create_succeeds_with_the_declared_defaults():
     from rocking_model.models import FlexibleOscillator, RigidBlock
 
     for kind, cls in (("rigid", RigidBlock), ("flexible", FlexibleOscillator)):
-        _engine.create_and_free(kind, [p.default for p in cls.parameters()])
+        _engine.Engine(kind, [p.default for p in cls.parameters()])
 
 
 def test_the_kernels_declare_the_parameters_of_the_python_classes():
