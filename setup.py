@@ -47,14 +47,25 @@ else:
     CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-fno-fast-math", "-fvisibility=hidden"]
     LIBS = ["m"]
 
+# the engine's cold calls bound with cffi (rocking_model._rk): no engine code of its own, it calls the engine of the
+# extension below (rocking_model/engine/build_ffi.py)
+sys.path.insert(0, os.path.join(HERE, "rocking_model", "engine"))
+from build_ffi import builder  # noqa: E402
+
+COLD = builder(include_dirs=[os.path.join("rocking_model", "engine")], extra_compile_args=CFLAGS) \
+    .distutils_extension(tmpdir=os.path.join("build", "cffi"), verbose=False)
+COLD.depends = [os.path.join("rocking_model", "engine", "rk_py_api.h")]
+
 setup(
     ext_modules=[
+        COLD,
         Extension(
             "rocking_model._engine",
             sources=SOURCES + [os.path.join("rocking_model", "engine", "_engine.c")],
             include_dirs=[os.path.join("rocking_model", "engine")],
             define_macros=[("RK_ENGINE_VERSION_STRING", '"%s"' % package_version())],
-            depends=sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.h"))),
+            depends=sorted(glob.glob(os.path.join("rocking_model", "engine", "src", "*.h")))
+            + [os.path.join("rocking_model", "engine", "rk_py_api.h")],
             extra_compile_args=CFLAGS,
             libraries=LIBS,
         )

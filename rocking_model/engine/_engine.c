@@ -1,18 +1,22 @@
-/* _engine.c -- the CPython extension module rocking_model._engine: the Engine type (the C API of
- * src/rk_engine.h) and the model functions (model, add_model, kinds, model_kinds). Only the limited, stable part
- * of the C API is used (no per-step Python object is created on the hot paths).
+/* _engine.c -- the CPython extension module rocking_model._engine: its hot calls, hand-written (the Engine type's
+ * creation, advance, advance_motion, sample, outputs, checkpoint and attributes). The rest of the module (state dicts,
+ * snapshots, reports, contacts, full_state, version(), api_version(), model_kinds(), kinds(), add_model()) is bound
+ * with cffi in rocking_model/_engine_cold.py, which module init installs here; it reaches this module's copy of the
+ * engine through the table of rk_py_api.h (_API). model(), the models' analysis functions (one kernel function of a
+ * model by name, for rocking_model.models.base), is still here: a cold call, to move to the cffi side next.
+ * No per-step Python object is created on the hot paths.
  *
  * Why hand-written rather than a binding tool: the hot calls (Engine creation, sample, advance, outputs) cost a
  * pulse simulate (the rigid block under a sine pulse, 4 s, ~58 us) 11.7-12.6 % more when bound with cffi in API
  * mode (same engine sources and flags, one C shim per creation and per sample: benchmarks/compiled_bench.py,
  * binding_ab, 300 interleaved rounds in one process, load average 3.7 on 2 shared cores), more than the 10 % a
- * tool may cost; per call, cffi's advance took ~0.86 us against 0.14 us here, output_dict ~2.5 us against 0.3 us.
- * The cold calls (state dicts, snapshots, reports, model_kinds) are the part a tool could take. */
+ * tool may cost; per call, cffi's advance took ~0.86 us against 0.14 us here, output_dict ~2.5 us against 0.3 us. */
 
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
 #include "src/rk_internal.h"
+#include "rk_py_api.h"
 
 #include <math.h>
 #include <string.h>
@@ -1050,43 +1054,6 @@ static PyObject *engine_output_row(EngineObject *self, PyObject *unused)
     return doubles_tuple(out, n + 5);
 }
 
-static PyObject *engine_contacts(EngineObject *self, PyObject *unused)
-{
-    int states[RK_MAX_CONTACTS], n, i;
-    PyObject *t;
-    (void)unused;
-    if (!ready(self))
-        return NULL;
-    n = rk_engine_contacts(self->e, states);
-    t = PyTuple_New(n);
-    if (t == NULL)
-        return NULL;
-    for (i = 0; i < n; i++)
-        PyTuple_SET_ITEM(t, i, PyLong_FromLong(states[i]));
-    return t;
-}
-
-static PyObject *engine_full_state(EngineObject *self, PyObject *unused)
-{
-    double q[RK_MAX_DOF], v[RK_MAX_DOF];
-    int n;
-    (void)unused;
-    if (!ready(self))
-        return NULL;
-    n = rk_engine_full_state(self->e, q, v);
-    return Py_BuildValue("(NN)", doubles_list(q, n), doubles_list(v, n));
-}
-
-static int dict_put(PyObject *d, const char *key, PyObject *value)
-{
-    int r;
-    if (value == NULL)
-        return -1;
-    r = PyDict_SetItemString(d, key, value);
-    Py_DECREF(value);
-    return r;
-}
-
 static PyObject *impact_times_list(rk_engine *e)
 {
     long long n = rk_engine_impact_times(e, NULL, 0);
@@ -1098,273 +1065,6 @@ static PyObject *impact_times_list(rk_engine *e)
     l = doubles_list(buf, n);
     PyMem_Free(buf);
     return l;
-}
-
-static PyObject *engine_get_state(EngineObject *self, PyObject *unused)
-{
-    rk_plain_state s;
-    rk_engine *e;
-    PyObject *d;
-    int n_dof, nc, i;
-    (void)unused;
-    if (!ready(self))
-        return NULL;
-    e = self->e;
-    rk_engine_get_state(e, &s);
-    n_dof = rk_engine_n_dof(e);
-    nc = rk_engine_n_contacts(e);
-    d = PyDict_New();
-    if (d == NULL)
-        return NULL;
-    if (dict_put(d, "t", PyFloat_FromDouble(s.t)) < 0)
-        goto fail;
-    if (rk_engine_scheme(e) == RK_SCHEME_MOREAU_JEAN) {
-        PyObject *closed;
-        if (dict_put(d, "q", doubles_list(s.q, n_dof)) < 0 || dict_put(d, "v", doubles_list(s.v, n_dof)) < 0
-            || dict_put(d, "mode", PyLong_FromLong(s.mode)) < 0)
-            goto fail;
-        closed = PyList_New(0);
-        if (closed == NULL)
-            goto fail;
-        for (i = 0; i < nc; i++) {
-            if (RK_IN(s.closed, i)) {
-                PyObject *x = PyLong_FromLong(i);
-                if (x == NULL || PyList_Append(closed, x) < 0) {
-                    Py_XDECREF(x);
-                    Py_DECREF(closed);
-                    goto fail;
-                }
-                Py_DECREF(x);
-            }
-        }
-        if (dict_put(d, "closed", closed) < 0 || dict_put(d, "impacts", PyLong_FromLongLong(s.impacts)) < 0
-            || dict_put(d, "overturned", PyBool_FromLong(s.overturned)) < 0
-            || dict_put(d, "n_steps", PyLong_FromLongLong(s.n_steps)) < 0
-            || dict_put(d, "impact_times", impact_times_list(e)) < 0
-            || dict_put(d, "friction_demand", PyFloat_FromDouble(s.friction_demand)) < 0
-            || dict_put(d, "painleve", PyLong_FromLongLong(s.painleve)) < 0)
-            goto fail;
-    } else {
-        long long rows = rk_engine_impact_log(e, NULL, 0);
-        int row_len = 1 + 2 * n_dof;
-        double *buf;
-        PyObject *flat;
-        if (dict_put(d, "mode", PyLong_FromLong(s.mode)) < 0 || dict_put(d, "y", doubles_list(s.y, s.n_y)) < 0
-            || dict_put(d, "impacts", PyLong_FromLongLong(s.impacts)) < 0
-            || dict_put(d, "overturned", PyBool_FromLong(s.overturned)) < 0
-            || dict_put(d, "n_steps", PyLong_FromLongLong(s.n_steps)) < 0
-            || dict_put(d, "h", PyFloat_FromDouble(s.h)) < 0
-            || dict_put(d, "impact_times", impact_times_list(e)) < 0)
-            goto fail;
-        buf = (double *)PyMem_Malloc((size_t)(rows > 0 ? rows : 1) * (size_t)row_len * sizeof(double));
-        if (buf == NULL) {
-            PyErr_NoMemory();
-            goto fail;
-        }
-        rk_engine_impact_log(e, buf, rows);
-        flat = doubles_list(buf, rows * row_len);
-        PyMem_Free(buf);
-        if (dict_put(d, "impact_log", flat) < 0 || dict_put(d, "shift", PyFloat_FromDouble(s.shift)) < 0
-            || dict_put(d, "friction_demand", PyFloat_FromDouble(s.friction_demand)) < 0
-            || dict_put(d, "painleve", PyLong_FromLongLong(s.painleve)) < 0)
-            goto fail;
-    }
-    return d;
-fail:
-    Py_DECREF(d);
-    return NULL;
-}
-
-static PyObject *get_key(PyObject *d, const char *key)
-{
-    PyObject *x = PyMapping_GetItemString(d, key);
-    if (x == NULL && PyErr_ExceptionMatches(PyExc_KeyError)) {
-        PyErr_Clear();
-        PyErr_Format(PyExc_ValueError, "state field '%s' is missing", key);
-    }
-    return x;
-}
-
-static int key_double(PyObject *d, const char *key, double *out)
-{
-    PyObject *x = get_key(d, key);
-    if (x == NULL)
-        return -1;
-    *out = PyFloat_AsDouble(x);
-    Py_DECREF(x);
-    if (*out == -1.0 && PyErr_Occurred()) {
-        PyErr_Format(PyExc_ValueError, "state field '%s' must be a float", key);
-        return -1;
-    }
-    return 0;
-}
-
-static int key_ll(PyObject *d, const char *key, long long *out)
-{
-    PyObject *x = get_key(d, key);
-    if (x == NULL)
-        return -1;
-    *out = PyLong_AsLongLong(x);
-    Py_DECREF(x);
-    if (*out == -1 && PyErr_Occurred()) {
-        PyErr_Format(PyExc_ValueError, "state field '%s' must be an int", key);
-        return -1;
-    }
-    return 0;
-}
-
-/** A list of floats into a PyMem buffer (*out owned by the caller). */
-static int key_doubles(PyObject *d, const char *key, double **out, long long *n)
-{
-    PyObject *x = get_key(d, key), *fast;
-    Py_ssize_t i, len;
-    if (x == NULL)
-        return -1;
-    fast = PySequence_Fast(x, "");
-    Py_DECREF(x);
-    if (fast == NULL) {
-        PyErr_Format(PyExc_ValueError, "state field '%s' must be a list of floats", key);
-        return -1;
-    }
-    len = PySequence_Fast_GET_SIZE(fast);
-    *out = (double *)PyMem_Malloc((size_t)(len > 0 ? len : 1) * sizeof(double));
-    if (*out == NULL) {
-        Py_DECREF(fast);
-        PyErr_NoMemory();
-        return -1;
-    }
-    for (i = 0; i < len; i++) {
-        double v = PyFloat_AsDouble(PySequence_Fast_GET_ITEM(fast, i));
-        if (v == -1.0 && PyErr_Occurred()) {
-            Py_DECREF(fast);
-            PyMem_Free(*out);
-            *out = NULL;
-            PyErr_Format(PyExc_ValueError, "state field '%s'[%zd] must be a float", key, i);
-            return -1;
-        }
-        (*out)[i] = v;
-    }
-    Py_DECREF(fast);
-    *n = (long long)len;
-    return 0;
-}
-
-static int key_fixed(PyObject *d, const char *key, double *out, int want)
-{
-    double *buf = NULL;
-    long long n = 0;
-    if (key_doubles(d, key, &buf, &n) < 0)
-        return -1;
-    if (n != want) {
-        PyMem_Free(buf);
-        PyErr_Format(PyExc_ValueError, "state field '%s' has %lld values; expected %d", key, n, want);
-        return -1;
-    }
-    memcpy(out, buf, (size_t)want * sizeof(double));
-    PyMem_Free(buf);
-    return 0;
-}
-
-/** set_state(dict): the scheme's fields (STATE_KEYS, without the header) as plain values; the consistency
- *  checks run in C with the Python's messages, nothing changes on error. */
-static PyObject *engine_set_state(EngineObject *self, PyObject *d)
-{
-    rk_plain_state s;
-    rk_engine *e;
-    double *times = NULL, *log = NULL;
-    long long n_times = 0, n_log = 0, x;
-    int n_dof, row_len, over;
-    PyObject *o;
-    rk_status st;
-    if (!ready(self))
-        return NULL;
-    if (!PyMapping_Check(d)) {
-        PyErr_SetString(PyExc_ValueError, "state must be a mapping (dict) of plain values");
-        return NULL;
-    }
-    e = self->e;
-    n_dof = rk_engine_n_dof(e);
-    row_len = 1 + 2 * n_dof;
-    memset(&s, 0, sizeof(s));
-    s.h = NAN;
-    if (key_double(d, "t", &s.t) < 0 || key_ll(d, "mode", &x) < 0)
-        return NULL;
-    if (x < -1 || x > 1000) {
-        PyErr_Format(PyExc_ValueError, "state field 'mode' = %lld is out of range; allowed range [0, %d]", x,
-                     rk_engine_n_modes(e) - 1);
-        return NULL;
-    }
-    s.mode = (int)x;
-    if (key_ll(d, "impacts", &s.impacts) < 0 || key_ll(d, "n_steps", &s.n_steps) < 0
-        || key_double(d, "friction_demand", &s.friction_demand) < 0 || key_ll(d, "painleve", &s.painleve) < 0)
-        return NULL;
-    o = get_key(d, "overturned");
-    if (o == NULL)
-        return NULL;
-    over = PyObject_IsTrue(o);
-    Py_DECREF(o);
-    if (over < 0)
-        return NULL;
-    s.overturned = over;
-    if (rk_engine_scheme(e) == RK_SCHEME_MOREAU_JEAN) {
-        PyObject *closed, *fast;
-        Py_ssize_t i;
-        if (key_fixed(d, "q", s.q, n_dof) < 0 || key_fixed(d, "v", s.v, n_dof) < 0)
-            return NULL;
-        closed = get_key(d, "closed");
-        if (closed == NULL)
-            return NULL;
-        fast = PySequence_Fast(closed, "state field 'closed' must be a list of ints");
-        Py_DECREF(closed);
-        if (fast == NULL)
-            return NULL;
-        for (i = 0; i < PySequence_Fast_GET_SIZE(fast); i++) {
-            long c = PyLong_AsLong(PySequence_Fast_GET_ITEM(fast, i));
-            if ((c == -1 && PyErr_Occurred()) || c < 0 || c >= rk_engine_n_contacts(e)) {
-                Py_DECREF(fast);
-                PyErr_Clear();
-                PyErr_Format(PyExc_ValueError, "state field 'closed'[%zd] must be an int in [0, %d]", i,
-                             rk_engine_n_contacts(e) - 1);
-                return NULL;
-            }
-            s.closed |= 1u << c;
-        }
-        Py_DECREF(fast);
-    } else {
-        double *y = NULL;
-        long long ny = 0;
-        if (key_doubles(d, "y", &y, &ny) < 0)
-            return NULL;
-        if (ny > RK_MAX_Y) {
-            PyMem_Free(y);
-            PyErr_Format(PyExc_ValueError, "state field 'y' has %lld values; allowed at most %d", ny, RK_MAX_Y);
-            return NULL;
-        }
-        memcpy(s.y, y, (size_t)ny * sizeof(double));
-        s.n_y = (int)ny;
-        PyMem_Free(y);
-        if (key_double(d, "h", &s.h) < 0 || key_double(d, "shift", &s.shift) < 0)
-            return NULL;
-        if (key_doubles(d, "impact_log", &log, &n_log) < 0)
-            return NULL;
-        if (n_log % row_len) {
-            PyMem_Free(log);
-            PyErr_Format(PyExc_ValueError, "state field 'impact_log' has %lld values; expected a multiple of %d",
-                         n_log, row_len);
-            return NULL;
-        }
-        n_log /= row_len;
-    }
-    if (key_doubles(d, "impact_times", &times, &n_times) < 0) {
-        PyMem_Free(log);
-        return NULL;
-    }
-    st = rk_engine_set_state(e, &s, times, n_times, log, n_log);
-    PyMem_Free(times);
-    PyMem_Free(log);
-    if (st != RK_OK)
-        return raise_status(st, rk_engine_message(e));
-    Py_RETURN_NONE;
 }
 
 static PyObject *engine_checkpoint(EngineObject *self, PyObject *unused)
@@ -1395,67 +1095,6 @@ static PyObject *engine_commit(EngineObject *self, PyObject *unused)
     Py_RETURN_NONE;
 }
 
-static PyObject *engine_snapshot(EngineObject *self, PyObject *unused)
-{
-    size_t n;
-    PyObject *b;
-    (void)unused;
-    if (!ready(self))
-        return NULL;
-    n = rk_engine_snapshot_size(self->e);
-    b = PyBytes_FromStringAndSize(NULL, (Py_ssize_t)n);
-    if (b == NULL)
-        return NULL;
-    if (rk_engine_snapshot(self->e, PyBytes_AS_STRING(b), n) != RK_OK) {
-        Py_DECREF(b);
-        PyErr_SetString(PyExc_RuntimeError, "snapshot failed");
-        return NULL;
-    }
-    return b;
-}
-
-static PyObject *engine_restore(EngineObject *self, PyObject *arg)
-{
-    Py_buffer b;
-    rk_status st;
-    if (!ready(self))
-        return NULL;
-    if (PyObject_GetBuffer(arg, &b, PyBUF_SIMPLE) < 0)
-        return NULL;
-    st = rk_engine_restore(self->e, b.buf, (size_t)b.len);
-    PyBuffer_Release(&b);
-    if (st != RK_OK)
-        return raise_status(st, rk_engine_message(self->e));
-    Py_RETURN_NONE;
-}
-
-static PyObject *engine_reports(EngineObject *self, PyObject *unused)
-{
-    const rk_reports *r;
-    PyObject *l;
-    int i, n;
-    (void)unused;
-    if (!ready(self))
-        return NULL;
-    r = rk_engine_reports(self->e);
-    n = r->count < RK_MAX_REPORTS ? r->count : RK_MAX_REPORTS;
-    l = PyList_New(n);
-    if (l == NULL)
-        return NULL;
-    for (i = 0; i < n; i++) {
-        const rk_report *it = &r->items[i];
-        PyObject *t = Py_BuildValue("(sds)", it->kind == RK_REPORT_INEXACT_CONTACT ? "inexact_contact"
-                                                                                    : "failed_step",
-                                    it->t, it->message);
-        if (t == NULL) {
-            Py_DECREF(l);
-            return NULL;
-        }
-        PyList_SET_ITEM(l, i, t);
-    }
-    return l;
-}
-
 static PyMethodDef engine_methods[] = {
     {"advance", (PyCFunction)(void (*)(void))engine_advance, METH_FASTCALL | METH_KEYWORDS,
      "advance(t_end, ag0=0.0, slope=0.0, max_steps=None, continuous=False, linear=False, ag_v=0.0, "
@@ -1477,16 +1116,9 @@ static PyMethodDef engine_methods[] = {
      "painleve."},
     {"output_row", (PyCFunction)engine_output_row, METH_NOARGS,
      "output_row() -> the values of output_dict() as a tuple of floats, in the same order."},
-    {"contacts", (PyCFunction)engine_contacts, METH_NOARGS, "contacts() -> tuple of ContactState codes."},
-    {"full_state", (PyCFunction)engine_full_state, METH_NOARGS, "full_state() -> (q, v) lists."},
-    {"get_state", (PyCFunction)engine_get_state, METH_NOARGS, "get_state() -> dict of the scheme's STATE_KEYS."},
-    {"set_state", (PyCFunction)engine_set_state, METH_O, "set_state(dict): load get_state's fields."},
     {"checkpoint", (PyCFunction)engine_checkpoint, METH_NOARGS, "checkpoint(): save the state in the slot."},
     {"rollback", (PyCFunction)engine_rollback, METH_NOARGS, "rollback(): restore the slot exactly."},
     {"commit", (PyCFunction)engine_commit, METH_NOARGS, "commit(): drop the slot."},
-    {"snapshot", (PyCFunction)engine_snapshot, METH_NOARGS, "snapshot() -> bytes of the whole state."},
-    {"restore", (PyCFunction)engine_restore, METH_O, "restore(bytes): load a snapshot of an engine built alike."},
-    {"reports", (PyCFunction)engine_reports, METH_NOARGS, "reports() -> [(kind, t, message)] of the last call."},
     {NULL, NULL, 0, NULL}
 };
 
@@ -1517,6 +1149,7 @@ GETTER(model_class, PyUnicode_FromString(rk_engine_model_class(self->e)))
 GETTER(report_count, PyLong_FromLong(rk_engine_reports(self->e)->count))
 GETTER(callback_raised, PyBool_FromLong(self->callback_raised))
 GETTER(impact_times, impact_times_list(self->e))
+GETTER(_address, PyLong_FromVoidPtr(self->e))
 
 static PyObject *get_output_names(EngineObject *self, void *closure)
 {
@@ -1548,6 +1181,7 @@ static PyGetSetDef engine_getset[] = {
     {"callback_raised", (getter)get_callback_raised, NULL, "the last advance_motion / sample re-raised a motion "
      "callback's own exception", NULL},
     {"impact_times", (getter)get_impact_times, NULL, "the last impact_log_size impact times [s]", NULL},
+    {"_address", (getter)get__address, NULL, "the rk_engine * (for the cffi binding's calls)", NULL},
     {NULL, NULL, NULL, NULL, NULL}
 };
 
@@ -1570,72 +1204,6 @@ static PyType_Spec engine_spec = {
     "rocking_model._engine.Engine", (int)sizeof(EngineObject), 0, Py_TPFLAGS_DEFAULT, engine_slots
 };
 
-/* model_kinds(): the registered model kernels and their declarations (parameters, initial values,
- * outputs), so that a caller of the low-level Engine can build its parameter list without the package */
-static PyObject *int_list_of(const int *x, int n)
-{
-    PyObject *out = PyList_New(n);
-    int i;
-    if (out == NULL)
-        return NULL;
-    for (i = 0; i < n; i++)
-        PyList_SET_ITEM(out, i, PyLong_FromLong(x[i]));
-    return out;
-}
-
-static PyObject *decls_of(const rk_param_decl *d, int n)
-{
-    PyObject *out = PyList_New(n);
-    int i;
-    if (out == NULL)
-        return NULL;
-    for (i = 0; i < n; i++)
-        PyList_SET_ITEM(out, i, Py_BuildValue("(ssdddiiiii)", d[i].name, d[i].unit, d[i].default_value, d[i].lo,
-                                              d[i].hi, d[i].lo_open, d[i].hi_open, d[i].inf_ok, d[i].integer,
-                                              d[i].n_items));
-    return out;
-}
-
-static PyObject *py_model_kinds(PyObject *self, PyObject *args)
-{
-    const rk_model_ops *const *k;
-    PyObject *out = PyList_New(0);
-    (void)self; (void)args;
-    if (out == NULL)
-        return NULL;
-    for (k = rk_model_kinds(); *k != NULL; k++) {
-        const rk_model_ops *o = *k;
-        PyObject *item = Py_BuildValue("{s:s,s:s,s:i,s:i,s:i,s:i,s:i,s:i,s:N,s:N,s:N,s:N}", "kind", o->kind,
-                                       "class_name", o->class_name, "n_dof", o->n_dof, "n_contacts", o->n_contacts,
-                                       "n_modes", o->n_modes, "phi_index", o->phi_index, "slide_index",
-                                       o->slide_index, "lift_index", o->lift_index,
-                                       "params", decls_of(o->param_decls, o->n_params),
-                                       "initial", decls_of(o->initial_decls, o->n_initial),
-                                       "outputs", decls_of(o->output_decls, o->n_outputs),
-                                       "shifted", int_list_of(o->shifted, o->n_shifted));
-        if (item == NULL || PyList_Append(out, item) < 0) {
-            Py_XDECREF(item);
-            Py_DECREF(out);
-            return NULL;
-        }
-        Py_DECREF(item);
-    }
-    return out;
-}
-
-static PyObject *py_version(PyObject *self, PyObject *args)
-{
-    (void)self; (void)args;
-    return PyUnicode_FromString(rk_engine_version());
-}
-
-static PyObject *py_api_version(PyObject *self, PyObject *args)
-{
-    (void)self; (void)args;
-    return PyLong_FromLong(rk_engine_api_version());
-}
-
-/* ------------------------------------------------------------------------------------------ model functions */
 /* model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one function of a model's generated kernel
  * on an instance built from params (ValueError with the model's own message on bad parameters). The models'
  * analysis methods (rocking_model.models.base: mass matrix, forces, contact relation, embedding, initial state,
@@ -1786,45 +1354,17 @@ static PyObject *py_model(PyObject *self, PyObject *args)
     return NULL;
 }
 
-/* add_model(address): the kernel of a model declared after the build (rocking_model.engine.plugin compiles it
- * into a library of its own and passes the address of its rk_model_ops) */
-static PyObject *py_add_model(PyObject *self, PyObject *arg)
-{
-    rk_error err;
-    void *p = PyLong_AsVoidPtr(arg);
-    (void)self;
-    if (p == NULL) {
-        if (!PyErr_Occurred())
-            PyErr_SetString(PyExc_ValueError, "add_model: the kernel's address is NULL");
-        return NULL;
-    }
-    memset(&err, 0, sizeof err);
-    if (rk_model_add((const rk_model_ops *)p, &err) != RK_OK) {
-        PyErr_SetString(PyExc_ValueError, err.message);
-        return NULL;
-    }
-    Py_RETURN_NONE;
-}
-
-/* kinds(): the model kinds the engine knows (built in, then added) */
-static PyObject *py_kinds(PyObject *self, PyObject *unused)
-{
-    char buf[4096];
-    (void)self;
-    (void)unused;
-    rk_model_kind_names(buf, sizeof buf);
-    return PyUnicode_FromString(buf);
-}
+/* the calls bound with cffi (rocking_model._engine_cold over rocking_model._rk) reach this copy of the engine */
+static const rk_py_api API = {
+    sizeof(rk_py_api), rk_engine_version, rk_engine_api_version, rk_engine_message, rk_engine_status, rk_engine_n_dof,
+    rk_engine_n_contacts, rk_engine_n_modes, rk_engine_scheme, rk_engine_get_state, rk_engine_impact_times,
+    rk_engine_impact_log, rk_engine_set_state, rk_engine_snapshot_size, rk_engine_snapshot, rk_engine_restore,
+    rk_engine_reports, rk_engine_contacts, rk_engine_full_state, rk_model_kinds, rk_model_add, rk_model_kind_names
+};
 
 static PyMethodDef methods[] = {
     {"model", py_model, METH_VARARGS, "model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one "
      "function of a model's kernel (mass_matrix, forces, gaps, contact_jacobians, embed, initial_state, info, ...)."},
-    {"add_model", py_add_model, METH_O, "add_model(address): add the kernel (rk_model_ops *) of a model declared "
-     "after the build."},
-    {"kinds", py_kinds, METH_NOARGS, "kinds() -> str: the known model kinds, quoted and comma-separated."},
-    {"model_kinds", py_model_kinds, METH_NOARGS, "model_kinds() -> the registered model kernels and their declarations."},
-    {"version", py_version, METH_NOARGS, "version() -> str: the version the C engine was built with."},
-    {"api_version", py_api_version, METH_NOARGS, "api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."},
     {NULL, NULL, 0, NULL}
 };
 
@@ -1871,6 +1411,25 @@ PyMODINIT_FUNC PyInit__engine(void)
         return NULL;
     }
     Py_INCREF(NonFiniteError);
+    {   /* the rest of the API, bound with cffi: <package>._engine_cold.install(module) adds its methods to Engine and
+         * its functions to this module */
+        PyObject *addr = PyLong_FromVoidPtr((void *)&API), *name, *cold, *r;
+        if (addr == NULL || PyModule_AddObject(m, "_API", addr) < 0) {
+            Py_XDECREF(addr);
+            Py_DECREF(m);
+            return NULL;
+        }
+        name = PyUnicode_FromFormat("%U._engine_cold", PackageName);
+        cold = name != NULL ? PyImport_Import(name) : NULL;
+        Py_XDECREF(name);
+        r = cold != NULL ? PyObject_CallMethod(cold, "install", "O", m) : NULL;
+        Py_XDECREF(cold);
+        if (r == NULL) {
+            Py_DECREF(m);
+            return NULL;
+        }
+        Py_DECREF(r);
+    }
     {
         PyObject *info = Py_BuildValue("{s:n,s:n,s:n}", "engine", (Py_ssize_t)sizeof(rk_engine), "core",
                                        (Py_ssize_t)sizeof(rk_core), "stepper", (Py_ssize_t)sizeof(rk_stepper));

@@ -1,0 +1,118 @@
+"""The cffi binding (API mode, out of line) of the engine's cold calls: setup.py compiles it into the extension module
+``rocking_model._rk``, which `rocking_model._engine_cold` wraps. It holds no engine code: its functions call the
+engine inside rocking_model._engine through the table of rk_py_api.h, which that module hands over at import
+(`rk_py_bind`), so that both bindings share one engine (its registry of added models included).
+
+The hot calls (engine creation, advance, sample, outputs) stay hand-written in _engine.c: see the comment there."""
+import cffi
+
+CDEF = r"""
+#define RK_MAX_DOF 8
+#define RK_MAX_CONTACTS 4
+#define RK_MAX_Y 16
+#define RK_MAX_REPORTS 16
+
+typedef enum rk_status { RK_OK = 0, RK_ERR_VALUE = 1, RK_ERR_WORK_LIMIT = 2, RK_ERR_NONFINITE = 3,
+                         RK_ERR_SOLVER = 4, RK_ERR_NOT_IMPLEMENTED = 5, RK_ERR_MEMORY = 6,
+                         RK_ERR_INTERNAL = 7 } rk_status;
+typedef struct rk_error { rk_status status; char message[512]; } rk_error;
+typedef unsigned int rk_set;
+typedef enum rk_scheme { RK_SCHEME_MOREAU_JEAN = 0, RK_SCHEME_EVENT_DRIVEN = 1 } rk_scheme;
+typedef enum rk_report_kind { RK_REPORT_INEXACT_CONTACT = 0, RK_REPORT_FAILED_STEP = 1 } rk_report_kind;
+typedef struct rk_report { rk_report_kind kind; double t; char message[512]; } rk_report;
+typedef struct rk_reports { int count; rk_report items[16]; } rk_reports;
+typedef struct rk_param_decl {
+    const char *name; const char *unit; double default_value; double lo, hi; int lo_open, hi_open; int inf_ok;
+    int integer; int n_items; ...;
+} rk_param_decl;
+typedef struct rk_model_ops {
+    const char *kind; const char *class_name; int n_dof, n_contacts, n_modes, phi_index, slide_index, lift_index;
+    int n_params; const rk_param_decl *param_decls; int n_initial; const rk_param_decl *initial_decls;
+    int n_outputs; const rk_param_decl *output_decls; int n_shifted; const int *shifted; ...;
+} rk_model_ops;
+typedef struct rk_plain_state {
+    double t; int mode; int n_y; double y[16]; double q[8], v[8]; rk_set closed; long long impacts;
+    int overturned; long long n_steps; double h; double shift; double friction_demand; long long painleve; ...;
+} rk_plain_state;
+typedef struct rk_engine rk_engine;
+
+int rk_py_bind(const void *api);
+const char *c_version(void);
+int c_api_version(void);
+const char *c_message(const rk_engine *e);
+rk_status c_status(const rk_engine *e);
+int c_n_dof(const rk_engine *e);
+int c_n_contacts(const rk_engine *e);
+int c_n_modes(const rk_engine *e);
+rk_scheme c_scheme(const rk_engine *e);
+void c_get_state(const rk_engine *e, rk_plain_state *s);
+long long c_impact_times(const rk_engine *e, double *buf, long long cap);
+long long c_impact_log(const rk_engine *e, double *buf, long long cap_rows);
+rk_status c_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
+                      const double *impact_log, long long n_log_rows);
+size_t c_snapshot_size(const rk_engine *e);
+rk_status c_snapshot(const rk_engine *e, void *buf, size_t size);
+rk_status c_restore(rk_engine *e, const void *buf, size_t size);
+const rk_reports *c_reports(const rk_engine *e);
+int c_contacts(const rk_engine *e, int *states);
+int c_full_state(rk_engine *e, double *q, double *v);
+const rk_model_ops *const *c_model_kinds(void);
+rk_status c_model_add(const rk_model_ops *ops, rk_error *err);
+void c_kind_names(char *buf, size_t n);
+"""
+
+PREAMBLE = r"""
+#include "rk_py_api.h"
+
+/* the extension's table, set once at import (rk_py_bind; the same table every time) */
+static const rk_py_api *API = NULL;
+
+static int rk_py_bind(const void *api)
+{
+    if (api == NULL || ((const rk_py_api *)api)->size != sizeof(rk_py_api))
+        return -1;
+    API = (const rk_py_api *)api;
+    return 0;
+}
+
+static const char *c_version(void) { return API->version(); }
+static int c_api_version(void) { return API->api_version(); }
+static const char *c_message(const rk_engine *e) { return API->message(e); }
+static rk_status c_status(const rk_engine *e) { return API->status(e); }
+static int c_n_dof(const rk_engine *e) { return API->n_dof(e); }
+static int c_n_contacts(const rk_engine *e) { return API->n_contacts(e); }
+static int c_n_modes(const rk_engine *e) { return API->n_modes(e); }
+static rk_scheme c_scheme(const rk_engine *e) { return API->scheme(e); }
+static void c_get_state(const rk_engine *e, rk_plain_state *s) { API->get_state(e, s); }
+static long long c_impact_times(const rk_engine *e, double *buf, long long cap)
+{
+    return API->impact_times(e, buf, cap);
+}
+static long long c_impact_log(const rk_engine *e, double *buf, long long cap_rows)
+{
+    return API->impact_log(e, buf, cap_rows);
+}
+static rk_status c_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times, long long n_times,
+                             const double *impact_log, long long n_log_rows)
+{
+    return API->set_state(e, s, impact_times, n_times, impact_log, n_log_rows);
+}
+static size_t c_snapshot_size(const rk_engine *e) { return API->snapshot_size(e); }
+static rk_status c_snapshot(const rk_engine *e, void *buf, size_t size) { return API->snapshot(e, buf, size); }
+static rk_status c_restore(rk_engine *e, const void *buf, size_t size) { return API->restore(e, buf, size); }
+static const rk_reports *c_reports(const rk_engine *e) { return API->reports(e); }
+static int c_contacts(const rk_engine *e, int *states) { return API->contacts(e, states); }
+static int c_full_state(rk_engine *e, double *q, double *v) { return API->full_state(e, q, v); }
+static const rk_model_ops *const *c_model_kinds(void) { return API->model_kinds(); }
+static rk_status c_model_add(const rk_model_ops *ops, rk_error *err) { return API->model_add(ops, err); }
+static void c_kind_names(char *buf, size_t n) { API->kind_names(buf, n); }
+"""
+
+
+def builder(include_dirs=(), extra_compile_args=()):
+    """The FFI builder of ``rocking_model._rk`` (include_dirs: the folder of rk_py_api.h and the one of src/)."""
+    ffi = cffi.FFI()
+    ffi.cdef(CDEF)
+    ffi.set_source("rocking_model._rk", PREAMBLE, include_dirs=list(include_dirs),
+                   extra_compile_args=list(extra_compile_args))
+    return ffi
