@@ -266,8 +266,54 @@ def add_model(address: int) -> None:
         raise ValueError(_text(err.message))
 
 
+#: the size of `model`'s result buffers (the largest result: a mass matrix of the engine's RK_MAX_Y)
+_BUF = 256
+_VECTOR = ("forces", "gaps", "contact_abscissae", "rest_position", "outputs", "mass_matrix", "inverse_mass_matrix",
+           "mode_rhs", "mode_outputs", "contact_forces", "classical_impact_velocity")
+_PAIR = ("stiff_jacobians", "contact_jacobians", "contact_drift", "embed", "mode_jacobian")
+
+
+def _doubles(x):
+    if x is None:
+        return ffi.NULL
+    return ffi.new("double[]", [float(v) for v in x] or [0.0])
+
+
+def model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0):
+    """model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one function of a model's generated
+    kernel on an instance built from ``params`` (ValueError with the model's own message on bad parameters):
+    info, mass_matrix, inverse_mass_matrix, forces, stiff_jacobians, gaps, contact_jacobians, contact_drift,
+    contact_abscissae, rest_position, energy, outputs, slip, initial_state, and of a sticking mode mode_dofs,
+    embed, mode_jacobian, mode_rhs, mode_outputs, contact_forces, classical_impact_velocity."""
+    p = [float(v) for v in params]
+    # buffers per call: cffi releases the GIL in the call, and Dask workers analyse models in threads
+    _O1, _O2 = ffi.new("double[]", _BUF), ffi.new("double[]", _BUF)
+    _N2, _IVAL, _MSG = ffi.new("int *"), ffi.new("int *"), ffi.new("char[]", 512)
+    _NAMES = ffi.new("char[]", 4096) if fn == "info" else ffi.new("char[]", 1)
+    n1 = lib.c_model(kind.encode(), ffi.new("double[]", p or [0.0]), len(p), fn.encode(), int(mode), _doubles(a),
+                     _doubles(b), float(ag), float(ag_v), _O1, _O2, _N2, _IVAL, _MSG, _NAMES, len(_NAMES))
+    if n1 == -1:
+        raise ValueError(_text(_MSG))
+    if n1 == -2:
+        return None
+    n2 = _N2[0]
+    if fn == "info":
+        names = _text(_NAMES).split("\n") if n2 else []
+        return {"length_scale": _O1[0], "time_scale": _O1[1], "force_scale": _O1[2], "step_limit": _O1[3],
+                "dof_scales": ffi.unpack(_O1 + 4, n1 - 4), "derived": dict(zip(names, ffi.unpack(_O2, n2)))}
+    if fn in ("energy", "slip"):
+        return _O1[0]
+    if fn == "mode_dofs":
+        return [int(x) for x in ffi.unpack(_O1, n1)]
+    if fn == "initial_state":
+        return _IVAL[0], ffi.unpack(_O1, n1), ffi.unpack(_O2, n2)
+    if fn in _PAIR:
+        return ffi.unpack(_O1, n1), ffi.unpack(_O2, n2)
+    return ffi.unpack(_O1, n1)
+
+
 _METHODS = (contacts, full_state, reports, get_state, set_state, snapshot, restore)
-_FUNCTIONS = (version, api_version, model_kinds, kinds, add_model)
+_FUNCTIONS = (version, api_version, model_kinds, kinds, add_model, model)
 
 
 def install(module) -> None:

@@ -2,9 +2,8 @@
  * creation, advance, advance_motion, sample, outputs, checkpoint and attributes). The rest of the module (state dicts,
  * snapshots, reports, contacts, full_state, version(), api_version(), model_kinds(), kinds(), add_model()) is bound
  * with cffi in rocking_model/_engine_cold.py, which module init installs here; it reaches this module's copy of the
- * engine through the table of rk_py_api.h (_API). model(), the models' analysis functions (one kernel function of a
- * model by name, for rocking_model.models.base), is still here: a cold call, to move to the cffi side next.
- * No per-step Python object is created on the hot paths.
+ * engine through the table of rk_py_api.h (_API), as does model() (one kernel function of a model by name, for
+ * rocking_model.models.base). No per-step Python object is created on the hot paths.
  *
  * Why hand-written rather than a binding tool: the hot calls (Engine creation, sample, advance, outputs) cost a
  * pulse simulate (the rigid block under a sine pulse, 4 s, ~58 us) 11.7-12.6 % more when bound with cffi in API
@@ -1204,167 +1203,16 @@ static PyType_Spec engine_spec = {
     "rocking_model._engine.Engine", (int)sizeof(EngineObject), 0, Py_TPFLAGS_DEFAULT, engine_slots
 };
 
-/* model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one function of a model's generated kernel
- * on an instance built from params (ValueError with the model's own message on bad parameters). The models'
- * analysis methods (rocking_model.models.base: mass matrix, forces, contact relation, embedding, initial state,
- * outputs, derived quantities) read their values here: each formula lives in the declaration alone. */
-static PyObject *py_model(PyObject *self, PyObject *args)
-{
-    const char *kind, *fn;
-    PyObject *params_obj, *a_obj = Py_None, *b_obj = Py_None;
-    double params[RK_MAX_PARAMS], a[RK_MAX_Y], b[RK_MAX_Y], ag = 0.0, ag_v = 0.0;
-    double o1[RK_MAX_Y * RK_MAX_Y], o2[RK_MAX_Y * RK_MAX_Y];
-    int n_params, n_a, n_b, mode = 0, n, nc, k, idx[RK_MAX_DOF], i;
-    rk_model m;
-    rk_error err;
-    const rk_model_ops *ops;
-    (void)self;
-    if (!PyArg_ParseTuple(args, "sOs|iOOdd", &kind, &params_obj, &fn, &mode, &a_obj, &b_obj, &ag, &ag_v))
-        return NULL;
-    if (read_doubles(params_obj, "params", params, RK_MAX_PARAMS, &n_params) < 0
-        || read_doubles(a_obj, "a", a, RK_MAX_Y, &n_a) < 0 || read_doubles(b_obj, "b", b, RK_MAX_Y, &n_b) < 0)
-        return NULL;
-    ops = rk_model_find(kind);
-    if (ops == NULL) {
-        char kinds[256];
-        rk_model_kind_names(kinds, sizeof kinds);
-        PyErr_Format(PyExc_ValueError, "model kind '%s' is unknown; allowed values %s", kind, kinds);
-        return NULL;
-    }
-    memset(&err, 0, sizeof err);
-    if (rk_model_init(&m, ops, params, n_params, &err) != RK_OK) {
-        PyErr_SetString(PyExc_ValueError, err.message);
-        return NULL;
-    }
-    n = ops->n_dof;
-    nc = ops->n_contacts;
-    memset(o1, 0, sizeof o1);
-    memset(o2, 0, sizeof o2);
-    if (mode < 0 || mode >= ops->n_modes) {
-        PyErr_Format(PyExc_ValueError, "mode = %d is out of range; allowed range [0, %d]", mode, ops->n_modes - 1);
-        return NULL;
-    }
-    k = (mode < RK_MAX_MODES && rk_stick_of(&m, mode, NULL) == mode) ? ops->mode_dofs(&m, mode, idx) : 0;
-    if (!strcmp(fn, "info")) {
-        PyObject *named = PyDict_New(), *out;
-        if (named == NULL)
-            return NULL;
-        for (i = 0; i < ops->n_named; i++) {
-            int j = ops->named_index[i];
-            PyObject *v = PyFloat_FromDouble(j >= 0 ? m.d[j] : m.p[-1 - j]);
-            if (v == NULL || PyDict_SetItemString(named, ops->named[i], v) < 0) {
-                Py_XDECREF(v);
-                Py_DECREF(named);
-                return NULL;
-            }
-            Py_DECREF(v);
-        }
-        out = Py_BuildValue("{s:d,s:d,s:d,s:d,s:N,s:N,s:d,s:d,s:d,s:i}", "length_scale", m.length_scale,
-                            "time_scale", m.time_scale, "force_scale", m.force_scale, "step_limit", m.step_limit,
-                            "dof_scales", doubles_list(m.dof_scales, n), "derived", named, "e_N", m.e_N,
-                            "e_T", m.e_T, "mu", m.mu, "impact_law", m.impact_law);
-        return out;
-    }
-    if (!strcmp(fn, "mass_matrix") || !strcmp(fn, "inverse_mass_matrix")) {
-        if (fn[0] == 'm')
-            ops->mass_matrix(&m, a, o1);
-        else
-            rk_model_inverse_mass(&m, a, o1);
-        return doubles_list(o1, n * n);
-    }
-    if (!strcmp(fn, "forces")) {
-        ops->forces(&m, a, b, ag, ag_v, o1);
-        return doubles_list(o1, n);
-    }
-    if (!strcmp(fn, "stiff_jacobians")) {
-        if (ops->stiff_jacobians == NULL || !ops->stiff_jacobians(&m, a, b, o1, o2))
-            Py_RETURN_NONE;
-        return Py_BuildValue("(NN)", doubles_list(o1, n * n), doubles_list(o2, n * n));
-    }
-    if (!strcmp(fn, "gaps") || !strcmp(fn, "contact_abscissae")) {
-        (fn[0] == 'g' ? ops->gaps : ops->contact_abscissae)(&m, a, o1);
-        return doubles_list(o1, nc);
-    }
-    if (!strcmp(fn, "contact_jacobians")) {
-        ops->contact_jacobians(&m, a, o1, o2);
-        return Py_BuildValue("(NN)", doubles_list(o1, n * nc), doubles_list(o2, n * nc));
-    }
-    if (!strcmp(fn, "contact_drift")) {
-        ops->contact_drift(&m, a, b, o1, o2);
-        return Py_BuildValue("(NN)", doubles_list(o1, nc), doubles_list(o2, nc));
-    }
-    if (!strcmp(fn, "rest_position")) {
-        ops->rest_position(&m, o1);
-        return doubles_list(o1, n);
-    }
-    if (!strcmp(fn, "energy"))
-        return PyFloat_FromDouble(ops->energy(&m, a, b));
-    if (!strcmp(fn, "outputs")) {
-        ops->outputs(&m, a, b, o1);
-        return doubles_list(o1, ops->n_outputs);
-    }
-    if (!strcmp(fn, "initial_state")) {
-        int start;
-        if (ops->initial_state(&m, a, &start, o1, o2, &err) != RK_OK) {
-            PyErr_SetString(PyExc_ValueError, err.message);
-            return NULL;
-        }
-        return Py_BuildValue("(iNN)", start, doubles_list(o1, n), doubles_list(o2, n));
-    }
-    if (!strcmp(fn, "slip"))
-        return PyFloat_FromDouble(rk_model_slip(&m, a));
-    /* the functions of a sticking mode */
-    if (rk_stick_of(&m, mode, NULL) != mode) {
-        PyErr_Format(PyExc_ValueError, "model(..., %s): mode %d is not a sticking mode", fn, mode);
-        return NULL;
-    }
-    if (!strcmp(fn, "mode_dofs")) {
-        PyObject *out = PyList_New(k);
-        for (i = 0; out != NULL && i < k; i++)
-            PyList_SET_ITEM(out, i, PyLong_FromLong(idx[i]));
-        return out;
-    }
-    if (!strcmp(fn, "embed")) {
-        ops->embed(&m, mode, a, b, o1, o2);
-        return Py_BuildValue("(NN)", doubles_list(o1, n), doubles_list(o2, n));
-    }
-    if (!strcmp(fn, "mode_jacobian")) {
-        ops->mode_jacobian(&m, mode, a, b, o1, o2);
-        return Py_BuildValue("(NN)", doubles_list(o1, n * k), doubles_list(o2, n));
-    }
-    if (!strcmp(fn, "mode_rhs")) {
-        ops->mode_rhs(&m, mode, a, ag, ag_v, o1);
-        return doubles_list(o1, 2 * k);
-    }
-    if (!strcmp(fn, "mode_outputs")) {
-        ops->mode_outputs(&m, mode, a, o1);
-        return doubles_list(o1, ops->n_outputs);
-    }
-    if (!strcmp(fn, "contact_forces")) {
-        ops->contact_forces(&m, mode, a, b, ag, ag_v, o1);
-        return doubles_list(o1, nc);
-    }
-    if (!strcmp(fn, "classical_impact_velocity")) {
-        int rule = ops->classical_impact_velocity == NULL ? 0 : ops->classical_impact_velocity(&m, a, b, mode, o1);
-        if (rule == 0)
-            Py_RETURN_NONE;
-        return doubles_list(o1, n);
-    }
-    PyErr_Format(PyExc_ValueError, "model(): unknown function '%s'", fn);
-    return NULL;
-}
-
 /* the calls bound with cffi (rocking_model._engine_cold over rocking_model._rk) reach this copy of the engine */
 static const rk_py_api API = {
     sizeof(rk_py_api), rk_engine_version, rk_engine_api_version, rk_engine_message, rk_engine_status, rk_engine_n_dof,
     rk_engine_n_contacts, rk_engine_n_modes, rk_engine_scheme, rk_engine_get_state, rk_engine_impact_times,
     rk_engine_impact_log, rk_engine_set_state, rk_engine_snapshot_size, rk_engine_snapshot, rk_engine_restore,
-    rk_engine_reports, rk_engine_contacts, rk_engine_full_state, rk_model_kinds, rk_model_add, rk_model_kind_names
+    rk_engine_reports, rk_engine_contacts, rk_engine_full_state, rk_model_kinds, rk_model_add, rk_model_kind_names,
+    rk_model_find, rk_model_init, rk_model_inverse_mass, rk_model_slip
 };
 
 static PyMethodDef methods[] = {
-    {"model", py_model, METH_VARARGS, "model(kind, params, fn, mode=0, a=None, b=None, ag=0.0, ag_v=0.0): one "
-     "function of a model's kernel (mass_matrix, forces, gaps, contact_jacobians, embed, initial_state, info, ...)."},
     {NULL, NULL, 0, NULL}
 };
 

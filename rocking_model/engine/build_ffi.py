@@ -59,10 +59,16 @@ int c_full_state(rk_engine *e, double *q, double *v);
 const rk_model_ops *const *c_model_kinds(void);
 rk_status c_model_add(const rk_model_ops *ops, rk_error *err);
 void c_kind_names(char *buf, size_t n);
+int c_model(const char *kind, const double *params, int n_params, const char *fn, int mode, const double *a,
+            const double *b, double ag, double ag_v, double *o1, double *o2, int *n2, int *ival, char *msg,
+            char *names, int names_len);
 """
 
 PREAMBLE = r"""
 #include "rk_py_api.h"
+
+#include <stdio.h>
+#include <string.h>
 
 /* the extension's table, set once at import (rk_py_bind; the same table every time) */
 static const rk_py_api *API = NULL;
@@ -106,6 +112,100 @@ static int c_full_state(rk_engine *e, double *q, double *v) { return API->full_s
 static const rk_model_ops *const *c_model_kinds(void) { return API->model_kinds(); }
 static rk_status c_model_add(const rk_model_ops *ops, rk_error *err) { return API->model_add(ops, err); }
 static void c_kind_names(char *buf, size_t n) { API->kind_names(buf, n); }
+
+/* one function of a model's generated kernel on an instance built from params (rocking_model.models.base's
+ * analysis methods): the values in o1 (and o2, *n2 of them), an integer result in *ival; returns the count in
+ * o1, -2 for "none" (no stiff part, no impact rule of the model's own), -1 with msg on an error. */
+static int c_model(const char *kind, const double *params, int n_params, const char *fn, int mode, const double *a,
+                   const double *b, double ag, double ag_v, double *o1, double *o2, int *n2, int *ival, char *msg,
+                   char *names, int names_len)
+{
+    rk_model m;
+    rk_error err;
+    const rk_model_ops *ops = API->model_find(kind);
+    int n, nc, k = 0, idx[RK_MAX_DOF], i;
+    *n2 = 0;
+    *ival = 0;
+    memset(&err, 0, sizeof err);
+    if (ops == NULL) {
+        char kinds[256];
+        API->kind_names(kinds, sizeof kinds);
+        snprintf(msg, 512, "model kind '%s' is unknown; allowed values %s", kind, kinds);
+        return -1;
+    }
+    if (API->model_init(&m, ops, params, n_params, &err) != RK_OK) {
+        snprintf(msg, 512, "%s", err.message);
+        return -1;
+    }
+    n = ops->n_dof;
+    nc = ops->n_contacts;
+    if (mode < 0 || mode >= ops->n_modes) {
+        snprintf(msg, 512, "mode = %d is out of range; allowed range [0, %d]", mode, ops->n_modes - 1);
+        return -1;
+    }
+    if (!strcmp(fn, "info")) {
+        size_t pos = 0;
+        o1[0] = m.length_scale; o1[1] = m.time_scale; o1[2] = m.force_scale; o1[3] = m.step_limit;
+        for (i = 0; i < n; i++)
+            o1[4 + i] = m.dof_scales[i];
+        names[0] = '\0';
+        for (i = 0; i < ops->n_named; i++) {
+            int j = ops->named_index[i];
+            o2[i] = j >= 0 ? m.d[j] : m.p[-1 - j];
+            pos += (size_t)snprintf(names + pos, pos < (size_t)names_len ? (size_t)names_len - pos : 0, "%s%s",
+                                    i ? "\n" : "", ops->named[i]);
+        }
+        *n2 = ops->n_named;
+        return 4 + n;
+    }
+    if (!strcmp(fn, "mass_matrix")) { ops->mass_matrix(&m, a, o1); return n * n; }
+    if (!strcmp(fn, "inverse_mass_matrix")) { API->model_inverse_mass(&m, a, o1); return n * n; }
+    if (!strcmp(fn, "forces")) { ops->forces(&m, a, b, ag, ag_v, o1); return n; }
+    if (!strcmp(fn, "stiff_jacobians")) {
+        if (ops->stiff_jacobians == NULL || !ops->stiff_jacobians(&m, a, b, o1, o2))
+            return -2;
+        *n2 = n * n;
+        return n * n;
+    }
+    if (!strcmp(fn, "gaps")) { ops->gaps(&m, a, o1); return nc; }
+    if (!strcmp(fn, "contact_abscissae")) { ops->contact_abscissae(&m, a, o1); return nc; }
+    if (!strcmp(fn, "contact_jacobians")) { ops->contact_jacobians(&m, a, o1, o2); *n2 = n * nc; return n * nc; }
+    if (!strcmp(fn, "contact_drift")) { ops->contact_drift(&m, a, b, o1, o2); *n2 = nc; return nc; }
+    if (!strcmp(fn, "rest_position")) { ops->rest_position(&m, o1); return n; }
+    if (!strcmp(fn, "energy")) { o1[0] = ops->energy(&m, a, b); return 1; }
+    if (!strcmp(fn, "outputs")) { ops->outputs(&m, a, b, o1); return ops->n_outputs; }
+    if (!strcmp(fn, "slip")) { o1[0] = API->model_slip(&m, a); return 1; }
+    if (!strcmp(fn, "initial_state")) {
+        if (ops->initial_state(&m, a, ival, o1, o2, &err) != RK_OK) {
+            snprintf(msg, 512, "%s", err.message);
+            return -1;
+        }
+        *n2 = n;
+        return n;
+    }
+    /* the functions of a sticking mode */
+    if (rk_stick_of(&m, mode, NULL) != mode) {
+        snprintf(msg, 512, "model(..., %s): mode %d is not a sticking mode", fn, mode);
+        return -1;
+    }
+    k = ops->mode_dofs(&m, mode, idx);
+    if (!strcmp(fn, "mode_dofs")) {
+        for (i = 0; i < k; i++)
+            o1[i] = idx[i];
+        return k;
+    }
+    if (!strcmp(fn, "embed")) { ops->embed(&m, mode, a, b, o1, o2); *n2 = n; return n; }
+    if (!strcmp(fn, "mode_jacobian")) { ops->mode_jacobian(&m, mode, a, b, o1, o2); *n2 = n; return n * k; }
+    if (!strcmp(fn, "mode_rhs")) { ops->mode_rhs(&m, mode, a, ag, ag_v, o1); return 2 * k; }
+    if (!strcmp(fn, "mode_outputs")) { ops->mode_outputs(&m, mode, a, o1); return ops->n_outputs; }
+    if (!strcmp(fn, "contact_forces")) { ops->contact_forces(&m, mode, a, b, ag, ag_v, o1); return nc; }
+    if (!strcmp(fn, "classical_impact_velocity")) {
+        int rule = ops->classical_impact_velocity == NULL ? 0 : ops->classical_impact_velocity(&m, a, b, mode, o1);
+        return rule == 0 ? -2 : n;
+    }
+    snprintf(msg, 512, "model(): unknown function '%s'", fn);
+    return -1;
+}
 """
 
 

@@ -31,6 +31,10 @@ typedef struct rk_py_api {
     const rk_model_ops *const *(*model_kinds)(void);
     rk_status (*model_add)(const rk_model_ops *ops, rk_error *err);
     void (*kind_names)(char *buf, size_t n);
+    const rk_model_ops *(*model_find)(const char *kind);
+    rk_status (*model_init)(rk_model *m, const rk_model_ops *ops, const double *params, int n_params, rk_error *err);
+    void (*model_inverse_mass)(const rk_model *m, const double *q, double *Minv);
+    double (*model_slip)(const rk_model *m, const double *q);
 } rk_py_api;
 
 #endif /* RK_PY_API_H */
