@@ -53,18 +53,6 @@ typedef enum rk_report_kind { RK_REPORT_INEXACT_CONTACT = 0, RK_REPORT_FAILED_ST
 typedef struct rk_report { rk_report_kind kind; double t; char message[512]; } rk_report;
 typedef struct rk_reports { int count; rk_report items[16]; } rk_reports;
 
-typedef struct rk_param_decl {
-    const char *name; const char *unit; double default_value; double lo, hi; int lo_open, hi_open; int inf_ok;
-    int integer; int n_items; ...;
-} rk_param_decl;
-typedef struct rk_model_ops {
-    const char *kind; const char *class_name; int n_dof, n_contacts, n_modes, phi_index, slide_index, lift_index;
-    int n_params; const rk_param_decl *param_decls; int n_initial; const rk_param_decl *initial_decls;
-    int n_outputs; const rk_param_decl *output_decls; int n_shifted; const int *shifted; ...;
-} rk_model_ops;
-const rk_model_ops *const *rk_model_kinds(void);
-rk_status rk_model_add(const rk_model_ops *ops, rk_error *err);
-void rk_model_kind_names(char *buf, size_t n);
 
 typedef enum rk_motion_kind { RK_MOTION_CALLBACK = 4, RK_MOTION_SCALED = 5, ... } rk_motion_kind;
 typedef struct rk_motion {
@@ -92,8 +80,6 @@ extern "Python" double rk_py_breakpoint(void *ctx, double t, int *failed, char *
 extern "Python" int rk_py_continuous(void *ctx, double tb);
 
 typedef struct rk_engine rk_engine;
-const char *rk_engine_version(void);
-int rk_engine_api_version(void);
 rk_engine *rk_engine_create(const char *kind, const double *params, int n_params, const double *initial,
                             int n_initial, const rk_options *options, rk_error *err);
 rk_engine *rk_engine_create_state(const char *kind, const double *params, int n_params, int mode,
@@ -126,8 +112,6 @@ int rk_engine_overturned(const rk_engine *e);
 long long rk_engine_n_steps(const rk_engine *e);
 double rk_engine_friction_demand(const rk_engine *e);
 long long rk_engine_painleve(const rk_engine *e);
-int rk_engine_contacts(const rk_engine *e, int *states);
-int rk_engine_full_state(rk_engine *e, double *q, double *v);
 const char *rk_engine_model_class(const rk_engine *e);
 int rk_engine_n_dof(const rk_engine *e);
 int rk_engine_n_contacts(const rk_engine *e);
@@ -135,21 +119,10 @@ int rk_engine_n_modes(const rk_engine *e);
 rk_scheme rk_engine_scheme(const rk_engine *e);
 const rk_reports *rk_engine_reports(const rk_engine *e);
 
-typedef struct rk_plain_state {
-    double t; int mode; int n_y; double y[16]; double q[8], v[8]; rk_set closed; long long impacts;
-    int overturned; long long n_steps; double h; double shift; double friction_demand; long long painleve;
-} rk_plain_state;
-void rk_engine_get_state(const rk_engine *e, rk_plain_state *s);
 long long rk_engine_impact_times(const rk_engine *e, double *buf, long long cap);
-long long rk_engine_impact_log(const rk_engine *e, double *buf, long long cap_rows);
-rk_status rk_engine_set_state(rk_engine *e, const rk_plain_state *s, const double *impact_times,
-                              long long n_times, const double *impact_log, long long n_log_rows);
 void rk_engine_checkpoint(rk_engine *e);
 rk_status rk_engine_rollback(rk_engine *e);
 void rk_engine_commit(rk_engine *e);
-size_t rk_engine_snapshot_size(const rk_engine *e);
-rk_status rk_engine_snapshot(const rk_engine *e, void *buf, size_t size);
-rk_status rk_engine_restore(rk_engine *e, const void *buf, size_t size);
 
 int rk_py_row(rk_engine *e, double *out);
 rk_status rk_py_motion(rk_motion *m, int kind, double a, double b, double c, rk_error *err);

@@ -1,6 +1,8 @@
-"""The compiled engine's low-level API (`Engine` and the module functions of rocking_model._engine, same arguments,
-results and exceptions) as a thin layer over the cffi binding `benchmarks.ffi_binding`: the B side of the binding
-A/B (`compiled_bench.binding_ab`), written for speed (no per-call dict, one C call per creation and per sample).
+"""The hot calls of the compiled engine's `Engine` (creation, advance, sample, outputs, checkpoint, attributes: same
+arguments, results and exceptions as rocking_model._engine's) as a thin layer over the cffi binding
+`benchmarks.ffi_binding`: the B side of the binding A/B (`compiled_bench.binding_ab`), written for speed (no
+per-call dict, one C call per creation and per sample). The cold calls are the package's own cffi binding
+(rocking_model._engine_cold) and are not measured.
 
 cffi releases the GIL around every C call (Dask workers run engines in threads); a ground motion written in
 Python is called back through ``extern "Python"`` functions, which take the GIL again."""
@@ -8,8 +10,7 @@ from benchmarks.ffi_binding import load
 
 ffi, lib = load()
 
-__all__ = ["Engine", "NonFiniteError", "add_model", "api_version", "create_and_free", "kinds", "model_kinds",
-           "motion_eval", "version"]
+__all__ = ["Engine", "NonFiniteError"]
 
 
 class NonFiniteError(ValueError):
@@ -477,17 +478,6 @@ class Engine:
     def n_outputs(self) -> int:
         return self._n
 
-    def contacts(self) -> tuple:
-        """contacts() -> tuple of ContactState codes."""
-        states = ffi.new("int[]", lib.RK_MAX_CONTACTS)
-        return tuple(ffi.unpack(states, lib.rk_engine_contacts(self._e, states)))
-
-    def full_state(self):
-        """full_state() -> (q, v) lists."""
-        q, v = ffi.new("double[]", lib.RK_MAX_DOF), ffi.new("double[]", lib.RK_MAX_DOF)
-        n = lib.rk_engine_full_state(self._e, q, v)
-        return ffi.unpack(q, n), ffi.unpack(v, n)
-
     def reports(self) -> list:
         """reports() -> [(kind, t, message)] of the last call."""
         r = lib.rk_engine_reports(self._e)
@@ -527,85 +517,6 @@ class Engine:
         return ffi.unpack(buf, n)
 
     # ------------------------------------------------------------------ state
-    def get_state(self) -> dict:
-        """get_state() -> dict of the scheme's STATE_KEYS."""
-        e = self._e
-        s = ffi.new("rk_plain_state *")
-        lib.rk_engine_get_state(e, s)
-        n_dof = lib.rk_engine_n_dof(e)
-        if lib.rk_engine_scheme(e) == lib.RK_SCHEME_MOREAU_JEAN:
-            closed = [i for i in range(lib.rk_engine_n_contacts(e)) if (s.closed >> i) & 1]
-            return {"t": s.t, "q": ffi.unpack(s.q, n_dof), "v": ffi.unpack(s.v, n_dof), "mode": s.mode,
-                    "closed": closed, "impacts": s.impacts, "overturned": bool(s.overturned), "n_steps": s.n_steps,
-                    "impact_times": self.impact_times, "friction_demand": s.friction_demand,
-                    "painleve": s.painleve}
-        rows = lib.rk_engine_impact_log(e, ffi.NULL, 0)
-        width = 1 + 2 * n_dof
-        if rows:
-            buf = ffi.new("double[]", rows * width)
-            lib.rk_engine_impact_log(e, buf, rows)
-            log = ffi.unpack(buf, rows * width)
-        else:
-            log = []
-        return {"t": s.t, "mode": s.mode, "y": ffi.unpack(s.y, s.n_y), "impacts": s.impacts,
-                "overturned": bool(s.overturned), "n_steps": s.n_steps, "h": s.h, "impact_times": self.impact_times,
-                "impact_log": log, "shift": s.shift, "friction_demand": s.friction_demand, "painleve": s.painleve}
-
-    def set_state(self, d) -> None:
-        """set_state(dict): load get_state's fields (the checks in C, with the Python's messages); nothing
-        changes on error."""
-        from collections.abc import Mapping
-
-        if not isinstance(d, Mapping):
-            raise ValueError("state must be a mapping (dict) of plain values")
-        e = self._e
-        n_dof = lib.rk_engine_n_dof(e)
-        s = ffi.new("rk_plain_state *")
-        s.h = float("nan")
-        s.t = _field_float(d, "t")
-        mode = _field_int(d, "mode")
-        if mode < -1 or mode > 1000:
-            raise ValueError(f"state field 'mode' = {mode} is out of range; allowed range "
-                             f"[0, {lib.rk_engine_n_modes(e) - 1}]")
-        s.mode = mode
-        s.impacts = _field_int(d, "impacts")
-        s.n_steps = _field_int(d, "n_steps")
-        s.friction_demand = _field_float(d, "friction_demand")
-        s.painleve = _field_int(d, "painleve")
-        s.overturned = bool(_field(d, "overturned"))
-        log, n_log = ffi.NULL, 0
-        if lib.rk_engine_scheme(e) == lib.RK_SCHEME_MOREAU_JEAN:
-            s.q = _field_fixed(d, "q", n_dof)
-            s.v = _field_fixed(d, "v", n_dof)
-            nc = lib.rk_engine_n_contacts(e)
-            try:
-                closed = list(_field(d, "closed"))
-            except TypeError:
-                raise ValueError("state field 'closed' must be a list of ints") from None
-            mask = 0
-            for i, c in enumerate(closed):
-                if type(c) is not int and not hasattr(c, "__index__") or not 0 <= c < nc:
-                    raise ValueError(f"state field 'closed'[{i}] must be an int in [0, {nc - 1}]")
-                mask |= 1 << int(c)
-            s.closed = mask
-        else:
-            y = _field_floats(d, "y")
-            if len(y) > lib.RK_MAX_Y:
-                raise ValueError(f"state field 'y' has {len(y)} values; allowed at most {lib.RK_MAX_Y}")
-            s.y[0:len(y)] = y
-            s.n_y = len(y)
-            s.h = _field_float(d, "h")
-            s.shift = _field_float(d, "shift")
-            flat = _field_floats(d, "impact_log")
-            width = 1 + 2 * n_dof
-            if len(flat) % width:
-                raise ValueError(f"state field 'impact_log' has {len(flat)} values; expected a multiple of {width}")
-            log, n_log = (ffi.new("double[]", flat) if flat else ffi.NULL), len(flat) // width
-        times = _field_floats(d, "impact_times")
-        if lib.rk_engine_set_state(e, s, ffi.new("double[]", times) if times else ffi.NULL, len(times), log,
-                                   n_log) != lib.RK_OK:
-            self._raise()
-
     # ------------------------------------------------------------------ checkpoint, snapshots
     def checkpoint(self) -> None:
         """checkpoint(): save the state in the slot."""
@@ -619,22 +530,6 @@ class Engine:
     def commit(self) -> None:
         """commit(): drop the slot."""
         lib.rk_engine_commit(self._e)
-
-    def snapshot(self) -> bytes:
-        """snapshot() -> bytes of the whole state."""
-        e = self._e
-        n = lib.rk_engine_snapshot_size(e)
-        buf = ffi.new("char[]", n)
-        if lib.rk_engine_snapshot(e, buf, n) != lib.RK_OK:
-            raise RuntimeError("snapshot failed")
-        return ffi.buffer(buf, n)[:]
-
-    def restore(self, data) -> None:
-        """restore(bytes): load a snapshot of an engine built alike."""
-        buf = ffi.from_buffer(data)
-        if lib.rk_engine_restore(self._e, buf, len(buf)) != lib.RK_OK:
-            self._raise()
-
 
 def _times(obj):
     """A 1-D C-contiguous float64 buffer as (double[], n), a numpy array's checked by its attributes (a memoryview
@@ -699,144 +594,4 @@ def _array(obj, name, n, size, alt):
     return c, 1 if itemsize != size else 0
 
 
-def _field(d, key):
-    try:
-        return d[key]
-    except KeyError:
-        raise ValueError(f"state field '{key}' is missing") from None
-
-
-def _field_float(d, key) -> float:
-    x = _field(d, key)
-    try:
-        return ffi.new("double *", x)[0]
-    except TypeError:
-        raise ValueError(f"state field '{key}' must be a float") from None
-
-
-def _field_int(d, key) -> int:
-    x = _field(d, key)
-    try:
-        return ffi.new("long long *", x)[0]
-    except (TypeError, OverflowError):
-        raise ValueError(f"state field '{key}' must be an int") from None
-
-
-def _field_floats(d, key) -> list:
-    x = _field(d, key)
-    try:
-        items = list(x)
-    except TypeError:
-        raise ValueError(f"state field '{key}' must be a list of floats") from None
-    out = ffi.new("double[]", len(items))
-    for i, v in enumerate(items):
-        try:
-            out[i] = v
-        except TypeError:
-            raise ValueError(f"state field '{key}'[{i}] must be a float") from None
-    return ffi.unpack(out, len(items))
-
-
-def _field_fixed(d, key, want) -> list:
-    x = _field_floats(d, key)
-    if len(x) != want:
-        raise ValueError(f"state field '{key}' has {len(x)} values; expected {want}")
-    return x
-
-
 # ---------------------------------------------------------------------------------------------- module functions
-def version() -> str:
-    """version() -> str: the version the C engine was built with."""
-    return _text(lib.rk_engine_version())
-
-
-def api_version() -> int:
-    """api_version() -> int: RK_ENGINE_API_VERSION of rk_engine.h."""
-    return lib.rk_engine_api_version()
-
-
-def create_and_free(kind, params, initial=None) -> None:
-    """create_and_free(kind, params, initial=None): create a C engine for model kind ('rigid', 'flexible') with
-    the declared parameters in order and free it; raises ValueError on bad input."""
-    p, n_params = _doubles(params, "params", lib.RK_MAX_PARAMS)
-    init, n_initial = _doubles(initial, "initial", lib.RK_MAX_INITIAL)
-    err = ffi.new("rk_error *")
-    e = lib.rk_engine_create(kind.encode(), p, n_params, init, n_initial, ffi.NULL, err)
-    if e == ffi.NULL:
-        _fail(err.status, err.message)
-    lib.rk_engine_free(e)
-
-
-def _decls(d, n) -> list:
-    return [(_text(x.name), _text(x.unit), x.default_value, x.lo, x.hi, x.lo_open, x.hi_open, x.inf_ok, x.integer,
-             x.n_items) for x in d[0:n]]
-
-
-def model_kinds() -> list:
-    """model_kinds() -> the registered model kernels and their declarations (parameters, initial values,
-    outputs), so that a caller of the low-level Engine can build its parameter list without the package."""
-    out = []
-    k = lib.rk_model_kinds()
-    i = 0
-    while k[i] != ffi.NULL:
-        o = k[i]
-        out.append({"kind": _text(o.kind), "class_name": _text(o.class_name), "n_dof": o.n_dof,
-                    "n_contacts": o.n_contacts, "n_modes": o.n_modes, "phi_index": o.phi_index,
-                    "slide_index": o.slide_index, "lift_index": o.lift_index,
-                    "params": _decls(o.param_decls, o.n_params), "initial": _decls(o.initial_decls, o.n_initial),
-                    "outputs": _decls(o.output_decls, o.n_outputs), "shifted": ffi.unpack(o.shifted, o.n_shifted)})
-        i += 1
-    return out
-
-
-def kinds() -> str:
-    """kinds() -> str: the known model kinds, quoted and comma-separated."""
-    buf = ffi.new("char[]", 4096)
-    lib.rk_model_kind_names(buf, 4096)
-    return _text(buf)
-
-
-def add_model(address: int) -> None:
-    """add_model(address): add the kernel (rk_model_ops *) of a model declared after the build (its address in a
-    library rocking_model.engine.plugin compiled)."""
-    if not address:
-        raise ValueError("add_model: the kernel's address is NULL")
-    err = ffi.new("rk_error *")
-    if lib.rk_model_add(ffi.cast("const rk_model_ops *", address), err) != lib.RK_OK:
-        raise ValueError(_text(err.message))
-
-
-def motion_eval(spec, times, vspec=None) -> tuple:
-    """motion_eval(spec, times, vspec=None) -> (ag, next_breakpoint, continuous_at) lists: rk_motion_eval,
-    next_breakpoint and continuous_at at each time, in order on one motion (its interval cache carried from one
-    time to the next); with vspec the pair's breakpoints and continuity and a fourth list, ag_v. The pinning
-    entry point of the tests."""
-    mo = _Motions()
-    m = mo.parse(spec)
-    mv = None if vspec is None else mo.parse(vspec)
-    failed = ffi.new("int *")
-    msg = ffi.new("char[]", lib.RK_MSG_LEN)
-    values, bps, cont, vvals = [], [], [], []
-
-    def check():
-        exc = mo.raised()
-        if exc is not None:
-            raise exc
-
-    for t in times:
-        x = lib.rk_motion_eval(m, t, failed, msg)
-        if failed[0]:
-            check()
-        values.append(x)
-        if mv is not None:
-            xv = lib.rk_motion_eval(mv, t, failed, msg)
-            if failed[0]:
-                check()
-            vvals.append(xv)
-            bps.append(lib.rk_motion_pair_next_breakpoint(m, mv, t))
-            cont.append(bool(lib.rk_motion_pair_continuous_at(m, mv, t)))
-        else:
-            bps.append(lib.rk_motion_next_breakpoint(m, t))
-            cont.append(bool(lib.rk_motion_continuous_at(m, t)))
-        check()
-    return (values, bps, cont, vvals) if mv is not None else (values, bps, cont)
