@@ -204,41 +204,49 @@ rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, r
     return rk_solve_with_friction(m, &p, &args, out, err);
 }
 
+void rk_uplift_data_of(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set moving,
+                       double slip_tol, rk_uplift_data *d, rk_lcp_problem *p)
+{
+    int n = m->ops->n_contacts, nd = m->ops->n_dof, i;
+    double f[RK_MAX_DOF];
+    m->ops->contact_jacobians(m, q, d->W_N, d->W_T);
+    m->ops->contact_drift(m, q, v, d->b_N, d->b_T);
+    inverse_mass(m, q, d->Minv);
+    m->ops->forces(m, q, v, ag, ag_v, f);
+    mat_vec(nd, d->Minv, f, d->acc_free);
+    for (i = 0; i < n; i++)
+        d->sliding[i] = 0;
+    if (slip_tol >= 0.0) {
+        double U_T[RK_MAX_CONTACTS];
+        columns_dot(nd, n, d->W_T, v, U_T);
+        for (i = 0; i < n; i++)
+            d->sliding[i] = (RK_IN(moving, i) && fabs(U_T[i]) > slip_tol) ? (U_T[i] > 0.0 ? 1 : -1) : 0;
+    }
+    memset(p, 0, sizeof *p);
+    p->n_dof = nd;
+    p->n_contacts = n;
+    p->Minv = d->Minv;
+    p->W_N = d->W_N;
+    p->W_T = d->W_T;
+    p->v_free = d->acc_free;
+    p->b_N = d->b_N;
+    p->b_T = d->b_T;
+}
+
 rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set candidates,
                     const rk_contact_args *a, rk_lcp_solution *out, rk_error *err)
 {
-    int n = m->ops->n_contacts, nd = m->ops->n_dof, i, sliding[RK_MAX_CONTACTS];
-    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
-    double a_N[RK_MAX_CONTACTS], a_T[RK_MAX_CONTACTS], f[RK_MAX_DOF], acc_free[RK_MAX_DOF];
+    rk_uplift_data d;
     rk_contact_args defaults, args;
     rk_lcp_problem p;
     if (a == NULL) {
         rk_contact_args_default(&defaults);
         a = &defaults;
     }
-    m->ops->contact_jacobians(m, q, W_N, W_T);
-    m->ops->contact_drift(m, q, v, a_N, a_T);
-    inverse_mass(m, q, Minv);
-    m->ops->forces(m, q, v, ag, ag_v, f);
-    mat_vec(nd, Minv, f, acc_free);
+    rk_uplift_data_of(m, q, v, ag, ag_v, candidates | a->forced, a->has_slip_tol ? a->slip_tol : -1.0, &d, &p);
     rk_contact_args_default(&args);
-    if (a->has_slip_tol) {
-        double U_T[RK_MAX_CONTACTS];
-        columns_dot(nd, n, W_T, v, U_T);
-        for (i = 0; i < n; i++)
-            sliding[i] = (RK_IN(candidates | a->forced, i) && fabs(U_T[i]) > a->slip_tol)
-                         ? (U_T[i] > 0.0 ? 1 : -1) : 0;
-        args.sliding = sliding;
-    }
-    memset(&p, 0, sizeof p);
-    p.n_dof = nd;
-    p.n_contacts = n;
-    p.Minv = Minv;
-    p.W_N = W_N;
-    p.W_T = W_T;
-    p.v_free = acc_free;
-    p.b_N = a_N;
-    p.b_T = a_T;
+    if (a->has_slip_tol)
+        args.sliding = d.sliding;
     p.candidates = candidates;
     p.forced = a->forced;
     args.count = a->count;

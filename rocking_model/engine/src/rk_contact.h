@@ -127,6 +127,18 @@ rk_status rk_impact(const rk_model *m, const double *q, const double *v_minus, r
 /** contact.uplift: the acceleration-level LCP at (q, v, ag). */
 rk_status rk_uplift(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set candidates,
                     const rk_contact_args *a, rk_lcp_solution *out, rk_error *err);
+/** The data of rk_uplift's acceleration-level problem at (q, v) under (ag, ag_v). */
+typedef struct rk_uplift_data {
+    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS];
+    double Minv[RK_MAX_DOF * RK_MAX_DOF];
+    double b_N[RK_MAX_CONTACTS], b_T[RK_MAX_CONTACTS];     /**< the drifts (d/dt W)^T v */
+    double acc_free[RK_MAX_DOF];                             /**< M^-1 f */
+    int sliding[RK_MAX_CONTACTS];   /**< +-1 where a contact of ``moving`` slides faster than slip_tol, else 0 */
+} rk_uplift_data;
+/** Fill d and point p at it (p's other fields zero: the caller sets candidates, forced, the solver's options);
+ *  slip_tol < 0: no sliding computed (all 0). */
+void rk_uplift_data_of(const rk_model *m, const double *q, const double *v, double ag, double ag_v, rk_set moving,
+                       double slip_tol, rk_uplift_data *d, rk_lcp_problem *p);
 /** contact.solve_with_friction: the friction law picks the problem (p's Minv..b_T, candidates, forced are
  *  used; its rtol / hint / mu / sliding / count / hint_states fields are set from m and a). */
 rk_status rk_solve_with_friction(const rk_model *m, const rk_lcp_problem *p, const rk_contact_args *a,

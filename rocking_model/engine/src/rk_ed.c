@@ -769,38 +769,17 @@ static rk_status ed_released_mode(rk_engine *e, const double *q, const double *v
 {
     const rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
-    int n = m->ops->n_contacts, nd = m->ops->n_dof, i, j, k, trial, n_trials;
-    int sliding[RK_MAX_CONTACTS], hint[RK_MAX_CONTACTS];
-    double W_N[RK_MAX_DOF * RK_MAX_CONTACTS], W_T[RK_MAX_DOF * RK_MAX_CONTACTS], Minv[RK_MAX_DOF * RK_MAX_DOF];
-    double b_N[RK_MAX_CONTACTS], b_T[RK_MAX_CONTACTS], U_T[RK_MAX_CONTACTS], f[RK_MAX_DOF], acc[RK_MAX_DOF];
+    int n = m->ops->n_contacts, i, k, trial, n_trials, hint[RK_MAX_CONTACTS];
     rk_set cand = rk_closed_candidates(m, q, v, s->gap_tol, s->v_tol), closed = rk_closed_of(m, s->mode);
+    const int *sliding;
+    rk_uplift_data d;
     rk_lcp_problem p;
     rk_lcp_solution sol;
     *mode = -1;
     if (!RK_IN(cand, c))
         return RK_OK;
-    m->ops->contact_jacobians(m, q, W_N, W_T);
-    m->ops->contact_drift(m, q, v, b_N, b_T);
-    rk_model_inverse_mass(m, q, Minv);
-    m->ops->forces(m, q, v, ag_t, av_t, f);
-    for (i = 0; i < nd; i++) {
-        double a = 0.0;
-        for (j = 0; j < nd; j++)
-            a += Minv[i * nd + j] * f[j];
-        acc[i] = a;
-    }
-    ed_wtx(m, W_T, v, U_T);
-    for (i = 0; i < n; i++)
-        sliding[i] = RK_IN(cand, i) && fabs(U_T[i]) > s->v_tol ? (U_T[i] > 0.0 ? 1 : -1) : 0;
-    memset(&p, 0, sizeof p);
-    p.n_dof = nd;
-    p.n_contacts = n;
-    p.Minv = Minv;
-    p.W_N = W_N;
-    p.W_T = W_T;
-    p.v_free = acc;
-    p.b_N = b_N;
-    p.b_T = b_T;
+    rk_uplift_data_of(m, q, v, ag_t, av_t, cand, s->v_tol, &d, &p);
+    sliding = d.sliding;
     p.candidates = cand;
     p.rtol = e->options.tolerances.lcp_exact;
     p.mu = m->mu;
