@@ -368,6 +368,13 @@ class ModelCode:
             names[md["rdd"][j]] = f"rdd[{j}]"
         return names
 
+    @staticmethod
+    def _r_names(md) -> dict:
+        """Symbols of a mode's reduced coordinates read from the arguments r, r_dot."""
+        names = {md["r"][j]: f"r[{j}]" for j in range(md["k"])}
+        names.update({md["rd"][j]: f"r_dot[{j}]" for j in range(md["k"])})
+        return names
+
     def _with_names(self, extra: dict, fn):
         saved = self.names
         self.names = dict(saved)
@@ -518,8 +525,7 @@ class ModelCode:
         # embed
         cases = {}
         for mode, md in self.modes.items():
-            names = {md["r"][j]: f"r[{j}]" for j in range(md["k"])}
-            names.update({md["rd"][j]: f"r_dot[{j}]" for j in range(md["k"])})
+            names = self._r_names(md)
             cases[mode] = self._with_names(names, lambda md=md: self._block(
                 [(f"q[{i}]", md["q_r"][i]) for i in range(n)] + [(f"v[{i}]", md["v_r"][i]) for i in range(n)]))
         s.append(f"static void {P}_embed(const rk_model *m, int mode, const double *r, const double *r_dot, double *q, "
@@ -527,8 +533,7 @@ class ModelCode:
         # mode_jacobian
         cases = {}
         for mode, md in self.modes.items():
-            names = {md["r"][j]: f"r[{j}]" for j in range(md["k"])}
-            names.update({md["rd"][j]: f"r_dot[{j}]" for j in range(md["k"])})
+            names = self._r_names(md)
             k = md["k"]
             cases[mode] = self._with_names(names, lambda md=md, k=k: self._block(
                 [(f"J[{i * k + j}]", md["J"][i, j]) for i in range(n) for j in range(k)]
