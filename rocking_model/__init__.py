@@ -11,7 +11,7 @@ what `simulate` needs."""
 GROUND_MOTIONS = ["GroundMotion", "ConstantMotion", "LinearMotion", "FunctionMotion", "CheckedMotion", "SampledMotion",
                   "ScaledMotion", "SinePulse", "CosinePulse", "RickerPulse", "RectangularPulse", "TwoComponentMotion",
                   "Record"]
-__all__ = ["RigidBlock", "FlexibleOscillator", "Mode", "Simulator", "simulate", "Result", *GROUND_MOTIONS,
+__all__ = ["RigidBlock", "FlexibleOscillator", "PostTensionedBlock", "Mode", "Simulator", "simulate", "Result", *GROUND_MOTIONS,
            "AG_MAX", "WorkLimitError", "SolverWarning", "SolverFailure", "ContactTolerances"]
 __version__ = "0.1.0"
 
@@ -20,6 +20,7 @@ _LAZY = {
     **{name: "ground_motion" for name in GROUND_MOTIONS if name != "Record"},
     "Record": "records",
     "FlexibleOscillator": "models.flexible_oscillator",
+    "PostTensionedBlock": "models.post_tensioned",
     "RigidBlock": "models.rigid_block",
     "Mode": "modes",
     "Result": "simulation", "Simulator": "simulation", "SolverFailure": "simulation", "SolverWarning": "simulation",

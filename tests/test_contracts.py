@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rocking_model import ContactTolerances, FlexibleOscillator, RigidBlock, Simulator, SinePulse
+from rocking_model import ContactTolerances, FlexibleOscillator, PostTensionedBlock, RigidBlock, Simulator, SinePulse
 from rocking_model.integrators import SCHEMES, Integrator, scheme_class
 from rocking_model.models import MODELS, RockingModel, make_model, model_class
 from rocking_model.modes import ContactState, Mode, slide_sign
@@ -51,10 +51,10 @@ def test_integrator_contract(name):
 
 
 def test_model_registry():
-    assert MODELS == {"rigid": RigidBlock, "flexible": FlexibleOscillator}
+    assert MODELS == {"rigid": RigidBlock, "flexible": FlexibleOscillator, "post_tensioned": PostTensionedBlock}
     assert model_class("flexible") is FlexibleOscillator
     assert make_model("rigid", b=0.3).b == 0.3
-    with pytest.raises(ValueError, match=r"model = 'frame' is not supported; allowed values: rigid, flexible"):
+    with pytest.raises(ValueError, match=r"model = 'frame' is not supported; allowed values: rigid, flexible, post_tensioned"):
         model_class("frame")
 
 

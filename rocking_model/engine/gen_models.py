@@ -118,6 +118,9 @@ class _Derived:
             return e
         if fs <= self.params:
             return self.symbol(e)
+        if isinstance(e, sp.Piecewise):
+            # a force law with branches (a slack tendon): each branch and each condition's sides hoisted
+            return sp.Piecewise(*[(self.hoist(x), self._hoist_condition(c)) for x, c in e.args])
         if isinstance(e, (sp.Add, sp.Mul)):
             const = [a for a in e.args if a.free_symbols <= self.params]
             rest = [self.hoist(a) for a in e.args if not (a.free_symbols <= self.params)]
@@ -127,6 +130,14 @@ class _Derived:
                 return e.func(c, *rest)
             return e.func(*rest)
         return e.func(*[self.hoist(a) for a in e.args])
+
+
+    def _hoist_condition(self, c):
+        if isinstance(c, sp.core.relational.Relational):
+            return c.func(self.hoist(c.lhs), self.hoist(c.rhs))
+        if isinstance(c, (sp.And, sp.Or, sp.Not)):
+            return c.func(*[self._hoist_condition(a) for a in c.args])
+        return c
 
 
 def _c_double(x: float) -> str:
@@ -201,9 +212,14 @@ class ModelCode:
         self.K = sp.Matrix(self.n, self.n, lambda i, j: sp.diff(V, q[i], q[j]))
         self.C = sp.Matrix(self.n, self.n, lambda i, j: sp.diff(Dis, v[i], v[j]))
         self.stiff = any(e != 0 for e in self.K) or any(e != 0 for e in self.C)
-        if self.stiff and any(e.free_symbols & set(q + v) for e in list(self.K) + list(self.C)):
-            raise ValueError(f"{self.cls.__name__}: the elastic energy and the dissipation must be quadratic "
-                             "(their Hessians, the stiff part, constant)")
+        # a model whose forces depend on where the base stands (a tendon anchored in the ground): the sticking
+        # modes' kernels read the base's horizontal offset from its rest position, m->offset (0 for the others:
+        # their modes leave it to the driver, which adds it to the SHIFTED_OUTPUTS)
+        slide = q[self.slide_i]
+        self.offset = None
+        if any(slide in e.free_symbols for e in list(self.f) + list(self.M)):
+            self.offset = sp.Symbol("base_offset", real=True)
+            self.names[self.offset] = "m->offset"
         self.X = [sp.sympify(c[0]) for c in mech.contacts]
         self.Y = [sp.sympify(c[1]) for c in mech.contacts]
         self.rest = [sp.sympify(r) for r in mech.rest]
@@ -223,13 +239,15 @@ class ModelCode:
         """Reduced coordinates, embedding, reduced dynamics and contact forces of a sticking mode."""
         q, v, n = self.q, self.v, self.n
         sub = {}
+        off = 0 if self.offset is None else self.offset
         if mode == FULL:
             for i in (self.slide_i, self.lift_i, self.phi_i):
                 sub[q[i]] = self.rest[i]
+            sub[q[self.slide_i]] = self.rest[self.slide_i] + off
         elif mode in (LEFT, RIGHT):
             c = CLOSED[mode][0]
             unknown = [q[self.slide_i], q[self.lift_i]]
-            eqs = [self.X[c] - self.X_rest[c], self.Y[c]]
+            eqs = [self.X[c] - self.X_rest[c] - off, self.Y[c]]
             sol = sp.solve(eqs, unknown, dict=True)
             if len(sol) != 1:
                 raise ValueError(f"{self.cls.__name__}: the pivot's position does not fix the base's translations")
@@ -271,12 +289,19 @@ class ModelCode:
         return dict(idx=idx, r=r, rd=rd, k=k, q_r=q_r, v_r=v_r, J=J, jd=jd, Mr=Mr, fr=fr, rdd=rdd, lam=lam,
                     totals=totals, gaps=gaps, phi=phi, outs=outs)
 
+    def _at_zero(self, e):
+        """e at a zero base offset (the embedding: the driver adds the offset)."""
+        return e if self.offset is None else sp.sympify(e).subs(self.offset, 0)
+
     def _outputs(self, mode, q_r, v_r):
-        """The declared outputs on the embedding of a mode (None: the full-state generic slip)."""
-        on = dict(zip(self.q, q_r))
-        on.update(zip(self.v, v_r))
+        """The declared outputs on the embedding of a mode (None: the full-state generic slip); those that move
+        with the base's offset (SHIFTED_OUTPUTS) at a zero offset: the driver adds it."""
+        on_mode = dict(zip(self.q, q_r))
+        on_mode.update(zip(self.v, v_r))
+        on_zero = {k: self._at_zero(e) for k, e in on_mode.items()}
         out = []
         for p in self.cls.OUTPUTS:
+            on = on_zero if p.name in self.cls.SHIFTED_OUTPUTS else on_mode
             e = self.mech.outputs[p.name]
             if isinstance(e, str) and e == "slip":
                 if mode == FLIGHT:
@@ -313,6 +338,8 @@ class ModelCode:
         accelerations; non-polynomial parts are treated the same way argument by argument."""
         if e.is_Atom or not (e.free_symbols - self.D.params):
             return e
+        if isinstance(e, sp.Piecewise):
+            return sp.Piecewise(*[(self._canonical(x), self._canonical_condition(c)) for x, c in e.args])
         params = self.D.params
         gens = sorted({a for a in e.atoms(sp.Symbol) if a not in params}
                       | {f for f in e.atoms(sp.sin, sp.cos) if f.free_symbols - params}, key=sp.default_sort_key)
@@ -334,6 +361,13 @@ class ModelCode:
             factor = sp.Mul(*[g ** k for g, k in zip(special, key) if k])
             out.append(factor * sp.Add(*terms) if factor != 1 else sp.Add(*terms))
         return sp.Add(*out)
+
+    def _canonical_condition(self, c):
+        if isinstance(c, sp.core.relational.Relational):
+            return c.func(self._canonical(c.lhs), self._canonical(c.rhs))
+        if isinstance(c, (sp.And, sp.Or, sp.Not)):
+            return c.func(*[self._canonical_condition(a) for a in c.args])
+        return c
 
     def _collect(self, e):
         """e grouped by the ground accelerations (fewer products than the expanded sum)."""
@@ -430,6 +464,8 @@ class ModelCode:
             funcs.append(self._emit_classical())
         if mech.work_note is not None:
             funcs.append(self._emit_work_note())
+        if mech.switches:
+            funcs.append(self._emit_switches())
         init = self._emit_init()
         w(init)
         out.extend(funcs)
@@ -527,7 +563,8 @@ class ModelCode:
         for mode, md in self.modes.items():
             names = self._r_names(md)
             cases[mode] = self._with_names(names, lambda md=md: self._block(
-                [(f"q[{i}]", md["q_r"][i]) for i in range(n)] + [(f"v[{i}]", md["v_r"][i]) for i in range(n)]))
+                [(f"q[{i}]", self._at_zero(md["q_r"][i])) for i in range(n)]
+                + [(f"v[{i}]", self._at_zero(md["v_r"][i])) for i in range(n)]))
         s.append(f"static void {P}_embed(const rk_model *m, int mode, const double *r, const double *r_dot, double *q, "
                  "double *v)\n{\n    (void)r; (void)r_dot;\n" + self._switch(cases) + "\n}\n")
         # mode_jacobian
@@ -536,8 +573,8 @@ class ModelCode:
             names = self._r_names(md)
             k = md["k"]
             cases[mode] = self._with_names(names, lambda md=md, k=k: self._block(
-                [(f"J[{i * k + j}]", md["J"][i, j]) for i in range(n) for j in range(k)]
-                + [(f"jd[{i}]", md["jd"][i]) for i in range(n)]))
+                [(f"J[{i * k + j}]", self._at_zero(md["J"][i, j])) for i in range(n) for j in range(k)]
+                + [(f"jd[{i}]", self._at_zero(md["jd"][i])) for i in range(n)]))
         s.append(f"static void {P}_mode_jacobian(const rk_model *m, int mode, const double *r, const double *r_dot, "
                  "double *J, double *jd)\n{\n    (void)r; (void)r_dot; (void)J;\n" + self._switch(cases) + "\n}\n")
         # rhs
@@ -605,6 +642,13 @@ class ModelCode:
                 lines.append(f"    double y[{max(2 * k, 1)}], rdd[{max(k, 1)}];\n    (void)y; (void)rdd;")
                 lines += [f"    y[{j}] = q[{i}];\n    y[{k + j}] = v[{i}];" for j, i in enumerate(md["idx"])]
                 names = self._y_names(md)
+                if self.offset is not None:
+                    # the base's offset read off the full state: the pivot's abscissa (the base's, in full contact)
+                    c = CLOSED[mode][0]
+                    off = (self.q[self.slide_i] - self.rest[self.slide_i] if mode == FULL
+                           else self.X[c] - self.X_rest[c])
+                    lines.append("    double offset_q;\n" + self._block([("offset_q", off)]))
+                    names[self.offset] = "offset_q"
                 lines.append(self._with_names(names, lambda md=md: self._rdd_code(md)))
                 lines.append(self._with_names(names, lambda md=md: self._block(
                     [(f"lam[{c}]", md["lam"][c]) for c in CLOSED[mode]], keep=True)))
@@ -728,6 +772,12 @@ class ModelCode:
         return (f"static void {self.prefix}_work_note(const rk_model *m, char *buf, size_t n)\n{{\n    (void)m;\n"
                 f"    snprintf(buf, n, {_c_string(fmt)}{''.join(', ' + a for a in args)});\n}}\n")
 
+    def _emit_switches(self) -> str:
+        targets = [(f"s[{i}]", sw.value / self.D.symbol(sw.scale, "switch_scale"))
+                   for i, sw in enumerate(self.mech.switches)]
+        return (f"static void {self.prefix}_switches(const rk_model *m, const double *q, const double *v, double *s)\n"
+                "{\n    (void)q; (void)v;\n" + self._block(targets) + "\n}\n")
+
     def _emit_init(self) -> str:
         P, mech = self.prefix, self.mech
         n = self.n
@@ -806,7 +856,8 @@ class ModelCode:
                 f"    {opt(mech.classical_impact is not None, 'classical_impact_velocity')}, "
                 f"{opt(mech.work_note is not None, 'work_note')},\n"
                 f"    {P}_mode_monitor_one,\n"
-                f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX\n}};\n")
+                f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX,\n"
+                f"    {len(mech.switches)}, {opt(bool(mech.switches), 'switches')}\n}};\n")
 
 
 # ------------------------------------------------------------------------------------------------ the file

@@ -6,6 +6,8 @@ checkout's ``python build_fmu.py``) builds, from an installed package as from a 
 - `FlexibleRockingOscillator`: the flexible rocking oscillator (Giouvanidis & Dimitrakopoulos 2017, appendix);
   `rocking_model.models.flexible_oscillator` (defaults: its representative laboratory specimen).
   Both run the compiled engine (one call into C per doStep).
+- `PostTensionedRockingBlock`: the rigid block held by a vertical unbonded post-tensioned tendon (controlled
+  rocking); `rocking_model.models.post_tensioned`.
 - `GroundMotionSource`: outputs a horizontal ground acceleration ag(t) and a vertical one ag_v(t) (positive
   upward; 0 without a vertical component), no inputs. The motion is chosen from the parameters by
   `rocking_model.cosim.ground_motion_from_parameters` -- the pulse by
@@ -22,7 +24,7 @@ imports its class: pythonfmu and the FMU binary import the slave class from a mo
 on purpose (two FMUs whose scripts share a module name cannot be loaded in the same process). Relative imports
 only: each FMU bundles this package under another name.
 """
-from ..models import FlexibleOscillator, RigidBlock
+from ..models import FlexibleOscillator, PostTensionedBlock, RigidBlock
 from ..models.linear_building import T_MAX, T_MIN, U_DOT_MAX, U_MAX, ZETA_MAX
 from . import AG_INPUT, DefaultExperiment, Fmi2Status, ModelSlave, RockingSlave, Var
 
@@ -57,6 +59,22 @@ class FlexibleRockingOscillator(ModelSlave):
                    "interpolated linearly with fmi2SetRealInputDerivatives).")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
     variables = ModelSlave.variables_of(FlexibleOscillator)
+
+
+class PostTensionedRockingBlock(ModelSlave):
+    """Rigid rocking block held by a vertical unbonded post-tensioned tendon (controlled rocking)."""
+
+    model_class = PostTensionedBlock
+    description = ("Post-tensioned rocking block: the rigid rocking block (half-width b, half-height h) held by "
+                   "a vertical unbonded tendon on its centreline, anchored at the base centre in the ground and "
+                   "at the top centre of the block, with force P0 + k_t (L - 2h) while taut (0 once slack), on a "
+                   "rigid ground with horizontal acceleration ag and vertical acceleration ag_v; unilateral "
+                   "corner contacts, Newton impact law, sticking or Coulomb friction; Moreau-Jean (scheme = 0) "
+                   "or event-driven (scheme = 1). ag and ag_v are held constant over each communication step (or "
+                   "interpolated linearly with fmi2SetRealInputDerivatives). Outputs freeze once the block "
+                   "overturns.")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
+    variables = ModelSlave.variables_of(PostTensionedBlock)
 
 
 class GroundMotionSource(RockingSlave):
@@ -151,5 +169,5 @@ class LinearBuildingStorey(RockingSlave):
 
 
 #: every FMU, by name (the model FMUs first)
-FMUS = {cls.__name__: cls for cls in (RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource,
-                                      LinearBuildingStorey)}
+FMUS = {cls.__name__: cls for cls in (RigidRockingBlock, FlexibleRockingOscillator, PostTensionedRockingBlock,
+                                      GroundMotionSource, LinearBuildingStorey)}

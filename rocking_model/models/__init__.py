@@ -5,6 +5,7 @@ The command line, the ensembles, the benchmarks and build_fmu.py choose a model 
 """
 from .base import RockingModel
 from .flexible_oscillator import FlexibleOscillator
+from .post_tensioned import PostTensionedBlock
 from .rigid_block import RigidBlock
 
 #: registry of the models: kind -> class
@@ -34,6 +35,7 @@ def make_model(kind: str, **parameters) -> RockingModel:
 
 register_model(RigidBlock)
 register_model(FlexibleOscillator)
+register_model(PostTensionedBlock)
 
-__all__ = ["RockingModel", "RigidBlock", "FlexibleOscillator", "MODELS", "register_model", "model_class",
+__all__ = ["RockingModel", "RigidBlock", "FlexibleOscillator", "PostTensionedBlock", "MODELS", "register_model", "model_class",
            "make_model"]

@@ -51,6 +51,18 @@ class ClassicalImpact:
 
 
 @dataclass
+class Switch:
+    """A point where a smooth force law of the model changes (a kink of the forces, no impulse): ``value`` (a
+    sympy expression of q, v and the parameters) crosses zero there, e.g. a tendon's force when it slackens.
+    The event-driven scheme ends its step at each crossing (located to ``value``/``scale`` within its event
+    tolerance), so that no Runge-Kutta step straddles the kink; ``description`` names it in reports."""
+
+    value: Any
+    scale: Any
+    description: str
+
+
+@dataclass
 class Mechanics:
     """The mechanics of a model in its generalized coordinates (sympy expressions of ``p``, ``q``, ``v``).
 
@@ -59,8 +71,8 @@ class Mechanics:
         ground accelerations act through it.
     contacts: the contact points (X_c(q), Y_c(q)) [m] in the ground frame; Y_c is the contact's gap.
     rest: q at rest (every contact closed, nothing moving).
-    potential: the elastic energy V(q) [J] (default none); its Hessian is the stiff part that the
-        time-stepper treats implicitly.
+    potential: the elastic energy V(q) [J] (default none); its Hessian, evaluated at the step's start, is
+        the stiff part that the time-stepper treats implicitly.
     dissipation: Rayleigh's dissipation function D(q, v) [W/2] (default none): the damping forces are -dD/dv.
     derived: named derived quantities (R, alpha, p, ...): they appear in the scales, checks and messages.
     length_scale [m], time_scale [s], force_scale [N]: scales of the tolerances and the event functions.
@@ -73,6 +85,7 @@ class Mechanics:
     work_note: (template, ) what drives the cost of a step, named in work-limit messages (``{name:fmt}``
         fields as in `Check`), or None.
     classical_impact: the model's own impact rule (`ClassicalImpact`) or None.
+    switches: the points where a force law changes (`Switch`), located as events by the event-driven scheme.
     """
 
     kinetic: Any
@@ -91,3 +104,4 @@ class Mechanics:
     checks: list = field(default_factory=list)
     work_note: Optional[str] = None
     classical_impact: Optional[ClassicalImpact] = None
+    switches: list = field(default_factory=list)

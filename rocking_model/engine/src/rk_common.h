@@ -22,9 +22,11 @@ extern "C" {
 #define RK_MAX_CONTACTS 4
 /** largest reduced state y = [r, r_dot] of a mode (a sliding mode adds the base offset to r) */
 #define RK_MAX_Y (2 * RK_MAX_DOF)
+/** largest number of switches of a model's force laws (Mechanics.switches: a tendon that slackens) */
+#define RK_MAX_SWITCHES 2
 /** largest number of event functions of a mode: one per contact, the friction event (slip stop or cone),
- *  the overturning margin (RockingModel.functions_of) */
-#define RK_MAX_EVENTS (RK_MAX_CONTACTS + 2)
+ *  the switches, the overturning margin */
+#define RK_MAX_EVENTS (RK_MAX_CONTACTS + 2 + RK_MAX_SWITCHES)
 /** largest number of contact modes (codes 0 .. n_modes-1) */
 #define RK_MAX_MODES 32
 /** largest number of declared parameters / initial values / outputs of a model */

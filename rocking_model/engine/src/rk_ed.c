@@ -42,7 +42,7 @@
 #define ED(e) (&(e)->core.s.ed)
 
 /* event kinds (event_driven._KIND_*) */
-enum { ED_IMPACT = 0, ED_RELEASE = 1, ED_OVERTURN = 2, ED_SLIP = 3, ED_CONE = 4 };
+enum { ED_IMPACT = 0, ED_RELEASE = 1, ED_OVERTURN = 2, ED_SLIP = 3, ED_CONE = 4, ED_SWITCH = 5 };
 
 /* ------------------------------------------------------------------------------------------ helpers */
 
@@ -211,6 +211,14 @@ static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
     return RK_OK;
 }
 
+/** the switches' event functions of the n functions g: their values times their sides (ED_SWITCH) */
+static void ed_orient(const rk_engine *e, double *g, int n)
+{
+    int nsw = e->model.ops->n_switches, j;
+    for (j = 0; j < nsw; j++)
+        g[n - 1 - nsw + j] *= ED(e)->switch_side[j];
+}
+
 static rk_status ed_G(void *ctx, double t, const double *y, double *g)
 {
     ed_fn *f = (ed_fn *)ctx;
@@ -222,13 +230,13 @@ static rk_status ed_G(void *ctx, double t, const double *y, double *g)
         /* the totals from the same kernel call (G does not depend on whether they are asked for) */
         int has = 0;
         f->memo_lam[0] = f->memo_lam[1] = NAN;
-        rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, f->memo_lam, &has);
+        ed_orient(f->e, g, rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, f->memo_lam, &has));
         f->memo_valid = 1;
         f->memo_t = t;
         memcpy(f->memo_y, y, sizeof(double) * (size_t)f->memo_n);
         return RK_OK;
     }
-    rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL);
+    ed_orient(f->e, g, rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL));
     return RK_OK;
 }
 
@@ -300,6 +308,7 @@ static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, doubl
     if (lam != NULL)
         lam[0] = lam[1] = NAN;
     n = rk_mode_monitors(&e->model, f->mode, y, a, av, g, lam, lam != NULL ? &has : NULL);
+    ed_orient(e, g, n);
     e->g_memo.valid = 1;
     e->g_memo.mode = f->mode;
     e->g_memo.n_y = n_y;
@@ -337,8 +346,30 @@ static int ed_kinds(const rk_model *m, int mode, int *kinds)
         kinds[n++] = ED_SLIP;
     else if (closed && !isinf(m->mu))
         kinds[n++] = ED_CONE;
+    for (i = 0; i < m->ops->n_switches; i++)
+        kinds[n++] = ED_SWITCH;
     kinds[n++] = ED_OVERTURN;
     return n;
+}
+
+/** the switches' sides from their functions g at a segment's start (kinds of its n functions): each one clearly
+ *  away from zero (beyond the event tolerance) gets the side of its value, and g its magnitude */
+static void ed_switch_sides(rk_engine *e, const int *kinds, int n, double *g)
+{
+    rk_ed_state *s = ED(e);
+    int i, j = 0, flipped = 0;
+    for (i = 0; i < n; i++) {
+        if (kinds[i] != ED_SWITCH)
+            continue;
+        if (g[i] < -s->event_tol) {
+            s->switch_side[j] = -s->switch_side[j];
+            g[i] = -g[i];
+            flipped = 1;
+        }
+        j++;
+    }
+    if (flipped)
+        e->g_memo.valid = 0;
 }
 
 /** whether the mode has force totals (the Python's totals is not None: closed contacts) */
@@ -415,6 +446,7 @@ static rk_status ed_set_state(rk_engine *e, int mode, const double *q_given, con
         }
     }
     s->shift = shift;
+    e->model.offset = shift;
     s->live = 0;
     e->core.token++;
     return RK_OK;
@@ -452,6 +484,7 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
     rk_ed_state *s = ED(e);
     const rk_options *o = &e->options;
     rk_model_tolerances sc;
+    int i;
     ED_TRY(ed_check_real("tolerance", o->tolerance, 1e-14, 1e-2, 0, err));
     ED_TRY(ed_check_real("zeno_tol", o->zeno_tol, 0.0, 1e-2, 1, err));
     if (o->method != RK_METHOD_DOP853 && o->method != RK_METHOD_DOPRI5)
@@ -482,6 +515,8 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
     s->friction_demand = 0.0;
     s->painleve = 0;
     s->live = 0;
+    for (i = 0; i < RK_MAX_SWITCHES; i++)
+        s->switch_side[i] = 1.0;
     s->rhs_mode = -1;
     s->max_work = -1;
     s->work_end = INFINITY;
@@ -923,6 +958,16 @@ static rk_status ed_handle(rk_engine *e, int kind, int idx, double t, ed_fn *f, 
         e->core.token++;
         return RK_OK;
     }
+    if (kind == ED_SWITCH) {
+        /* a force law changed (no impulse, the mode holds): the step ends here and the next one starts at the
+         * kink; the crossed function's side flips */
+        int n_events, kinds[RK_MAX_EVENTS];
+        n_events = ed_kinds(&e->model, s->mode, kinds);
+        s->switch_side[idx - (n_events - 1 - e->model.ops->n_switches)] *= -1.0;
+        e->g_memo.valid = 0;
+        e->core.token++;
+        return RK_OK;
+    }
     if (kind == ED_IMPACT) {
         ED_TRY(ed_ag_call(f->ag, f->ag_v, t, &a, &av, err));
         ED_TRY(ed_impact(e, q, v, t, a, av, err));
@@ -1236,6 +1281,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         f.memo_n = 2 * k;
     /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
     ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 2 * k, g_prev, has_totals ? lam : NULL));
+    ed_switch_sides(e, kinds, ev.n, g_prev);
     if (has_totals) {
         d_prev = ed_ratio(s, lam);
         ed_note_ratio(e, d_prev);
@@ -1372,7 +1418,7 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
      * on or just starting */
     ok = 1;
     for (i = 0; i < n_e - 1; i++) {
-        int c = i >= nc ? ev[i] >= 0.0 : RK_IN(closed, i) ? ev[i] > 0.0 : ev[i] > clear;
+        int c = kinds[i] == ED_SWITCH || (i >= nc ? ev[i] >= 0.0 : RK_IN(closed, i) ? ev[i] > 0.0 : ev[i] > clear);
         if (!c) {
             ok = 0;
             break;
@@ -1388,7 +1434,7 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
             if (RK_IN(closed, i) && !(ev[i] > 0.0))
                 all = 0;
         for (i = nc; i < n_e - 1; i++)
-            if (!(ev[i] >= 0.0))
+            if (kinds[i] != ED_SWITCH && !(ev[i] >= 0.0))
                 all = 0;
         if (all)
             return RK_OK;
@@ -1563,6 +1609,9 @@ rk_status rk_ed_set_state(rk_engine *e, const rk_plain_state *st, const double *
     s->k = k;
     memcpy(s->y, st->y, (size_t)(2 * k) * sizeof(double));
     s->shift = st->shift;
+    e->model.offset = st->shift;
+    for (i = 0; i < RK_MAX_SWITCHES; i++)
+        s->switch_side[i] = 1.0;
     s->friction_demand = st->friction_demand;
     s->painleve = st->painleve;
     s->live = 0;

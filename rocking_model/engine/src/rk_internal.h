@@ -45,7 +45,7 @@ typedef struct rk_ed_state {
     int mode;
     int k;                              /**< reduced dofs of mode; y has 2k entries */
     double y[RK_MAX_Y];
-    double shift;                       /**< [m] base offset of a sticking mode on the ground */
+    double shift;                       /**< [m] base offset of a sticking mode on the ground (e->model.offset) */
     long long impacts;
     int overturned;
     long long n_steps;
@@ -70,6 +70,10 @@ typedef struct rk_ed_state {
     unsigned long long motion_key;      /**< (part D) the key of the current call's non-constant motion: its
                                              rk_motion.identity (the same GroundMotion object: the Python's
                                              id(ag)) with the top bit set, or a new motion_serial when 0 */
+    /* the side of each switch of the model's force laws (+1: its value positive), so that its event
+     * function (the value times the side) falls through zero at the next crossing either way; set from the
+     * value at each segment's start where clearly away from zero, flipped by each switch event */
+    double switch_side[RK_MAX_SWITCHES];
     /* settings (from the options and the model; constant after create) */
     double tolerance, dt_max;
     const rk_tableau *tab;

@@ -53,10 +53,11 @@ rk_status rk_model_add(const rk_model_ops *ops, rk_error *err)
     if (ops == NULL || ops->kind == NULL || ops->class_name == NULL)
         return rk_fail(err, RK_ERR_VALUE, "model kernel is missing its kind");
     if (ops->n_dof < 1 || ops->n_dof > RK_MAX_DOF || ops->n_contacts < 1 || ops->n_contacts > RK_MAX_CONTACTS
-        || ops->n_params > RK_MAX_PARAMS || ops->n_initial > RK_MAX_INITIAL || ops->n_outputs > RK_MAX_OUTPUTS)
+        || ops->n_params > RK_MAX_PARAMS || ops->n_initial > RK_MAX_INITIAL || ops->n_outputs > RK_MAX_OUTPUTS
+        || ops->n_switches < 0 || ops->n_switches > RK_MAX_SWITCHES || (ops->n_switches > 0 && ops->switches == NULL))
         return rk_fail(err, RK_ERR_VALUE, "model '%s' exceeds the engine's limits (at most %d coordinates, %d "
-                       "contacts, %d parameters, %d initial values, %d outputs)", ops->kind, RK_MAX_DOF,
-                       RK_MAX_CONTACTS, RK_MAX_PARAMS, RK_MAX_INITIAL, RK_MAX_OUTPUTS);
+                       "contacts, %d parameters, %d initial values, %d outputs, %d switches)", ops->kind, RK_MAX_DOF,
+                       RK_MAX_CONTACTS, RK_MAX_PARAMS, RK_MAX_INITIAL, RK_MAX_OUTPUTS, RK_MAX_SWITCHES);
     for (k = rk_generated_models; *k != NULL; k++) {
         if (strcmp((*k)->kind, ops->kind) == 0)
             return rk_fail(err, RK_ERR_VALUE, "model kind '%s' is built into the engine; declare a new kind",
@@ -614,6 +615,22 @@ static void stick_monitors(const rk_model *m, int mode, const double *y, double 
         rk_model_generic_monitors(m, mode, y, ag, ag_v, g, totals);
 }
 
+/* the switches of the force laws on the reduced state y of mode, before the overturning margin g[n - 1]: the
+ * margin moves to the end (n + n_switches functions) */
+static int with_switches(const rk_model *m, int mode, const double *y, double *g, int n)
+{
+    int nsw = m->ops->n_switches;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
+    if (nsw == 0)
+        return n;
+    rk_embed_any(m, mode, y, q, v);
+    if (!rk_mode_sliding(m, mode) && rk_closed_of(m, mode))
+        q[m->ops->slide_index] += m->offset;
+    g[n - 1 + nsw] = g[n - 1];
+    m->ops->switches(m, q, v, g + n - 1);
+    return n + nsw;
+}
+
 int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals,
                      int *has_totals)
 {
@@ -648,7 +665,7 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
         }
         if (has_totals != NULL)
             *has_totals = 1;
-        return nc + 2;
+        return with_switches(m, mode, y, g, nc + 2);
     }
     {
         rk_set closed = rk_closed_of(m, mode);
@@ -662,11 +679,11 @@ int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, do
             totals[1] = tot[1];
         }
         if (!cone)
-            return nc + 1;
+            return with_switches(m, mode, y, g, nc + 1);
         /* the friction cone before the overturning margin: positive while the corners stick */
         g[nc + 1] = g[nc];
         g[nc] = (m->mu * tot[0] - fabs(tot[1])) / m->force_scale;
-        return nc + 2;
+        return with_switches(m, mode, y, g, nc + 2);
     }
 }
 
@@ -675,11 +692,12 @@ int rk_mode_monitor_one(const rk_model *m, int mode, const double *y, int i, dou
     int nc = m->ops->n_contacts, cone;
     if (m->ops->mode_monitor_one == NULL || m->ops->mode_monitors == NULL || rk_mode_sliding(m, mode))
         return 0;
-    /* rk_mode_monitors' layout: the contacts' functions, [the friction cone,] the overturning margin */
+    /* rk_mode_monitors' layout: the contacts' functions, [the friction cone,] [the switches,] the overturning
+     * margin */
     cone = rk_closed_of(m, mode) != 0u && !isinf(m->mu);
     if (i < nc)
         return m->ops->mode_monitor_one(m, mode, y, i, gi);
-    if (i == nc + cone)
+    if (i == nc + cone + m->ops->n_switches)
         return m->ops->mode_monitor_one(m, mode, y, nc, gi);
     return 0;
 }

@@ -154,6 +154,12 @@ typedef struct rk_model_ops {
     int n_named;                     /**< the declaration's derived quantities (R, alpha, p, ...) */
     const char *const *named;        /**< their names */
     const int *named_index;          /**< their places in rk_model.d */
+    /* ---------------------------------------------------------------- switches of the force laws */
+    /** the points where a smooth force law changes (a tendon slackens): n_switches values, each crossing zero
+     *  there, over its scale, of the full state (q, v); the event-driven scheme ends its steps at each
+     *  crossing. optional (n_switches 0, NULL). */
+    int n_switches;
+    void (*switches)(const rk_model *m, const double *q, const double *v, double *s);
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
@@ -179,6 +185,10 @@ struct rk_model {
     rk_set mode_closed[RK_MAX_MODES];
     signed char mode_stick[RK_MAX_MODES];
     signed char mode_sigma[RK_MAX_MODES];
+    /** [m] the base's horizontal offset from its rest position in the driver's current sticking mode: read by
+     *  the mode kernels of a model whose forces depend on where the base stands (a tendon anchored in the
+     *  ground); 0 outside a driver. */
+    double offset;
 };
 
 /** ops->closed_of(m, mode) from the table (an indirect call for a mode beyond it). */
