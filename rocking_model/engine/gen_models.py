@@ -6,14 +6,15 @@ first moment of mass, elastic energy, dissipation, contact points). From these t
 sympy, everything the engine asks of a model (`rk_model_ops` in src/rk_model.h):
 
 - the full-coordinate system: M(q) (the Hessian of T in v), f(q, v, ag, ag_v) from Lagrange's equations, the
-  stiff part (K, C: the Hessians of the elastic energy and of the dissipation), gaps, contact Jacobians
-  W_N, W_T, their drifts, the contacts' abscissae;
+  stiff part (K, C: the Hessians of the elastic energy and of the dissipation, at the current state), gaps,
+  contact Jacobians W_N, W_T, their drifts, the contacts' abscissae, the switches of the force laws;
 - each sticking contact mode of the two-corner base (full contact, rocking on either corner, flight): its
   reduced coordinates and embedding, the reduced mass matrix Jᵀ M J and forces Jᵀ (f - M J̇ ṙ), the reduced
   acceleration (closed form for one or two coordinates and diagonal systems, else a small dense solve), the
   contact forces of its closed corners (the rows of M q̈ - f along the base's translations and rotation), and
   its event functions (forces of the closed corners over the force scale, gaps of the open ones over the
-  length scale, the overturning margin);
+  length scale, the overturning margin); for a model whose forces depend on the base's horizontal position,
+  all of it with the base at the offset ``m->offset`` from its rest position;
 - outputs, energy, initial state, parameter tables and checks, derived constants.
 
 Subexpressions of the parameters alone are computed once per model instance (``m->d[]``, at construction);

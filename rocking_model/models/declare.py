@@ -16,7 +16,12 @@ potential of the inertial and gravity forces is ``ag * Sx + (g + ag_v) * Sy``.
 The contact modes of a two-corner base are derived, not written: flight keeps every coordinate; rocking on
 corner c solves "corner c at its rest position" for the base's translations (``slide_index``,
 ``lift_index``); full contact pins the base (translations and ``phi``) at its rest values. Their reduced
-dynamics come from the Lagrangian restricted to the remaining coordinates.
+dynamics come from the Lagrangian restricted to the remaining coordinates. Where the forces depend on where
+the base stands (a tendon anchored in the ground), the rest position is shifted by the base's horizontal
+offset, which the engine carries beside the reduced state.
+
+A force law with branches is a sympy ``Piecewise`` (a tendon that slackens); declare where it changes as a
+`Switch`, so that the event-driven scheme steps to it.
 """
 from __future__ import annotations
 
