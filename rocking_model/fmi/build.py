@@ -1,6 +1,7 @@
 """Build every FMU (`rocking_model.fmi.fmus.FMUS`) into <dest>/<Name>.fmu and validate it with fmpy.
 
-The registered models (the rigid block, the flexible oscillator) are also built as self-contained FMUs,
+The registered models (`rocking_model.models.MODELS`: the rigid block, the flexible oscillator, the
+post-tensioned block) are also built as self-contained FMUs,
 <dest>/standalone/<Name>.fmu: the compiled C engine (rocking_model/engine/src) under the C FMI layer
 rocking_model/fmi/binary/standalone/fmi2_engine.c, no Python needed (`build_standalone`).
 
@@ -312,6 +313,8 @@ def _zero(t):
 CROSS_CHECK = {
     "RigidRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.5), "ag_v": _zero}),
     "FlexibleRockingOscillator": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(3.0), "ag_v": _zero}),
+    # default start values (the rules): P0 = k_t = 0, the tendon idle, so the scene is the free block's
+    "PostTensionedRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.5), "ag_v": _zero}),
     "GroundMotionSource": dict(stop=2.0, step=0.01, rel_tol=1e-8, inputs={}),
     "LinearBuildingStorey": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.0, 0.5, 0.1)}),
 }
