@@ -17,8 +17,17 @@ itself; the record's ``scale`` applies to both components. A case without a vert
 case id it had before these fields existed, and a result file written before them (without their columns)
 resumes: its header is completed on the first resume (`RepairWarning`).
 
+The model's other declared parameters (`rocking_model.models.MODELS`: e.g. m, P0, k_t of the post-tensioned
+block, EI of the flexible oscillator) enter through the case field ``params``: a JSON object of the values
+given (by name; "" for none: the model's declared defaults). A case without any has the case id it had before
+this field existed, and a result file written before it resumes (its header is completed, `RepairWarning`).
+
 Dimensionless pulse grids follow Makris' overturning spectra: amplitude ratio A / (g tan(alpha)) and
-frequency ratio omega_p / p of the rigid block (alpha = atan(b/h), p = sqrt(3g/(4R))).
+frequency ratio omega_p / p of a rigid block (alpha = atan(b/h), p = sqrt(3g/(4R))): the models that are rigid
+blocks (`is_rigid_block`: the rigid block and its subclasses, such as the post-tensioned block). For the
+post-tensioned block these are its rigid block's ratios: its uplift threshold from rest is
+tan(alpha) (g + P0/m), so its uplift starts above a_ratio = 1 + P0/(m g), and its tendon makes it stiffer than
+p says.
 """
 from __future__ import annotations
 
@@ -48,12 +57,19 @@ from .models import model_class
 SCHEMES = tuple(sorted(_SCHEME_CLASSES, key=lambda name: -_SCHEME_CLASSES[name].code))
 
 #: case fields, in output column order
-CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "motion", "A", "omega_p", "a_ratio", "w_ratio",
+CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "params", "motion", "A", "omega_p", "a_ratio", "w_ratio",
                "record", "units", "scale", "vertical", "ag_v_scale", "scheme", "t_end", "output_interval",
                "tolerance", "dt_max")
 #: the case fields of the vertical ground acceleration and their values in a case without one (the rows of
 #: result files written before they existed, the cases whose ids stay those of earlier versions)
 VERTICAL_DEFAULTS = {"vertical": "", "ag_v_scale": 0.0}
+#: the case field of the model's other parameters and its value in a case without any (as VERTICAL_DEFAULTS)
+PARAMS_DEFAULTS = {"params": ""}
+#: the case fields added since the first version, in the order they were added, with their values in a case
+#: (or a row of an older file) without them
+ADDED_FIELDS = (VERTICAL_DEFAULTS, PARAMS_DEFAULTS)
+#: the case fields set by `pulse_cases` / `record_cases` themselves, not through ``params``
+_OWN_FIELDS = ("b", "h", "e_N", "mu")
 #: [1] allowed range of ag_v_scale: a vertical component up to 10 times the record's (or the horizontal's);
 #: the simulators refuse any |ag_v| above AG_MAX anyway
 AG_V_SCALE_MAX = 10.0
@@ -77,6 +93,8 @@ def case_id(case: dict) -> str:
         del key["mu"]             # the default law: the ids of the cases of earlier versions stay valid
     if not _ag_v_scale(case):
         del key["vertical"], key["ag_v_scale"]      # no vertical component: the ids of earlier versions
+    if key.get("params") in (None, ""):
+        del key["params"]         # the model's defaults: the ids of earlier versions
     return hashlib.sha1(json.dumps(key, sort_keys=True, default=repr).encode()).hexdigest()[:16]
 
 
@@ -98,9 +116,59 @@ def _rigid_scales(b: float, h: float, g: float = 9.81) -> tuple[float, float]:
     return math.atan2(b, h), math.sqrt(3.0 * g / (4.0 * R))
 
 
+def is_rigid_block(model: str) -> bool:
+    """Whether the registered model ``model`` is a rigid block of half-width b and half-height h (the
+    `RigidBlock` and its subclasses, e.g. the post-tensioned block): its slenderness alpha, frequency parameter
+    p and the dimensionless ratios of the overturning spectra are the block's."""
+    from .models import RigidBlock
+
+    return issubclass(model_class(model), RigidBlock)
+
+
+def model_params(model: str, params: dict | None) -> str:
+    """The case field ``params``: the model's declared parameters in ``params`` (other than b, h, e_N and mu,
+    case fields of their own) checked against its declarations, as a JSON object with sorted keys; "" for
+    none. ValueError naming a parameter the model does not declare or a value out of its range."""
+    if not params:
+        return ""
+    declared = {p.name: p for p in model_class(model).parameters()}
+    out = {}
+    for name, value in params.items():
+        if name in _OWN_FIELDS:
+            raise ValueError(f"params: {name} is a case field of its own (give it as "
+                             f"{'geometries' if name in ('b', 'h') else name})")
+        if name not in declared:
+            raise ValueError(f"params: {name!r} is not a parameter of the {model} model; allowed: "
+                             + ", ".join(n for n in declared if n not in _OWN_FIELDS))
+        value = declared[name].check(value)
+        out[name] = value if isinstance(value, int) and not isinstance(value, bool) else float(value)
+    return json.dumps(out, sort_keys=True, separators=(",", ":"))
+
+
+def _params_of(case: dict) -> dict:
+    """The model parameters of a case's ``params`` field ({} when absent or empty)."""
+    text = case.get("params")
+    if text in (None, "") or (isinstance(text, float) and text != text):
+        return {}
+    if isinstance(text, dict):
+        return dict(text)
+    value = json.loads(text)
+    if not isinstance(value, dict):
+        raise ValueError(f"params = {text!r}: a JSON object of model parameters by name")
+    return value
+
+
+def _block_scales(model: str, b: float, h: float, params: str) -> tuple[float, float, float]:
+    """(alpha [rad], p [rad/s], g [m/s2]) of a rigid-block model (`is_rigid_block`), NaN for the others."""
+    if not is_rigid_block(model):
+        return math.nan, math.nan, math.nan
+    g = float(_params_of({"params": params}).get("g", 9.81))
+    return (*_rigid_scales(b, h, g), g)
+
+
 def _finish(case: dict) -> dict:
     case = {k: case.get(k, "" if k in ("record", "units") else math.inf if k == "mu" else
-                        VERTICAL_DEFAULTS.get(k, math.nan)) for k in CASE_FIELDS}
+                        VERTICAL_DEFAULTS.get(k, PARAMS_DEFAULTS.get(k, math.nan))) for k in CASE_FIELDS}
     case["case_id"] = case_id(case)
     return case
 
@@ -154,15 +222,20 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
                 frequencies: Sequence[float] | None = None, geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),),
                 schemes: Sequence[str] = ("event_driven",), model: str = "rigid", e_N: float = 0.0,
                 mu: float = math.inf, t_end: float | None = None, output_interval: float = 0.01, tolerance: float = 1e-8,
-                dt_max: float | None = None, ag_v_scales: Sequence[float] = (0.0,)) -> list[dict]:
+                dt_max: float | None = None, ag_v_scales: Sequence[float] = (0.0,),
+                params: dict | None = None) -> list[dict]:
     """Grid of pulse cases: pulse ``kind`` x amplitudes x frequencies x geometries (b, h) [m] x schemes x
     ag_v_scales.
 
     Amplitudes either as ratios A / (g tan(alpha)) or in m/s2; frequencies as ratios omega_p / p or in Hz
-    (omega_p = 2 pi f). Ratios need the rigid block. t_end [s] defaults to the end of the pulse plus 15/p
+    (omega_p = 2 pi f). Ratios need a rigid block (`is_rigid_block`: the rigid and the post-tensioned block;
+    for the post-tensioned block they are those of its rigid block, whose uplift threshold tan(alpha) g the
+    tendon raises to tan(alpha) (g + P0/m)). t_end [s] defaults to the end of the pulse plus 15/p
     (enough for overturning after an impact). dt_max: Moreau-Jean step [s] (default 1e-3). e_N, mu: the
     model's coefficient of restitution and friction coefficient (inf: the paper's sticking law).
-    ag_v_scales: vertical components [1], in [-10, 10]: ag_v = ag_v_scale x the pulse (0, the default: none)."""
+    ag_v_scales: vertical components [1], in [-10, 10]: ag_v = ag_v_scale x the pulse (0, the default: none).
+    params: the model's other declared parameters by name (e.g. {"m": 1000, "P0": 2e4, "k_t": 2e6}; the case
+    field ``params``, `model_params`); g among them sets the ratios' g."""
     if kind not in PULSES:
         raise ValueError(f"pulse = {kind!r} is not supported; allowed values: {', '.join(PULSES)}")
     model_class(model)                    # ValueError naming the registered models
@@ -171,9 +244,11 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
         raise ValueError("give either amplitude ratios A/(g tan alpha) or amplitudes [m/s2]")
     if (frequency_ratios is None) == (frequencies is None):
         raise ValueError("give either frequency ratios omega_p/p or frequencies [Hz]")
-    if model != "rigid" and (amplitude_ratios is not None or frequency_ratios is not None):
-        raise ValueError("amplitude and frequency ratios are defined for the rigid block; give amplitudes "
-                         "[m/s2] and frequencies [Hz] for the flexible oscillator")
+    extra = model_params(model, params)
+    block = is_rigid_block(model)
+    if not block and (amplitude_ratios is not None or frequency_ratios is not None):
+        raise ValueError(f"amplitude and frequency ratios are defined for the rigid blocks; give amplitudes "
+                         f"[m/s2] and frequencies [Hz] for the {model_class(model).title}")
     amps = _check_list("amplitude ratio" if amplitudes is None else "amplitude",
                        amplitude_ratios if amplitudes is None else amplitudes)
     freqs = _check_list("frequency ratio" if frequencies is None else "frequency",
@@ -184,16 +259,17 @@ def pulse_cases(kind: str = "sine", *, amplitude_ratios: Sequence[float] | None 
             raise ValueError(f"scheme = {s!r} is not supported; allowed values: {', '.join(SCHEMES)}")
     cases = []
     for (b, h), scheme, a, f, v in itertools.product(geometries, schemes, amps, freqs, vscales):
-        alpha, p = _rigid_scales(b, h) if model == "rigid" else (math.nan, math.nan)
-        A = a * 9.81 * math.tan(alpha) if amplitudes is None else a
+        alpha, p, g = _block_scales(model, b, h, extra)
+        A = a * g * math.tan(alpha) if amplitudes is None else a
         omega_p = f * p if frequencies is None else 2.0 * math.pi * f
         T_p = 2.0 * math.pi / omega_p
         t_pulse = 3.0 * T_p if kind == "ricker" else T_p
-        p_ref = p if model == "rigid" else 2.5
+        p_ref = p if block else 2.5
         te = t_end if t_end is not None else t_pulse + 15.0 / p_ref
-        cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion=kind, A=A,
-                                  omega_p=omega_p, a_ratio=A / (9.81 * math.tan(alpha)) if model == "rigid"
-                                  else math.nan, w_ratio=omega_p / p if model == "rigid" else math.nan,
+        cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), params=extra,
+                                  motion=kind, A=A,
+                                  omega_p=omega_p, a_ratio=A / (g * math.tan(alpha)) if block
+                                  else math.nan, w_ratio=omega_p / p if block else math.nan,
                                   scale=1.0, ag_v_scale=float(v), scheme=scheme, t_end=float(te),
                                   output_interval=output_interval,
                                   tolerance=tolerance, dt_max=math.nan if dt_max is None else dt_max)))
@@ -204,7 +280,8 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
                  geometries: Sequence[tuple[float, float]] = ((0.2, 1.0),), schemes: Sequence[str] = ("event_driven",),
                  model: str = "rigid", e_N: float = 0.0, mu: float = math.inf, t_end: float | None = None,
                  output_interval: float = 0.01, tolerance: float = 1e-8, dt_max: float | None = None,
-                 vertical: Sequence[str] | None = None, ag_v_scales: Sequence[float] | None = None) -> list[dict]:
+                 vertical: Sequence[str] | None = None, ag_v_scales: Sequence[float] | None = None,
+                 params: dict | None = None) -> list[dict]:
     """Grid of record cases: records (file paths or ``synthetic:<seed>``) x scale factors x geometries x
     schemes x ag_v_scales. t_end [s] defaults to the record's end plus 5 s. The records are read here once
     (so a bad file fails before anything runs) and again, once per worker, by `run_case`.
@@ -213,11 +290,13 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
     (see `rocking_model.records.combine`); a three-column CSV record has its own. ag_v_scales [1], in
     [-10, 10]: ag_v = ag_v_scale x the vertical component, or x the horizontal record for a record without
     one; default 1 for records with a vertical component, 0 (none) for the others. ``scale`` applies to
-    both components."""
+    both components. params: the model's other declared parameters by name, as in `pulse_cases`; a_ratio
+    (PGA / (g tan(alpha))) is set for the rigid blocks (`is_rigid_block`), NaN for the others."""
     from .records import load_motion
 
     model_class(model)
     _check_case_fields(model, geometries, e_N, mu, t_end, output_interval, tolerance, dt_max)
+    extra = model_params(model, params)
     scales = _check_list("scale", scales)
     records = list(records)
     verticals = [""] * len(records) if vertical is None else ["" if v is None else str(v) for v in vertical]
@@ -237,11 +316,11 @@ def record_cases(records: Sequence[str], scales: Sequence[float] = (1.0,), *, un
         te = t_end if t_end is not None else float(rec.t[-1]) + 5.0
         vscales = ag_v_scales if ag_v_scales is not None else [0.0 if rec.vertical is None else 1.0]
         for (b, h), scheme, s, v in itertools.product(geometries, schemes, scales, vscales):
-            alpha, p = _rigid_scales(b, h) if model == "rigid" else (math.nan, math.nan)
-            cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), motion="record",
-                                      record=spec, units=units or "", scale=float(s), vertical=vspec,
+            alpha, p, g = _block_scales(model, b, h, extra)
+            cases.append(_finish(dict(model=model, b=float(b), h=float(h), e_N=float(e_N), mu=float(mu), params=extra,
+                                      motion="record", record=spec, units=units or "", scale=float(s), vertical=vspec,
                                       ag_v_scale=float(v), scheme=scheme,
-                                      A=rec.pga * s, a_ratio=rec.pga * s / (9.81 * math.tan(alpha)),
+                                      A=rec.pga * s, a_ratio=rec.pga * s / (g * math.tan(alpha)),
                                       t_end=float(te), output_interval=output_interval, tolerance=tolerance,
                                       dt_max=math.nan if dt_max is None else dt_max)))
     return cases
@@ -279,21 +358,37 @@ def case_motion(case: dict):
 
 def case_model(case: dict):
     """The model of a case: the registered ``case["model"]`` (`rocking_model.models.MODELS`) with the case's
-    b, h, e_N and mu (inf where a file of an earlier version has none). The models are immutable, so one made
-    for the same (model, b, h, e_N, mu) of plain floats is reused (an ensemble has few geometries and many
-    motions; building and checking a model is a third of a compiled case's Python work)."""
+    b, h, e_N and mu (inf where a file of an earlier version has none) and the parameters of its ``params``
+    (none where absent). The models are immutable, so one made for the same (model, b, h, e_N, mu, params) of
+    plain floats and text is reused (an ensemble has few geometries and many motions; building and checking a
+    model is a third of a compiled case's Python work)."""
     mu = case.get("mu", math.inf)
     mu = math.inf if mu != mu else mu
     name, b, h, e_N = case["model"], case["b"], case["h"], case["e_N"]
-    if type(name) is str and type(b) is float and type(h) is float and type(e_N) is float and type(mu) is float:
-        return _cached_model(name, b, h, e_N, mu)
-    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu)
+    params = case.get("params")
+    params = "" if params is None or (isinstance(params, float) and params != params) else params
+    if type(name) is str and type(b) is float and type(h) is float and type(e_N) is float and type(mu) is float \
+            and type(params) is str:
+        return _cached_model(name, b, h, e_N, mu, params)
+    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu, **_model_kwargs(name, params))
+
+
+def _model_kwargs(name: str, params) -> dict:
+    """The keyword arguments of a case's ``params`` (TypeError-free: a name the model does not declare is a
+    ValueError naming it)."""
+    kw = _params_of({"params": params})
+    declared = {p.name for p in model_class(name).parameters()} - set(_OWN_FIELDS)
+    unknown = sorted(set(kw) - declared)
+    if unknown:
+        raise ValueError(f"params: {unknown[0]!r} is not a parameter of the {name} model; allowed: "
+                         + ", ".join(sorted(declared)))
+    return kw
 
 
 @functools.lru_cache(maxsize=256)
-def _cached_model(name: str, b: float, h: float, e_N: float, mu: float):
+def _cached_model(name: str, b: float, h: float, e_N: float, mu: float, params: str = ""):
     """A model of plain float parameters (a failed check raises and is not cached)."""
-    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu)
+    return model_class(name)(b=b, h=h, e_N=e_N, mu=mu, **_model_kwargs(name, params))
 
 
 def run_case(case: dict) -> dict:
@@ -328,9 +423,9 @@ def _simulate_case(case: dict) -> dict:
 
     from .simulation import simulate
 
-    model = case_model(case)             # b, h, e_N, mu checked against the model's declarations
-    rigid = case["model"] == "rigid"
-    alpha, p = _rigid_scales(model.b, model.h) if rigid else (math.nan, math.nan)
+    model = case_model(case)             # b, h, e_N, mu, params checked against the model's declarations
+    rigid = is_rigid_block(case["model"])
+    alpha, p = _rigid_scales(model.b, model.h, model.g) if rigid else (math.nan, math.nan)
     kw = {}
     if case["scheme"] == "event_driven":
         kw["tolerance"] = case["tolerance"]
@@ -393,8 +488,9 @@ def _parse(row: dict) -> dict:
             out[k] = v if isinstance(v, bool) else str(v).strip().lower() in ("true", "1")
         else:
             out[k] = "" if v is None else str(v)
-    for k, v in VERTICAL_DEFAULTS.items():
-        out.setdefault(k, v)          # a row of a file written before these fields existed
+    for added in ADDED_FIELDS:
+        for k, v in added.items():
+            out.setdefault(k, v)      # a row of a file written before these fields existed
     return out
 
 
@@ -442,9 +538,12 @@ def _fsync_dir(path: Path) -> None:
 
 #: the header line of a CSV output
 _HEADER = ",".join(FIELDS)
-#: the columns and header of a CSV output written before the vertical fields existed (completed on resume)
-_FIELDS_BEFORE_VERTICAL = tuple(k for k in FIELDS if k not in VERTICAL_DEFAULTS)
-_HEADER_BEFORE_VERTICAL = ",".join(_FIELDS_BEFORE_VERTICAL)
+#: the columns of a CSV output written before each group of `ADDED_FIELDS` existed, by header (completed on
+#: resume): the first version's (none of them), then with the vertical fields but without params, ...
+_OLDER_FIELDS = {}
+for _i in range(len(ADDED_FIELDS)):
+    _cols = tuple(k for k in FIELDS if not any(k in added for added in ADDED_FIELDS[_i:]))
+    _OLDER_FIELDS[",".join(_cols)] = _cols
 #: [lines] longest record joined when a quoted field spans lines (rows of earlier versions could hold a
 #: multi-line error message; rows are now written on one line)
 _MAX_JOIN = 20
@@ -520,12 +619,18 @@ def _repair_csv(path: Path) -> list[str]:
     text = data.decode("utf-8", "surrogateescape")
     head, sep, body = text.partition("\n")
     notes = []
-    if head.rstrip("\r") == _HEADER_BEFORE_VERTICAL:
-        data = _add_vertical_columns(path, body)
+    older = _OLDER_FIELDS.get(head.rstrip("\r"))
+    if older is not None:
+        missing = [k for k in FIELDS if k not in older]
+        data = _add_columns(path, body, older)
         text = data.decode("utf-8", "surrogateescape")
         head, sep, body = text.partition("\n")
-        notes.append(f"{path}: written before the columns {', '.join(VERTICAL_DEFAULTS)} existed: added to its "
-                     "header and rows (no vertical component; its cases keep their ids)")
+        notes.append(f"{path}: written before the columns {', '.join(missing)} existed: added to its header and "
+                     "rows (" + "; ".join(what for what, group in (("no vertical component", VERTICAL_DEFAULTS),
+                                                                   ("the model's default parameters",
+                                                                    PARAMS_DEFAULTS))
+                                          if any(k in group for k in missing))
+                     + "; its cases keep their ids)")
     problem = _header_problem(path, head, bool(sep))
     if problem:
         if _HEADER.startswith(head.rstrip("\r")) and not body.strip():
@@ -552,23 +657,24 @@ def _repair_csv(path: Path) -> list[str]:
                     "again"]
 
 
-def _add_vertical_columns(path: Path, body: str) -> bytes:
-    """Rewrite a CSV output written before the vertical fields existed with today's header, each good row
-    with the fields of a case without a vertical component (`VERTICAL_DEFAULTS`; its other cells as they were)
-    and each broken row, and an unfinished last row, as they were (the repair that follows sets them aside).
-    Returns the new contents."""
+def _add_columns(path: Path, body: str, older: Sequence[str]) -> bytes:
+    """Rewrite a CSV output of the columns ``older`` (written before some of `ADDED_FIELDS` existed) with
+    today's header, each good row with the fields of a case without them (e.g. `VERTICAL_DEFAULTS`: no vertical
+    component; its other cells as they were) and each broken row, and an unfinished last row, as they were (the
+    repair that follows sets them aside). Returns the new contents."""
+    defaults = {k: v for added in ADDED_FIELDS for k, v in added.items()}
     lines = body.split("\n")
     tail = lines.pop()
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\r\n")
     w.writerow(FIELDS)
     for raw in lines:
-        row = _csv_record(raw, _FIELDS_BEFORE_VERTICAL)
+        row = _csv_record(raw, older)
         if row is None:
             out.write(raw + "\n")
             continue
-        cells = dict(zip(_FIELDS_BEFORE_VERTICAL, next(csv.reader([raw.rstrip("\r")]))))
-        w.writerow([cells[k] if k in cells else VERTICAL_DEFAULTS[k] for k in FIELDS])
+        cells = dict(zip(older, next(csv.reader([raw.rstrip("\r")]))))
+        w.writerow([cells[k] if k in cells else defaults[k] for k in FIELDS])
     out.write(tail)
     data = out.getvalue().encode("utf-8", "surrogateescape")
     _rewrite(path, data)

@@ -254,15 +254,16 @@ def test_result_file_written_before_vertical_resumes_with_zero_new_cases(tmp_pat
     assert [c["case_id"] for c in cases] == old_ids
     out = tmp_path / "old.csv"
     shutil.copy(BEFORE_VERTICAL, out)
-    with pytest.warns(RepairWarning, match="vertical, ag_v_scale existed: added"):
+    with pytest.warns(RepairWarning, match="params, vertical, ag_v_scale existed: added"):
         s = run_ensemble(cases, out, workers=0, progress=False)
     assert s["n_run"] == 0 and s["n_skipped"] == len(cases)
     lines = out.read_text().splitlines()
     assert lines[0] == ",".join(FIELDS)
-    i = FIELDS.index("vertical")
+    i, j = FIELDS.index("vertical"), FIELDS.index("params")
     for old, new in zip(old_text.splitlines()[1:], lines[1:]):
         cells = new.split(",")
-        assert cells[i:i + 2] == ["", "0.0"] and cells[:i] + cells[i + 2:] == old.split(",")
+        assert cells[i:i + 2] == ["", "0.0"] and cells[j] == ""
+        assert [c for k, c in enumerate(cells) if k not in (i, i + 1, j)] == old.split(",")
     rows = {r["case_id"]: r for r in read_results(out)}
     assert set(rows) == set(old_ids) and all(r["ag_v_scale"] == 0.0 for r in rows.values())
     more = pulse_cases("sine", amplitudes=[2.0], frequencies=[1.0], model="flexible", geometries=[(0.25, 1.5)],
@@ -321,3 +322,63 @@ def test_vertical_case_motion_and_rows(tmp_path):
     with pytest.raises(ValueError, match="give one vertical record per record"):
         record_cases([str(p), str(h)], vertical=[str(h)])
     assert "ag_v_scale = -20 is out of range" in run_case(dict(c3[1], ag_v_scale=-20.0, case_id=""))["error"]
+
+
+def test_model_parameters_of_any_model_as_the_case_field_params(tmp_path):
+    """The models' other declared parameters (here the post-tensioned block's m, P0, k_t) are the case field
+    ``params`` (a JSON object; "" without any, the case ids of earlier versions): the post-tensioned block, a
+    rigid block, takes the dimensionless ratios of its rigid block, and its row equals a direct simulation;
+    an undeclared parameter, one of another model or a value out of range is refused by name."""
+    import json
+
+    from rocking_model.ensemble import case_model, is_rigid_block
+    from rocking_model.models import PostTensionedBlock
+
+    assert is_rigid_block("rigid") and is_rigid_block("post_tensioned") and not is_rigid_block("flexible")
+    kw = dict(geometries=[(0.3, 1.5)], model="post_tensioned", t_end=3.0)
+    cases = pulse_cases("sine", amplitude_ratios=[6.0], frequency_ratios=[3.0],
+                        params={"m": 1000, "P0": 2e4, "k_t": 2e6}, **kw)
+    (c,) = cases
+    assert json.loads(c["params"]) == {"P0": 2e4, "k_t": 2e6, "m": 1000.0}
+    alpha, p = math.atan(0.3 / 1.5), math.sqrt(3 * 9.81 / (4 * math.hypot(0.3, 1.5)))
+    assert c["A"] == pytest.approx(6.0 * 9.81 * math.tan(alpha)) and c["omega_p"] == pytest.approx(3 * p)
+    model = case_model(c)
+    assert model == PostTensionedBlock(b=0.3, h=1.5, m=1000.0, P0=2e4, k_t=2e6)
+    row = run_case(c)
+    ref = simulate(model, SinePulse(c["A"], c["omega_p"]), 3.0, output_interval=0.01)
+    assert not row["error"] and row["max_abs_phi"] == float(np.max(np.abs(ref.phi))) > 0.05
+    assert row["alpha"] == pytest.approx(alpha) and row["max_phi_over_alpha"] == pytest.approx(row["max_abs_phi"] / alpha)
+    # no params: the model's defaults, and the case id of a case without the field
+    plain = pulse_cases("sine", amplitude_ratios=[6.0], frequency_ratios=[3.0], **kw)[0]
+    assert plain["params"] == "" and plain["case_id"] == _old_case_id(plain) != c["case_id"]
+    for params, msg in (({"P0": 1.0}, "'P0' is not a parameter of the rigid model"),
+                        ({"b": 0.3}, "b is a case field of its own"),
+                        ({"EI": 1e5}, "'EI' is not a parameter of the rigid model")):
+        with pytest.raises(ValueError, match=msg):
+            pulse_cases("sine", amplitude_ratios=[1.0], frequency_ratios=[1.0], params=params)
+    with pytest.raises(ValueError, match="P0 = -1 is out of range"):
+        pulse_cases("sine", amplitude_ratios=[1.0], frequency_ratios=[1.0], params={"P0": -1}, **kw)
+    bad = dict(c, params='{"EI": 1.0}', case_id="")
+    assert "'EI' is not a parameter of the post_tensioned model" in run_case(bad)["error"]
+
+
+def test_result_file_written_before_params_resumes_with_zero_new_cases(tmp_path):
+    """A CSV output of the version before the params field (its header without it) resumes: nothing runs
+    again, the column is added empty (one RepairWarning), and a case with params runs on top of it."""
+    import csv
+
+    cases = _grid(geometries=[(0.3, 1.2)], t_end=1.0)[:2]
+    out = tmp_path / "old.csv"
+    run_ensemble(cases, out, workers=0, progress=False)
+    old = [r for r in csv.reader(out.open(newline=""))]
+    j = old[0].index("params")
+    with out.open("w", newline="") as f:
+        csv.writer(f, lineterminator="\r\n").writerows([r[:j] + r[j + 1:] for r in old])
+    with pytest.warns(RepairWarning, match="before the columns params existed: added"):
+        s = run_ensemble(cases, out, workers=0, progress=False)
+    assert s["n_run"] == 0 and s["n_skipped"] == 2
+    assert [r for r in csv.reader(out.open(newline=""))] == old
+    more = pulse_cases("sine", amplitude_ratios=[3.0], frequency_ratios=[2.0], geometries=[(0.3, 1.2)], t_end=1.0,
+                       params={"m": 5.0})
+    assert run_ensemble(cases + more, out, workers=0, progress=False)["n_run"] == 1
+    assert {r["case_id"]: r["params"] for r in read_results(out)}[more[0]["case_id"]] == '{"m":5.0}'
