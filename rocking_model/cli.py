@@ -120,31 +120,76 @@ def _help(per_kind: dict, n_models: int) -> str:
     if len(set(texts.values())) == 1:
         (text,) = set(texts.values())
         return text if len(per_kind) == n_models else f"{', '.join(per_kind)}: {text}"
-    return "; ".join(f"{k}: {t}" for k, t in texts.items())
+    kinds: dict = {}                      # text -> the models that declare it so, in registry order
+    for k, t in texts.items():
+        kinds.setdefault(t, []).append(k)
+    return "; ".join(f"{', '.join(ks)}: {t}" for t, ks in kinds.items())
+
+
+def _given_parameters(args, skip=()) -> dict:
+    """The model parameters given on the command line ({name: value}), checked to be the model's (UsageError
+    naming an option that belongs to another model and the model's own)."""
+    from .models import model_class
+
+    cls = model_class(args.model)
+    allowed = [p.name for p in cls.parameters() if p.name not in skip]
+    given = {k: getattr(args, k) for k in _declared() if k not in skip and getattr(args, k, None) is not None}
+    extra = sorted(set(given) - set(allowed))
+    if extra:
+        raise UsageError(f"--{extra[0].replace('_', '-')} is not a parameter of the {args.model} model; "
+                         f"allowed: " + ", ".join("--" + k.replace("_", "-") for k in allowed))
+    return given
 
 
 def _model(args):
     from .models import model_class
 
-    cls = model_class(args.model)
-    allowed = [p.name for p in cls.parameters()]
-    given = {k: getattr(args, k) for k in _declared() if getattr(args, k, None) is not None}
-    extra = sorted(set(given) - set(allowed))
-    if extra:
-        raise UsageError(f"--{extra[0].replace('_', '-')} is not a parameter of the {args.model} model; "
-                         f"allowed: " + ", ".join("--" + k.replace("_", "-") for k in allowed))
-    return cls(**given)
+    return model_class(args.model)(**_given_parameters(args))
+
+
+def _is_block(kind: str) -> bool:
+    """A rigid block of half-width b and half-height h (`rocking_model.ensemble.is_rigid_block`)."""
+    from .ensemble import is_rigid_block
+
+    return is_rigid_block(kind)
+
+
+def _describe(model, args) -> str:
+    """One line naming the model: its title, b and h, the other parameters given on the command line (with
+    their units) and, for a rigid block, its slenderness, frequency parameter and uplift acceleration."""
+    units = {p.name: p.unit for p in type(model).parameters()}
+    shown = ["b", "h"] + [k for k in _declared() if k not in ("b", "h") and getattr(args, k, None) is not None]
+    if not _is_block(args.model) and "EI" in units and "EI" not in shown:
+        shown.append("EI")
+    parts = []
+    for k in shown:
+        value = getattr(model, k)
+        unit = units.get(k, "")
+        parts.append(f"{k} = {value:g}" + (f" {unit}" if unit and unit != "1" else "") if isinstance(value, (int, float))
+                     else f"{k} = {value}")
+    text = f"{type(model).title} " + ", ".join(parts)
+    if _is_block(args.model):
+        text += (f" (alpha = {model.alpha:.4f} rad, p = {model.p:.3f} rad/s, g tan(alpha) = "
+                 f"{model.g * math.tan(model.alpha):.3f} m/s2")
+        P0 = getattr(model, "P0", 0.0)
+        if P0:                 # the tendon's pre-stress raises the uplift acceleration (models/post_tensioned.py)
+            text += f", uplift at tan(alpha) (g + P0/m) = {math.tan(model.alpha) * (model.g + P0 / model.m):.3f} m/s2"
+        text += ")"
+    return text
 
 
 def scene_name(args) -> str:
     """The default file stem of `rocking simulate`: the model, the parameters and initial values given, the
-    motion and a scheme other than the default, e.g. ``rigid_b0.3_h1.2_sine-A3ms2-f2Hz`` (the same scene
+    motion and a scheme other than the default, e.g. ``rigid_b0.3_h1.2_sine-A3ms2-f2Hz`` or
+    ``post_tensioned_b0.3_h1.5_m1000_P0-20000_k_t2e+06_sine-A10ms2-f1Hz`` (the same scene
     gives the same name; a second run of it is refused without --force)."""
     parts = [args.model]
     for name in list(_declared()) + list(_declared_initial()):
         value = getattr(args, name, None)
         if value is not None:
-            parts.append(f"{name}{value:g}" if isinstance(value, (int, float)) else f"{name}-{value}")
+            # a name ending in a digit (P0, phi_0) takes a dash before its value: P0-20000, not P020000
+            sep = "-" if name[-1].isdigit() else ""
+            parts.append(f"{name}{sep}{value:g}" if isinstance(value, (int, float)) else f"{name}-{value}")
     if args.record:
         rec = str(args.record)
         parts.append(rec.replace(":", "-") if rec.startswith("synthetic") else Path(rec).stem)
@@ -284,11 +329,9 @@ def cmd_simulate(args) -> int:
     header += [f"{n} [{units[n]}]" if n in units else n for n in names]
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.10g")
 
-    rigid = args.model == "rigid"
+    rigid = _is_block(args.model)
     alpha = model.alpha if rigid else None
-    geo = (f"rigid block b = {model.b:g} m, h = {model.h:g} m (alpha = {model.alpha:.4f} rad, "
-           f"p = {model.p:.3f} rad/s, g tan(alpha) = {model.g * math.tan(model.alpha):.3f} m/s2)") if rigid else \
-        f"flexible oscillator b = {model.b:g} m, h = {model.h:g} m, EI = {model.EI:g} N m2"
+    geo = _describe(model, args)
     phi = np.abs(res.phi)
     k = int(np.argmax(phi))
     over = np.asarray(res.overturned, dtype=bool)
@@ -304,8 +347,13 @@ def cmd_simulate(args) -> int:
           + (f"; above mu = {model.mu:g} the corners slid" if math.isfinite(model.mu) else
              "; a surface with a smaller mu would slide") + ")"
           + (f", Painleve situations: {int(res.painleve[-1])}" if res.painleve[-1] else ""))
-    if not rigid:
-        print(f"  max |top displacement| = {np.max(np.abs(res.top_displacement)):.4g} m")
+    # the model's own outputs beyond a rigid body's (top_displacement, tendon_force, ...): their largest value
+    from .models import RigidBlock
+    body = {p.name for p in RigidBlock.OUTPUTS} | {"u", "u_dot"}
+    for p in model.OUTPUTS:
+        if p.name not in body and p.name in res.values:
+            label = p.name.replace("_", " ")
+            print(f"  max |{label}| = {np.max(np.abs(np.asarray(res.values[p.name], dtype=float))):.4g} {p.unit}")
     print(f"  wall time  = {wall:.3f} s ({res.n_steps} steps)")
     written = [csv_path]
     if not args.no_plot:
@@ -338,11 +386,15 @@ def cmd_benchmark(args, extra: list[str]) -> int:
 def cmd_ensemble(args) -> int:
     from . import ensemble as E
 
-    b0, h0 = (0.2, 1.0) if args.model == "rigid" else (0.25, 1.5)      # the models' defaults
+    from .models import model_class
+
+    declared = {p.name: p for p in model_class(args.model).parameters()}
+    b0, h0 = declared["b"].default, declared["h"].default      # the model's defaults
     geometries = [(b, h) for b in (_flat(args.b) or [b0]) for h in (_flat(args.h) or [h0])]
+    params = _given_parameters(args, skip=ENSEMBLE_GRID)
     common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N, mu=args.mu,
                   t_end=args.t_end, output_interval=args.output_interval, tolerance=args.tolerance,
-                  dt_max=args.dt_max)
+                  dt_max=args.dt_max, params=params or None)
     if bool(args.record) == bool(args.pulse):
         raise UsageError("give either --record FILE... (with --scales) or --pulse KIND (with amplitudes and "
                          "frequencies)")
@@ -394,39 +446,58 @@ def cmd_ensemble(args) -> int:
         on = f"on {s['workers']} worker(s)" if s["workers"] else "serially"
         print(f"throughput {s['throughput']:.2f} cases/s {on} "
               f"({s['wall_time']:.1f} s, plus {s['setup_time']:.1f} s cluster start)")
-    if args.pulse and args.model == "rigid" and args.amplitude_ratios and args.frequency_ratios \
+    if args.pulse and _is_block(args.model) and args.amplitude_ratios and args.frequency_ratios \
             and not args.no_plot:
         from .plotting import plot_overturning_spectrum
         ids = {c["case_id"] for c in cases}
         rows = [r for r in E.read_results(args.out) if r["case_id"] in ids]
         png = Path(args.plot) if args.plot else Path(args.out).with_name(Path(args.out).stem + "_spectrum.png")
         b, h = geometries[0]
-        title = f"Overturning spectrum, {args.pulse} pulse, rigid block" + \
-            (f" b = {b:g} m, h = {h:g} m" if len(geometries) == 1 else f" ({len(geometries)} geometries)")
+        title = f"Overturning spectrum, {args.pulse} pulse, {model_class(args.model).title}" + \
+            (f" b = {b:g} m, h = {h:g} m" if len(geometries) == 1 else f" ({len(geometries)} geometries)") + \
+            "".join(f", {k} = {v:g}" for k, v in params.items() if isinstance(v, float))
         print(f"wrote {plot_overturning_spectrum(rows, png, title=title)}")
     return 0 if s["n_errors"] == 0 else 1
 
 
 # --------------------------------------------------------------------------------------------- parser
+#: the model parameters of `rocking ensemble` that are case fields of their own (b, h: grids of geometries);
+#: the models' other declared parameters are options of one value each (the case field ``params``)
+ENSEMBLE_GRID = ("b", "h", "e_N", "mu")
+
+
+def _option_names(name: str) -> list[str]:
+    """The option strings of a declared name: --k-t, and --k_t as it is declared (one option)."""
+    dashed = f"--{name.replace('_', '-')}"
+    return [dashed] + ([f"--{name}"] if "_" in name else [])
+
+
 def _model_options(p: argparse.ArgumentParser, lists: bool = False) -> None:
     g = p.add_argument_group("model")
     from .models import MODELS
 
     g.add_argument("--model", choices=tuple(MODELS), default="rigid",
                    help="; ".join(f"{k}: the {cls.title}" for k, cls in MODELS.items()) + " (default: rigid)")
+    declared = _declared()
     if lists:
+        def defaults(name):
+            return ", ".join(f"{per_kind.default:g} {k}" for k, per_kind in declared[name].items())
         g.add_argument("--b", type=_values, nargs="+", metavar="B",
-                       help="half-widths [m] (grid; default: the model's, 0.2 rigid, 0.25 flexible)")
+                       help=f"half-widths [m] (grid; default: the model's, {defaults('b')})")
         g.add_argument("--h", type=_values, nargs="+", metavar="H",
-                       help="half-heights / column heights [m] (grid; default 1.0 rigid, 1.5 flexible)")
-        g.add_argument("--e-N", dest="e_N", type=float, default=0.0, help="coefficient of restitution [1]")
+                       help=f"half-heights / column heights [m] (grid; default: the model's, {defaults('h')})")
+        g.add_argument(*_option_names("e_N"), dest="e_N", type=float, default=0.0,
+                       help="coefficient of restitution [1]")
         g.add_argument("--mu", type=float, default=math.inf,
                        help="Coulomb friction coefficient [1] (default inf: the paper's sticking law)")
-        return
-    # the options and their help come from the models' declarations (rocking_model.params)
-    for name, per_kind in list(_declared().items()) + list(_declared_initial().items()):
+    # the options and their help come from the models' declarations (rocking_model.params); an ensemble takes
+    # the parameters other than its grid's, one value each, and no initial values
+    options = list(declared.items()) + ([] if lists else list(_declared_initial().items()))
+    for name, per_kind in options:
+        if lists and name in ENSEMBLE_GRID:
+            continue
         choice = any(p.items for p in per_kind.values())
-        g.add_argument(f"--{name.replace('_', '-')}", dest=name, type=_choice if choice else float,
+        g.add_argument(*_option_names(name), dest=name, type=_choice if choice else float,
                        help=_help(per_kind, len(MODELS)).replace("%", "%%"))
 
 

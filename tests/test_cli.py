@@ -342,3 +342,45 @@ def test_ensemble_vertical_scales_and_records(tmp_path, capsys):
     rows = sorted(read_results(rec), key=lambda r: r["record"])
     assert [r["ag_v_scale"] for r in rows] == [1.0, 0.0] and rows[0]["vertical"].endswith("UP.AT2")
     assert all(r["error"] == "" for r in rows)
+
+
+def test_every_model_simulates_and_runs_an_ensemble_from_its_declared_options(tmp_path, capsys):
+    """The post-tensioned block (and any registered model) through the CLI by its declared parameters alone:
+    `simulate` with --P0 / --k_t (the declared spelling) or --k-t, its summary naming them and its own output
+    (the tendon force); `ensemble` with the same options (the case field params) and, a rigid block, the
+    dimensionless ratios and the spectrum; an option of another model refused by name."""
+    import csv
+    import json
+
+    from rocking_model import simulate
+    from rocking_model.models import PostTensionedBlock
+    from rocking_model.ground_motion import SinePulse
+
+    pt = ["--model", "post_tensioned", "--b", "0.3", "--h", "1.5", "--m", "1000", "--P0", "2e4"]
+    assert main(["simulate", *pt, "--k_t", "2e6", "--pulse", "sine", "--amplitude", "10", "--frequency", "1",
+                 "--t-end", "3", "--no-plot", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "post-tensioned rocking block b = 0.3 m, h = 1.5 m, m = 1000 kg, P0 = 20000 N, k_t = 2e+06 N/m" in out
+    assert "uplift at tan(alpha) (g + P0/m) = 5.962 m/s2" in out and "max |tendon force| = " in out
+    (path,) = tmp_path.glob("post_tensioned_*.csv")
+    assert path.name == "post_tensioned_b0.3_h1.5_m1000_P0-20000_k_t2e+06_sine-A10ms2-f1Hz.csv"
+    ref = simulate(PostTensionedBlock(b=0.3, h=1.5, m=1000.0, P0=2e4, k_t=2e6), SinePulse(10.0, 2 * math.pi),
+                   3.0, output_interval=0.01)
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    assert np.max(np.abs(data["phi_rad"] - ref.phi)) < 1e-9 and np.max(ref.phi) > 0.1
+    assert np.max(np.abs(data["tendon_force_N"] - ref.values["tendon_force"])) < 1e-3
+    assert main(["simulate", *pt, "--k-t", "2e6", "--t-end", "0.1", "--no-plot", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    ens = tmp_path / "pt.csv"
+    assert main(["ensemble", *pt, "--k_t", "2e6", "--pulse", "sine", "--amplitude-ratios", "2", "6",
+                 "--frequency-ratios", "3", "--workers", "0", "--no-progress", "--out", str(ens)]) == 0
+    assert (tmp_path / "pt_spectrum.png").read_bytes()[:4] == b"\x89PNG"
+    rows = list(csv.DictReader(ens.open()))
+    assert [r["model"] for r in rows] == ["post_tensioned"] * 2 and not any(r["error"] for r in rows)
+    assert json.loads(rows[0]["params"]) == {"P0": 20000.0, "k_t": 2e6, "m": 1000.0}
+    # a_ratio 2 is below the tendon's uplift threshold (1 + P0/(m g) = 3.04): the block stays at rest
+    assert float(rows[0]["max_abs_phi"]) == 0.0 and float(rows[1]["max_abs_phi"]) > 0.05
+    capsys.readouterr()
+    assert main(["ensemble", "--P0", "1", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3",
+                 "--workers", "0", "--out", str(tmp_path / "r.csv")]) == 2
+    assert "--P0 is not a parameter of the rigid model; allowed: --m, --g, --impact-law" in capsys.readouterr().err
