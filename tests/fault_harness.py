@@ -50,11 +50,20 @@ STATUS_NAMES = {OK: "fmi2OK", WARNING: "fmi2Warning", DISCARD: "fmi2Discard", ER
 
 RIGID, FLEX, GMS, STOREY = ("RigidRockingBlock", "FlexibleRockingOscillator", "GroundMotionSource",
                             "LinearBuildingStorey")
-FMUS = (RIGID, FLEX, GMS, STOREY)
-SHORT = {RIGID: "rigid", FLEX: "flex", GMS: "ground", STOREY: "storey"}
-WITH_INPUT = (RIGID, FLEX, STOREY)
+PT = "PostTensionedRockingBlock"
+FMUS = (RIGID, FLEX, PT, GMS, STOREY)
+SHORT = {RIGID: "rigid", FLEX: "flex", PT: "pt", GMS: "ground", STOREY: "storey"}
+#: the model FMUs (`rocking_model.models.MODELS`), all of them `ModelSlave`s on the compiled engine
+ROCKING = (RIGID, FLEX, PT)
+WITH_INPUT = (RIGID, FLEX, PT, STOREY)
 #: the FMUs with the vertical ground acceleration input ag_v (issue 23) besides ag
-WITH_VERTICAL = (RIGID, FLEX)
+WITH_VERTICAL = (RIGID, FLEX, PT)
+#: The post-tensioned block (PT) shares the rigid block's slave class code (`ModelSlave`), its C FMI layer and
+#: its state format: it runs the cases over every FMU, every input and every kind of FMU (statuses, messages,
+#: state after refusals in a scene where the tendon acts, states, resets), its own parameters (P0, k_t: their
+#: bad values and the edges of their ranges) and the resets; the cases that test the shared machinery once
+#: more (the other slave classes' second initialization, batched setters, corrupted state bytes, input rates
+#: in initialization mode, declared solver options, the 50 instances) stay on the rigid and flexible FMUs.
 
 #: [m/s2] declared range of the input ag on every FMU that has it (modelDescription min/max)
 AG_LIMIT = 1000.0
@@ -62,7 +71,9 @@ AG_LIMIT = 1000.0
 DT = 0.01
 #: pulse amplitude [m/s2] and start values of the scene each FMU runs before a refused call: the rigid
 #: block (b/h = 0.2, uplift at g tan(alpha) = 1.96 m/s2) and the flexible oscillator rock, the storey vibrates
-SCENES = {RIGID: (3.0, {}), FLEX: (4.0, {}), STOREY: (2.0, {}), GMS: (None, {})}
+SCENES = {RIGID: (3.0, {}), FLEX: (4.0, {}), STOREY: (2.0, {}), GMS: (None, {}),
+          # b/h = 0.2 with a tendon (P0/m = 20 m/s2): uplift at 0.2 (9.81 + 20) = 5.96 m/s2; rocks, the tendon taut
+          PT: (8.0, {"m": 1000.0, "P0": 2e4, "k_t": 2e6})}
 #: steps of the scene before the refused call, and identical steps after it (subject versus control)
 N_BEFORE, N_AFTER = 20, 5
 #: a value reference no FMU of the package has
@@ -694,6 +705,9 @@ BAD_PARAMS = [
     (FLEX, {"rho": -1.0}), (FLEX, {"zeta": -0.1}), (FLEX, {"e_N": 2.0}), (FLEX, {"h": 0.0}), (FLEX, {"b": -0.2}),
     (FLEX, {"u_0": 10.0}), (FLEX, {"scheme": 7}), (FLEX, {"impact_rule": 5}), (FLEX, {"tolerance": 1.0}),
     (FLEX, {"g": math.inf}),
+    # post-tensioned block: its own parameters (the others are the rigid block's)
+    (PT, {"P0": -1.0}), (PT, {"P0": math.nan}), (PT, {"P0": math.inf}), (PT, {"k_t": -1.0}), (PT, {"k_t": math.nan}),
+    (PT, {"k_t": 1e16}),
     # linear storey
     (STOREY, {"T": -1.0}), (STOREY, {"T": math.nan}), (STOREY, {"zeta": -0.1}), (STOREY, {"u_0": math.inf}),
     # ground-motion source
@@ -886,7 +900,7 @@ def bad_step(h: Harness, fmu: str, what: str):
 
 
 for _fmu in FMUS:
-    for _what in ("dt=0", "dt<0", "dt=nan", "dt=inf", "t=nan", "t-ahead", "t-behind") if _fmu in (RIGID, FLEX) \
+    for _what in ("dt=0", "dt<0", "dt=nan", "dt=inf", "t=nan", "t-ahead", "t-behind") if _fmu in ROCKING \
             else ("dt=0", "dt=nan", "t=nan", "t-ahead"):
         add(f"doStep/{SHORT[_fmu]}/{_what}", bad_step, fmu=_fmu, what=_what,
             desc=f"{_fmu}: fmi2DoStep with {_what}")
@@ -1688,14 +1702,16 @@ def _edges():
     """(FMU, parameter, value) for the two edges of every declared Real parameter of the rocking FMUs (a closed
     bound itself, an open one's nearest double inside, a missing one 1e300; a range closed at 0 also the
     smallest positive double, whose reciprocal is inf), from the same declarations the FMUs are built from."""
-    from rocking_model.models import FlexibleOscillator, RigidBlock
+    from rocking_model.models import FlexibleOscillator, PostTensionedBlock, RigidBlock
     from rocking_model.simulation import SOLVER_PARAMETERS
 
     out = []
-    for fmu, cls in ((RIGID, RigidBlock), (FLEX, FlexibleOscillator)):
+    for fmu, cls in ((RIGID, RigidBlock), (FLEX, FlexibleOscillator), (PT, PostTensionedBlock)):
         for q in (*cls.parameters(), *cls.INITIAL, *SOLVER_PARAMETERS):
             if q.items or not q.fmu or q.unit is None:
                 continue
+            if fmu == PT and q.name not in ("P0", "k_t"):
+                continue         # the rigid block's parameters, initial values and solver options: its cases
             lo = -1e300 if q.lo is None else (math.nextafter(q.lo, math.inf) if q.lo_open else q.lo)
             hi = 1e300 if q.hi is None else (math.nextafter(q.hi, -math.inf) if q.hi_open else q.hi)
             tiny = (5e-324,) if lo == 0.0 else ()
@@ -1934,7 +1950,7 @@ def reset_from(h: Harness, fmu: str, where: str):
     initialization the same run."""
     s = h.instance(fmu)
     params = {RIGID: {"b": 0.3, "phi_0": 0.02}, FLEX: {"b": 0.3, "phi_0": 0.01}, STOREY: {"T": 0.3},
-              GMS: {"A": 2.0}}[fmu]
+              GMS: {"A": 2.0}, PT: {"b": 0.3, "phi_0": 0.02, "m": 500.0, "P0": 1e4, "k_t": 1e6}}[fmu]
     if where == "before-init":
         s.setup()
         s.enter()
@@ -1970,7 +1986,8 @@ def reset_from(h: Harness, fmu: str, where: str):
 
 for _fmu, _wheres in ((RIGID, ("before-init", "after-init", "after-error", "after-terminate", "after-discard",
                                "in-init-mode")),
-                      (FLEX, ("after-init", "after-error")), (STOREY, ("after-init", "after-error")),
+                      (FLEX, ("after-init", "after-error")), (PT, ("after-init", "after-error")),
+                      (STOREY, ("after-init", "after-error")),
                       (GMS, ("after-init", "after-error"))):
     for _where in _wheres:
         add(f"reset/{SHORT[_fmu]}/{_where}", reset_from, fmu=_fmu, where=_where,
@@ -2000,7 +2017,7 @@ def many_instances(h: Harness, fmus: Sequence[str], n: int = 50):
 add("reset/rigid/50-instances", many_instances, fmus=(RIGID,), kinds=("status", "state"),
     desc="RigidRockingBlock: 50 instances in one process")
 add("reset/all/50-instances-mixed", many_instances, fmus=FMUS, kinds=("status", "state"),
-    desc="the four FMUs, 50 instances in turn in one process")
+    desc="the five FMUs, 50 instances in turn in one process")
 
 
 # ---------------------------------------------------------------------------------------------- resources
@@ -2231,7 +2248,7 @@ FAMILIES = {
                           "the error message still reaches the logger (only debug messages need logging on)"),
     "declared": ("declared values that hung or overflowed a step: `mu` = 5e-324 (1/mu = inf hung the event-driven "
                  "step in LAPACK), now below the stated minimum 1e-3; both edges of every declared Real parameter "
-                 "of the two rocking FMUs under both schemes",
+                 "of the rocking FMUs under both schemes (of the post-tensioned block: its own, P0 and k_t)",
                  "beyond: fmi2Error at `fmi2ExitInitializationMode`; at an edge: fmi2Error naming the parameter, or "
                  "every step fmi2OK / fmi2Warning (fmi2Discard with a message)",
                  "the range the message states is the modelDescription's min and max (one declaration read by "
@@ -2341,10 +2358,10 @@ _PAGE_HEAD = """\
 <!-- generated by `python tests/fault_harness.py --write-doc docs/robustness.md` from the case list of
 tests/fault_harness.py; tests/test_fault_suite.py checks that this page is what the list generates -->
 
-The four FMUs (RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource, LinearBuildingStorey) run
-inside the importer's process. `tests/test_fault_suite.py` drives every FMI 2.0 co-simulation function
-through fmpy's low-level `fmpy.fmi2.FMU2Slave` with {n_cases} cases in {n_classes} classes, each case in a process
-of its own with a timeout (a crash or a hang is a failed case, never a dead test run). Every case asserts:
+The five FMUs (RigidRockingBlock, FlexibleRockingOscillator, PostTensionedRockingBlock, GroundMotionSource,
+LinearBuildingStorey) run inside the importer's process. `tests/test_fault_suite.py` drives every FMI 2.0
+co-simulation function through fmpy's low-level `fmpy.fmi2.FMU2Slave` with {n_cases} cases in {n_classes} classes,
+each case in a process of its own with a timeout (a crash or a hang is a failed case, never a dead test run). Every case asserts:
 
 1. the process survives (exit code 0, no signal) and finishes within its timeout;
 2. the status is exactly the one FMI 2.0 gives the call (the column "statuses" below);
@@ -2429,7 +2446,7 @@ def robustness_page() -> str:
 #: (issue 22: RigidRockingBlock and FlexibleRockingOscillator built from the C engine, dist/standalone/)
 KINDS = ("pythonfmu", "standalone")
 #: the FMUs that have a self-contained build; the system FMUs (source, storey) exist as pythonfmu FMUs only
-STANDALONE_FMUS = (RIGID, FLEX)
+STANDALONE_FMUS = (RIGID, FLEX, PT)
 _STANDALONE_BUILDS: Dict[str, Any] = {}
 
 
@@ -2478,7 +2495,7 @@ def standalone_xfail(kind: str, cid: str) -> Optional[str]:
 
 def not_applicable(kind: str, cid: str) -> Optional[str]:
     """Why case ``cid`` does not apply to ``kind`` of FMU, or None when it does. On the standalone FMUs every
-    case of the two rocking FMUs runs, except those of `STANDALONE_NA`; the cases of the system FMUs alone
+    case of the rocking FMUs runs, except those of `STANDALONE_NA`; the cases of the system FMUs alone
     (source, storey) would rerun the pythonfmu FMUs and are left to the pythonfmu kind."""
     if kind == "pythonfmu":
         return None

@@ -1,5 +1,6 @@
-"""Conformance and fault suite (issue 12): classes of misuse and bad input over the four FMUs
-(RigidRockingBlock, FlexibleRockingOscillator, GroundMotionSource, LinearBuildingStorey), driving every
+"""Conformance and fault suite (issue 12): classes of misuse and bad input over the five FMUs
+(RigidRockingBlock, FlexibleRockingOscillator, PostTensionedRockingBlock, GroundMotionSource,
+LinearBuildingStorey), driving every
 FMI 2.0 co-simulation function through fmpy's low-level ``FMU2Slave``.
 
 The cases live in tests/fault_harness.py (a case = a small function or a row of a table). Each runs in a
@@ -296,7 +297,7 @@ def test_at_least_100_classes():
     undescribed = [c.cid for c in fh.CASES.values() if not c.what]
     assert not undescribed, undescribed
     covered = {fmu for c in fh.CASES.values() for fmu in fh.FMUS if fh.SHORT[fmu] in c.cid.split("/")[1:2]}
-    assert covered == set(fh.FMUS)  # both rocking FMUs and the two system FMUs
+    assert covered == set(fh.FMUS)  # the rocking FMUs and the two system FMUs
 
 
 def test_robustness_page_is_what_the_case_list_generates():
