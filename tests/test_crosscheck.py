@@ -12,7 +12,8 @@ from fmpy.cross_check.validate_vendor_repo import read_csv, validate_test_fmu  #
 from fmpy.util import read_ref_opt_file  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-NAMES = ["RigidRockingBlock", "FlexibleRockingOscillator", "GroundMotionSource", "LinearBuildingStorey"]
+NAMES = ["RigidRockingBlock", "FlexibleRockingOscillator", "PostTensionedRockingBlock", "GroundMotionSource",
+         "LinearBuildingStorey"]
 
 
 @pytest.fixture(scope="module")
