@@ -19,6 +19,7 @@ from rocking_model import (AG_MAX, FlexibleOscillator, RigidBlock, SampledMotion
                            simulate)
 from rocking_model.cosim import MotionSource
 from rocking_model.ground_motion import GroundMotion, SinePulse
+from rocking_model.models import PostTensionedBlock
 from rocking_model.models.flexible_oscillator import OMEGA_MAX
 from rocking_model.models.linear_building import LinearStorey, StoreySimulator
 from rocking_model.simulation import DT_MIN_REL, MAX_STEPS
@@ -181,8 +182,12 @@ def test_ag_out_of_range_is_refused_naming_it(model, scheme, ag):
 
 
 @pytest.mark.parametrize("scheme", ["moreau_jean", "event_driven"])
-@pytest.mark.parametrize("model", [RigidBlock(), FlexibleOscillator()], ids=["rigid", "flexible"])
+@pytest.mark.parametrize("model", [RigidBlock(), FlexibleOscillator(),
+                                   PostTensionedBlock(m=1000.0, P0=2e4, k_t=2e6)],
+                         ids=["rigid", "flexible", "post_tensioned"])
 def test_ag_at_the_bound_gives_finite_outputs(model, scheme):
+    """(The post-tensioned block with its tendon acting: the tendon's kinks, events of the event-driven scheme,
+    under the largest accepted input.)"""
     sim = Simulator(model, scheme)
     for k in range(1, 30):
         watchdog(lambda: sim.advance(0.01 * k, AG_MAX * (-1) ** (k // 3)))
