@@ -301,7 +301,23 @@ class ModelCode:
         self._n_blocks = getattr(self, "_n_blocks", 0) + 1
         repl, red = sp.cse(exprs, symbols=sp.numbered_symbols(f"t{self._n_blocks}_"), optimizations="basic")
         pr = _Printer(self._names_all())
-        lines = [f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};" for s, e in repl]
+        # a sine and a cosine of the same argument from one call of rk_sincos (memoised: the kernels evaluated at
+        # one state ask them again), where the first of the two was computed; the other line goes
+        trig: dict = {}
+        for s, e in repl:
+            if isinstance(e, (sp.sin, sp.cos)):
+                trig.setdefault(e.args[0], {})[e.func] = s
+        pairs = {a: d for a, d in trig.items() if len(d) == 2}
+        lines, done = [], set()
+        for s, e in repl:
+            if isinstance(e, (sp.sin, sp.cos)) and e.args[0] in pairs:
+                if e.args[0] not in done:
+                    done.add(e.args[0])
+                    sn, cs = (pr.doprint(pairs[e.args[0]][f]) for f in (sp.sin, sp.cos))
+                    lines.append(f"{indent}double {sn}, {cs};")
+                    lines.append(f"{indent}rk_sincos(m, {pr.doprint(e.args[0])}, &{sn}, &{cs});")
+                continue
+            lines.append(f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};")
         for (lhs, _), e in zip(targets, red):
             lines.append(f"{indent}{lhs} = {pr.doprint(e)};")
         self._scope.update({e: s for s, e in repl if isinstance(e, (sp.sin, sp.cos))})

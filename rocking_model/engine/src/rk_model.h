@@ -28,6 +28,10 @@
 
 #include "rk_common.h"
 
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -179,7 +183,34 @@ struct rk_model {
     rk_set mode_closed[RK_MAX_MODES];
     signed char mode_stick[RK_MAX_MODES];
     signed char mode_sigma[RK_MAX_MODES];
+    /* rk_sincos's memo: sin and cos of the last argument (trig_ok 0: none, as a zeroed model starts). Not part of
+     * the model's meaning: a cache, which the const kernels write through it */
+    int trig_ok;
+    uint64_t trig_bits;
+    double trig_s, trig_c;
 };
+
+/** sin(x) and cos(x) for the generated kernels, memoised for the last argument (compared bit for bit: the same
+ *  values as computing them again). One step's end asks them repeatedly for the same coordinate: the rhs's last
+ *  stage, the event functions there, the outputs of a sample, and at the next communication step the settle and
+ *  the restart under the new input. */
+static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
+{
+    rk_model *w = (rk_model *)m;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    if (w->trig_ok && bits == w->trig_bits) {
+        *s = w->trig_s;
+        *c = w->trig_c;
+        return;
+    }
+    *s = sin(x);
+    *c = cos(x);
+    w->trig_bits = bits;
+    w->trig_s = *s;
+    w->trig_c = *c;
+    w->trig_ok = 1;
+}
 
 /** ops->closed_of(m, mode) from the table (an indirect call for a mode beyond it). */
 static inline rk_set rk_closed_of(const rk_model *m, int mode)
