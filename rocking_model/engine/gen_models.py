@@ -569,6 +569,17 @@ class ModelCode:
                 f"    dy[{k + j}] = rdd[{j}];" for j in range(k))
         s.append(f"static void {P}_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, "
                  "double *dy)\n{\n    (void)y; (void)ag; (void)ag_v; (void)dy;\n" + self._switch(cases) + "\n}\n")
+        # mode_acc1: r_ddot of the one-dof modes alone, the same statements as mode_rhs's, from and to registers
+        cases = {}
+        for mode, md in self.modes.items():
+            if md["k"] == 1:
+                body = self._with_names(self._y_names(md), lambda md=md: self._rdd_code(md))
+                cases[mode] = "    double rdd[1];\n" + body + "\n    return rdd[0];"
+        self.has_acc1 = bool(cases)
+        if cases:
+            s.append(f"static double {P}_mode_acc1(const rk_model *m, int mode, double y0, double y1, double ag, "
+                     "double ag_v)\n{\n    const double y[2] = {y0, y1};\n    (void)m; (void)y; (void)ag; (void)ag_v;\n"
+                     + self._switch(cases) + "\n    return NAN;\n}\n")
         # monitor_one: the open gaps and the margin (no ag, no forces)
         cases = {}
         L = self.D.symbol(self.mech.length_scale, "L")
@@ -822,7 +833,8 @@ class ModelCode:
                 f"    {opt(mech.classical_impact is not None, 'classical_impact_velocity')}, "
                 f"{opt(mech.work_note is not None, 'work_note')},\n"
                 f"    {P}_mode_monitor_one,\n"
-                f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX\n}};\n")
+                f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX,\n"
+                f"    {opt(self.has_acc1, 'mode_acc1')}\n}};\n")
 
 
 # ------------------------------------------------------------------------------------------------ the file

@@ -129,6 +129,8 @@ typedef struct ed_fn {
     int pure;                   /**< ag(t) (and ag_v(t)) calls no callback: evaluating it or not changes nothing */
     /** the model's own rhs of a non-sliding mode (what rk_mode_rhs calls there; NULL: through rk_mode_rhs) */
     void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
+    /** the model's mode_acc1 where mode_rhs is set and ag(t) cannot fail (NULL: none): ed_acc1 */
+    double (*acc1)(const rk_model *m, int mode, double y0, double y1, double ag, double ag_v);
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
     /** memo_n > 0: ed_G computes the totals too and keeps them for the last (t, y[memo_n]) it saw, which ed_totals
      *  reads there (the dip search and the demand peak both evaluate the middle of a step); 0: off */
@@ -157,6 +159,7 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     f->v0 = f->constant && ag_v != NULL ? rk_motion_eval(ag_v, 0.0, NULL, NULL) : 0.0;
     f->pure = f->constant || (ed_motion_pure(ag) && (ag_v == NULL || ed_motion_pure(ag_v)));
     f->mode_rhs = rk_mode_sliding(&e->model, mode) ? NULL : e->model.ops->mode_rhs;
+    f->acc1 = f->mode_rhs != NULL && f->pure ? e->model.ops->mode_acc1 : NULL;
     rk_error_clear(&f->err);
     f->memo_n = 0;
     f->memo_valid = 0;
@@ -209,6 +212,15 @@ static rk_status ed_rhs(void *ctx, double t, const double *y, double *dy)
     if (st != RK_OK)
         return rk_fail(&f->err, st, "the acceleration of mode %d has no solution at t = %.17g s", f->mode, t);
     return RK_OK;
+}
+
+/** ed_rhs's r_ddot of a one-dof mode as an rk_rhs1_fn (f->acc1 set: a motion that cannot fail) */
+static double ed_acc1(void *ctx, double t, double y0, double y1)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    double a, av;
+    (void)ed_ag(f, t, &a, &av);
+    return f->acc1(&f->e->model, f->mode, y0, y1, a, av);
 }
 
 static rk_status ed_G(void *ctx, double t, const double *y, double *g)
@@ -1139,6 +1151,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
         ED_TRYF(f, rk_stepper_init(st, s->tab, ed_rhs, f, s->t, s->y, 2 * s->k, s->tolerance, atol, max_step,
                                    s->k ? s->h : NAN, NULL, err));
     }
+    st->fun1 = f->acc1 != NULL ? ed_acc1 : NULL;
     s->rhs_mode = f->mode;
     s->rhs_constant = f->constant;
     s->rhs_value = f->a0;

@@ -158,6 +158,10 @@ typedef struct rk_model_ops {
     int n_named;                     /**< the declaration's derived quantities (R, alpha, p, ...) */
     const char *const *named;        /**< their names */
     const int *named_index;          /**< their places in rk_model.d */
+    /** optional (NULL: none): r_ddot of a sticking mode with one degree of freedom at y = (y0, y1) under (ag, ag_v),
+     *  bit for bit the dy[1] of mode_rhs (dy[0] is y1), taken and returned in registers: the Runge-Kutta stages
+     *  of such a mode chain through it without a store and a load of the state per stage (rk_step) */
+    double (*mode_acc1)(const rk_model *m, int mode, double y0, double y1, double ag, double ag_v);
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only

@@ -347,6 +347,11 @@ static RK_ALWAYS_INLINE rk_status stage(const rk_stepper *s, const rk_tableau *t
     lincomb_all(&tab->A[st_i], K, n, acc, fixed);
     for (j = 0; j < n; j++)
         arg[j] = s->y[j] + h * acc[j];
+    if (fixed && n == 2 && s->fun1 != NULL) {
+        K[st_i][0] = arg[1];
+        K[st_i][1] = s->fun1(s->ctx, t + tab->C[st_i] * h, arg[0], arg[1]);
+        return RK_OK;
+    }
     return call_rhs(s, t + tab->C[st_i] * h, arg, K[st_i], errp);
 }
 
@@ -377,9 +382,12 @@ static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, const rk_tablea
     lincomb_all(&tab->B, K, n, acc, fixed);
     for (j = 0; j < n; j++)
         y_new[j] = y[j] + h * acc[j];
-    st = call_rhs(s, t_new, y_new, K[ns - 1], errp);
-    if (st != RK_OK)
+    if (fixed && n == 2 && s->fun1 != NULL) {
+        K[ns - 1][0] = y_new[1];
+        K[ns - 1][1] = s->fun1(s->ctx, t_new, y_new[0], y_new[1]);
+    } else if ((st = call_rhs(s, t_new, y_new, K[ns - 1], errp)) != RK_OK) {
         return st;
+    }
     for (m = 0; m < tab->n_errors; m++)
         lincomb_all(&tab->E[m], K, n, er[m], fixed);
     /* mixed error scale atol_j + rtol max(|y_j|, |y_new_j|) */
