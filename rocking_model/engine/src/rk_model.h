@@ -208,8 +208,13 @@ static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
         *c = w->trig_c;
         return;
     }
+#if defined(__GNUC__) && defined(__GLIBC__)
+    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy) */
+    __builtin_sincos(x, s, c);
+#else
     *s = sin(x);
     *c = cos(x);
+#endif
     w->trig_bits = bits;
     w->trig_s = *s;
     w->trig_c = *c;
