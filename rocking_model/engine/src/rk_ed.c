@@ -237,7 +237,7 @@ static rk_status ed_G(void *ctx, double t, const double *y, double *g)
         rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, f->memo_lam, &has);
         f->memo_valid = 1;
         f->memo_t = t;
-        memcpy(f->memo_y, y, sizeof(double) * (size_t)f->memo_n);
+        rk_copy(f->memo_y, y, f->memo_n);
         return RK_OK;
     }
     rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL);
@@ -276,7 +276,7 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
     double a, av, g[RK_MAX_EVENTS];
     int has = 0;
     rk_status st;
-    if (f->memo_valid && t == f->memo_t && memcmp(y, f->memo_y, sizeof(double) * (size_t)f->memo_n) == 0) {
+    if (f->memo_valid && t == f->memo_t && rk_same_bits(y, f->memo_y, f->memo_n)) {
         lam[0] = f->memo_lam[0];
         lam[1] = f->memo_lam[1];
         return RK_OK;
@@ -300,8 +300,8 @@ static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, doubl
     if (st != RK_OK)
         return st;
     if (e->g_memo.valid && e->g_memo.mode == f->mode && e->g_memo.n_y == n_y && (lam == NULL || e->g_memo.has_lam)
-        && memcmp(&a, &e->g_memo.a, sizeof a) == 0 && memcmp(&av, &e->g_memo.av, sizeof av) == 0
-        && memcmp(y, e->g_memo.y, sizeof(double) * (size_t)n_y) == 0) {
+        && rk_same_bits(&a, &e->g_memo.a, 1) && rk_same_bits(&av, &e->g_memo.av, 1)
+        && rk_same_bits(y, e->g_memo.y, n_y)) {
         memcpy(g, e->g_memo.g, sizeof e->g_memo.g);
         if (lam != NULL) {
             lam[0] = e->g_memo.lam[0];
@@ -318,8 +318,8 @@ static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, doubl
     e->g_memo.has_lam = lam != NULL;
     e->g_memo.a = a;
     e->g_memo.av = av;
-    memcpy(e->g_memo.y, y, sizeof(double) * (size_t)n_y);
-    memcpy(e->g_memo.g, g, sizeof(double) * (size_t)n);
+    rk_copy(e->g_memo.y, y, n_y);
+    rk_copy(e->g_memo.g, g, n);
     if (lam != NULL) {
         e->g_memo.lam[0] = lam[0];
         e->g_memo.lam[1] = lam[1];
@@ -1352,10 +1352,10 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
                 ev.watch[i] = 0;
             }
         }
-        memcpy(g_prev, g_new, (size_t)ev.n * sizeof(double));
+        rk_copy(g_prev, g_new, ev.n);
     }
     s->t = s->stepper.t;
-    memcpy(s->y, s->stepper.y, (size_t)(2 * k) * sizeof(double));
+    rk_copy(s->y, s->stepper.y, 2 * k);
     if (k)
         s->h = s->stepper.h_abs;
     s->live = 1;

@@ -251,8 +251,8 @@ rk_status rk_stepper_init(rk_stepper *s, const rk_tableau *tab, rk_rhs_fn fun, v
     }
     s->h_abs = py_min(s->h_abs, max_step);
     s->t_old = s->t;
-    memcpy(s->y_old, s->y, sizeof(double) * (size_t)n);
-    memcpy(s->f_old, s->f, sizeof(double) * (size_t)n);
+    rk_copy(s->y_old, s->y, n);
+    rk_copy(s->f_old, s->f, n);
     s->n_steps = 0;
     s->n_rejected = 0;
     s->failed = 0;
@@ -274,8 +274,8 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
         st = call_rhs(s, t0, y0, f, err);
         if (st != RK_OK)
             return st;
-        memmove(s->y, y0, sizeof(double) * (size_t)n);       /* y0 may be s->y itself */
-        memcpy(s->f, f, sizeof(double) * (size_t)n);
+        rk_copy(s->y, y0, n);       /* y0 may be s->y itself */
+        rk_copy(s->f, f, n);
     }
     s->t = t0;
     s->n_K = 0;
@@ -290,8 +290,8 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
         s->h_abs = py_min(h, s->max_step);
     }
     s->t_old = s->t;
-    memcpy(s->y_old, s->y, sizeof(double) * (size_t)n);
-    memcpy(s->f_old, s->f, sizeof(double) * (size_t)n);
+    rk_copy(s->y_old, s->y, n);
+    rk_copy(s->f_old, s->f, n);
     return RK_OK;
 }
 
@@ -580,7 +580,7 @@ rk_status rk_dense_eval(rk_stepper *s, double t, double *y, rk_error *err)
     rk_status st;
     rk_error_clear(err);
     if (t == s->t) {
-        memcpy(y, s->y, sizeof(double) * (size_t)n);
+        rk_copy(y, s->y, n);
         return RK_OK;
     }
     if (n == 0)
