@@ -327,7 +327,23 @@ class ModelCode:
         self._n_blocks = getattr(self, "_n_blocks", 0) + 1
         repl, red = sp.cse(exprs, symbols=sp.numbered_symbols(f"t{self._n_blocks}_"), optimizations="basic")
         pr = _Printer(self._names_all())
-        lines = [f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};" for s, e in repl]
+        # a sine and a cosine of the same argument from one call of rk_sincos (memoised: the kernels evaluated at
+        # one state ask them again), where the first of the two was computed; the other line goes
+        trig: dict = {}
+        for s, e in repl:
+            if isinstance(e, (sp.sin, sp.cos)):
+                trig.setdefault(e.args[0], {})[e.func] = s
+        pairs = {a: d for a, d in trig.items() if len(d) == 2}
+        lines, done = [], set()
+        for s, e in repl:
+            if isinstance(e, (sp.sin, sp.cos)) and e.args[0] in pairs:
+                if e.args[0] not in done:
+                    done.add(e.args[0])
+                    sn, cs = (pr.doprint(pairs[e.args[0]][f]) for f in (sp.sin, sp.cos))
+                    lines.append(f"{indent}double {sn}, {cs};")
+                    lines.append(f"{indent}rk_sincos(m, {pr.doprint(e.args[0])}, &{sn}, &{cs});")
+                continue
+            lines.append(f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};")
         for (lhs, _), e in zip(targets, red):
             lines.append(f"{indent}{lhs} = {pr.doprint(e)};")
         self._scope.update({e: s for s, e in repl if isinstance(e, (sp.sin, sp.cos))})
@@ -591,6 +607,17 @@ class ModelCode:
                 f"    dy[{k + j}] = rdd[{j}];" for j in range(k))
         s.append(f"static void {P}_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, "
                  "double *dy)\n{\n    (void)y; (void)ag; (void)ag_v; (void)dy;\n" + self._switch(cases) + "\n}\n")
+        # mode_acc1: r_ddot of the one-dof modes alone, the same statements as mode_rhs's, from and to registers
+        cases = {}
+        for mode, md in self.modes.items():
+            if md["k"] == 1:
+                body = self._with_names(self._y_names(md), lambda md=md: self._rdd_code(md))
+                cases[mode] = "    double rdd[1];\n" + body + "\n    return rdd[0];"
+        self.has_acc1 = bool(cases)
+        if cases:
+            s.append(f"static double {P}_mode_acc1(const rk_model *m, int mode, double y0, double y1, double ag, "
+                     "double ag_v)\n{\n    const double y[2] = {y0, y1};\n    (void)m; (void)y; (void)ag; (void)ag_v;\n"
+                     + self._switch(cases) + "\n    return NAN;\n}\n")
         # monitor_one: the open gaps and the margin (no ag, no forces)
         cases = {}
         L = self.D.symbol(self.mech.length_scale, "L")
@@ -858,7 +885,8 @@ class ModelCode:
                 f"{opt(mech.work_note is not None, 'work_note')},\n"
                 f"    {P}_mode_monitor_one,\n"
                 f"    {len(self.named)}, {P}_NAMED, {P}_NAMED_INDEX,\n"
-                f"    {len(mech.switches)}, {opt(bool(mech.switches), 'switches')}\n}};\n")
+                f"    {len(mech.switches)}, {opt(bool(mech.switches), 'switches')},\n"
+                f"    {opt(self.has_acc1, 'mode_acc1')}\n}};\n")
 
 
 # ------------------------------------------------------------------------------------------------ the file

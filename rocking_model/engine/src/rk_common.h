@@ -75,6 +75,28 @@ static inline void rk_error_clear(rk_error *err)
     }
 }
 
+/** dst[0..n) = src[0..n) (the same array allowed), and whether a[0..n) and b[0..n) hold the same bits: the few
+ *  values of a state, event functions or outputs, without a call into the C library per copy or comparison */
+static inline void rk_copy(double *dst, const double *src, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        dst[i] = src[i];
+}
+
+static inline int rk_same_bits(const double *a, const double *b, int n)
+{
+    int i;
+    for (i = 0; i < n; i++) {
+        union { double d; unsigned long long u; } x, y;
+        x.d = a[i];
+        y.d = b[i];
+        if (x.u != y.u)
+            return 0;
+    }
+    return 1;
+}
+
 /** A function the compiler must not inline into its caller: a rarely taken branch of a hot function (whose
  *  registers it would otherwise make every call save). GCC and Clang only; elsewhere a hint is not needed. */
 #if defined(__GNUC__)

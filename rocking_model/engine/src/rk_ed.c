@@ -129,6 +129,8 @@ typedef struct ed_fn {
     int pure;                   /**< ag(t) (and ag_v(t)) calls no callback: evaluating it or not changes nothing */
     /** the model's own rhs of a non-sliding mode (what rk_mode_rhs calls there; NULL: through rk_mode_rhs) */
     void (*mode_rhs)(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *dy);
+    /** the model's mode_acc1 where mode_rhs is set and ag(t) cannot fail (NULL: none): ed_acc1 */
+    double (*acc1)(const rk_model *m, int mode, double y0, double y1, double ag, double ag_v);
     rk_error err;               /**< the failure of a callback (a motion callback, a sliding solve) */
     /** memo_n > 0: ed_G computes the totals too and keeps them for the last (t, y[memo_n]) it saw, which ed_totals
      *  reads there (the dip search and the demand peak both evaluate the middle of a step); 0: off */
@@ -157,6 +159,7 @@ static void ed_fn_init(ed_fn *f, rk_engine *e, int mode, rk_motion *ag, rk_motio
     f->v0 = f->constant && ag_v != NULL ? rk_motion_eval(ag_v, 0.0, NULL, NULL) : 0.0;
     f->pure = f->constant || (ed_motion_pure(ag) && (ag_v == NULL || ed_motion_pure(ag_v)));
     f->mode_rhs = rk_mode_sliding(&e->model, mode) ? NULL : e->model.ops->mode_rhs;
+    f->acc1 = f->mode_rhs != NULL && f->pure ? e->model.ops->mode_acc1 : NULL;
     rk_error_clear(&f->err);
     f->memo_n = 0;
     f->memo_valid = 0;
@@ -219,6 +222,15 @@ static void ed_orient(const rk_engine *e, double *g, int n)
         g[n - 1 - nsw + j] *= ED(e)->switch_side[j];
 }
 
+/** ed_rhs's r_ddot of a one-dof mode as an rk_rhs1_fn (f->acc1 set: a motion that cannot fail) */
+static double ed_acc1(void *ctx, double t, double y0, double y1)
+{
+    ed_fn *f = (ed_fn *)ctx;
+    double a, av;
+    (void)ed_ag(f, t, &a, &av);
+    return f->acc1(&f->e->model, f->mode, y0, y1, a, av);
+}
+
 static rk_status ed_G(void *ctx, double t, const double *y, double *g)
 {
     ed_fn *f = (ed_fn *)ctx;
@@ -233,7 +245,7 @@ static rk_status ed_G(void *ctx, double t, const double *y, double *g)
         ed_orient(f->e, g, rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, f->memo_lam, &has));
         f->memo_valid = 1;
         f->memo_t = t;
-        memcpy(f->memo_y, y, sizeof(double) * (size_t)f->memo_n);
+        rk_copy(f->memo_y, y, f->memo_n);
         return RK_OK;
     }
     ed_orient(f->e, g, rk_mode_monitors(&f->e->model, f->mode, y, a, av, g, NULL, NULL));
@@ -272,7 +284,7 @@ static rk_status ed_totals(ed_fn *f, double t, const double *y, double *lam)
     double a, av, g[RK_MAX_EVENTS];
     int has = 0;
     rk_status st;
-    if (f->memo_valid && t == f->memo_t && memcmp(y, f->memo_y, sizeof(double) * (size_t)f->memo_n) == 0) {
+    if (f->memo_valid && t == f->memo_t && rk_same_bits(y, f->memo_y, f->memo_n)) {
         lam[0] = f->memo_lam[0];
         lam[1] = f->memo_lam[1];
         return RK_OK;
@@ -296,8 +308,8 @@ static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, doubl
     if (st != RK_OK)
         return st;
     if (e->g_memo.valid && e->g_memo.mode == f->mode && e->g_memo.n_y == n_y && (lam == NULL || e->g_memo.has_lam)
-        && memcmp(&a, &e->g_memo.a, sizeof a) == 0 && memcmp(&av, &e->g_memo.av, sizeof av) == 0
-        && memcmp(y, e->g_memo.y, sizeof(double) * (size_t)n_y) == 0) {
+        && rk_same_bits(&a, &e->g_memo.a, 1) && rk_same_bits(&av, &e->g_memo.av, 1)
+        && rk_same_bits(y, e->g_memo.y, n_y)) {
         memcpy(g, e->g_memo.g, sizeof e->g_memo.g);
         if (lam != NULL) {
             lam[0] = e->g_memo.lam[0];
@@ -315,8 +327,8 @@ static rk_status ed_G_totals(ed_fn *f, double t, const double *y, int n_y, doubl
     e->g_memo.has_lam = lam != NULL;
     e->g_memo.a = a;
     e->g_memo.av = av;
-    memcpy(e->g_memo.y, y, sizeof(double) * (size_t)n_y);
-    memcpy(e->g_memo.g, g, sizeof(double) * (size_t)n);
+    rk_copy(e->g_memo.y, y, n_y);
+    rk_copy(e->g_memo.g, g, n);
     if (lam != NULL) {
         e->g_memo.lam[0] = lam[0];
         e->g_memo.lam[1] = lam[1];
@@ -1184,6 +1196,7 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
         ED_TRYF(f, rk_stepper_init(st, s->tab, ed_rhs, f, s->t, s->y, 2 * s->k, s->tolerance, atol, max_step,
                                    s->k ? s->h : NAN, NULL, err));
     }
+    st->fun1 = f->acc1 != NULL ? ed_acc1 : NULL;
     s->rhs_mode = f->mode;
     s->rhs_constant = f->constant;
     s->rhs_value = f->a0;
@@ -1385,10 +1398,10 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
                 ev.watch[i] = 0;
             }
         }
-        memcpy(g_prev, g_new, (size_t)ev.n * sizeof(double));
+        rk_copy(g_prev, g_new, ev.n);
     }
     s->t = s->stepper.t;
-    memcpy(s->y, s->stepper.y, (size_t)(2 * k) * sizeof(double));
+    rk_copy(s->y, s->stepper.y, 2 * k);
     if (k)
         s->h = s->stepper.h_abs;
     s->live = 1;

@@ -436,7 +436,7 @@ void rk_engine_outputs(rk_engine *e, double *out)
             rk_ed_outputs(e, e->out_cache);
         e->out_token = e->core.token;
     }
-    memcpy(out, e->out_cache, (size_t)n * sizeof(double));
+    rk_copy(out, e->out_cache, n);
 }
 
 double rk_engine_time(const rk_engine *e)

@@ -281,8 +281,8 @@ rk_status rk_dip_search(rk_event_ctx *c, const int *armed, const double *g_prev,
     }
     *ta = t0;
     *tb = t1;
-    memcpy(ga, g_prev, sizeof(double) * (size_t)ne);
-    memcpy(gb, g_new, sizeof(double) * (size_t)ne);
+    rk_copy(ga, g_prev, ne);
+    rk_copy(gb, g_new, ne);
     return RK_OK;
 }
 

@@ -28,6 +28,10 @@
 
 #include "rk_common.h"
 
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -160,6 +164,10 @@ typedef struct rk_model_ops {
      *  crossing. optional (n_switches 0, NULL). */
     int n_switches;
     void (*switches)(const rk_model *m, const double *q, const double *v, double *s);
+    /** optional (NULL: none): r_ddot of a sticking mode with one degree of freedom at y = (y0, y1) under (ag, ag_v),
+     *  bit for bit the dy[1] of mode_rhs (dy[0] is y1), taken and returned in registers: the Runge-Kutta stages
+     *  of such a mode chain through it without a store and a load of the state per stage (rk_step) */
+    double (*mode_acc1)(const rk_model *m, int mode, double y0, double y1, double ag, double ag_v);
 } rk_model_ops;
 
 /** An instance: the kernel, its parameters and derived constants. Plain data (copy by assignment); the only
@@ -189,7 +197,39 @@ struct rk_model {
      *  the mode kernels of a model whose forces depend on where the base stands (a tendon anchored in the
      *  ground); 0 outside a driver. */
     double offset;
+    /* rk_sincos's memo: sin and cos of the last argument (trig_ok 0: none, as a zeroed model starts). Not part of
+     * the model's meaning: a cache, which the const kernels write through it */
+    int trig_ok;
+    uint64_t trig_bits;
+    double trig_s, trig_c;
 };
+
+/** sin(x) and cos(x) for the generated kernels, memoised for the last argument (compared bit for bit: the same
+ *  values as computing them again). One step's end asks them repeatedly for the same coordinate: the rhs's last
+ *  stage, the event functions there, the outputs of a sample, and at the next communication step the settle and
+ *  the restart under the new input. */
+static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
+{
+    rk_model *w = (rk_model *)m;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    if (w->trig_ok && bits == w->trig_bits) {
+        *s = w->trig_s;
+        *c = w->trig_c;
+        return;
+    }
+#if defined(__GNUC__) && defined(__GLIBC__)
+    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy) */
+    __builtin_sincos(x, s, c);
+#else
+    *s = sin(x);
+    *c = cos(x);
+#endif
+    w->trig_bits = bits;
+    w->trig_s = *s;
+    w->trig_c = *c;
+    w->trig_ok = 1;
+}
 
 /** ops->closed_of(m, mode) from the table (an indirect call for a mode beyond it). */
 static inline rk_set rk_closed_of(const rk_model *m, int mode)

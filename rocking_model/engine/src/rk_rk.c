@@ -251,8 +251,8 @@ rk_status rk_stepper_init(rk_stepper *s, const rk_tableau *tab, rk_rhs_fn fun, v
     }
     s->h_abs = py_min(s->h_abs, max_step);
     s->t_old = s->t;
-    memcpy(s->y_old, s->y, sizeof(double) * (size_t)n);
-    memcpy(s->f_old, s->f, sizeof(double) * (size_t)n);
+    rk_copy(s->y_old, s->y, n);
+    rk_copy(s->f_old, s->f, n);
     s->n_steps = 0;
     s->n_rejected = 0;
     s->failed = 0;
@@ -274,8 +274,8 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
         st = call_rhs(s, t0, y0, f, err);
         if (st != RK_OK)
             return st;
-        memmove(s->y, y0, sizeof(double) * (size_t)n);       /* y0 may be s->y itself */
-        memcpy(s->f, f, sizeof(double) * (size_t)n);
+        rk_copy(s->y, y0, n);       /* y0 may be s->y itself */
+        rk_copy(s->f, f, n);
     }
     s->t = t0;
     s->n_K = 0;
@@ -290,14 +290,35 @@ rk_status rk_stepper_restart(rk_stepper *s, rk_rhs_fn fun, void *ctx, double t0,
         s->h_abs = py_min(h, s->max_step);
     }
     s->t_old = s->t;
-    memcpy(s->y_old, s->y, sizeof(double) * (size_t)n);
-    memcpy(s->f_old, s->f, sizeof(double) * (size_t)n);
+    rk_copy(s->y_old, s->y, n);
+    rk_copy(s->f_old, s->f, n);
     return RK_OK;
 }
 
+#if defined(__GNUC__)
+#define RK_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define RK_ALWAYS_INLINE inline
+#endif
+/* loops over a tableau's stages and terms: unrolled in full where the tableau is a constant (step_n) */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8
+#define RK_UNROLL _Pragma("GCC unroll 16")
+#else
+#define RK_UNROLL
+#endif
+
+/* acc[j] += c row[j], j < n */
+static RK_ALWAYS_INLINE void add_term(double *acc, double c, const double *row, int n)
+{
+    int j;
+    for (j = 0; j < n; j++)
+        acc[j] = acc[j] + c * row[j];
+}
+
 /* sum_i c_i K[idx_i][j] for every component j < n at once (rk._lincomb per component: the same products and
- * left-to-right sums, the terms read once for all components); 0.0 where there are no terms */
-static inline void lincomb_all(const rk_lincomb *lc, double K[][RK_MAX_Y], int n, double *acc)
+ * left-to-right sums, the terms read once for all components); 0.0 where there are no terms. fixed: lc and n
+ * are constants (step_n's DOP853 path), the terms unrolled */
+static RK_ALWAYS_INLINE void lincomb_all(const rk_lincomb *lc, double K[][RK_MAX_Y], int n, double *acc, int fixed)
 {
     int i, j;
     if (lc->n == 0) {
@@ -307,49 +328,68 @@ static inline void lincomb_all(const rk_lincomb *lc, double K[][RK_MAX_Y], int n
     }
     for (j = 0; j < n; j++)
         acc[j] = lc->c[0] * K[lc->idx[0]][j];
-    for (i = 1; i < lc->n; i++) {
-        const double c = lc->c[i], *row = K[lc->idx[i]];
-        for (j = 0; j < n; j++)
-            acc[j] = acc[j] + c * row[j];
+    if (fixed) {
+        RK_UNROLL
+        for (i = 1; i < lc->n; i++)
+            add_term(acc, lc->c[i], K[lc->idx[i]], n);
+    } else {
+        for (i = 1; i < lc->n; i++)
+            add_term(acc, lc->c[i], K[lc->idx[i]], n);
     }
 }
 
-#if defined(__GNUC__)
-#define RK_ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define RK_ALWAYS_INLINE inline
-#endif
+/* stage st_i of a step: K[st_i] = f(t + C h, y + h sum_i A_i K_i) */
+static RK_ALWAYS_INLINE rk_status stage(const rk_stepper *s, const rk_tableau *tab, int st_i, int n, int fixed,
+                                       double t, double h, double K[][RK_MAX_Y], rk_error *errp)
+{
+    double arg[RK_MAX_Y], acc[RK_MAX_Y];
+    int j;
+    lincomb_all(&tab->A[st_i], K, n, acc, fixed);
+    for (j = 0; j < n; j++)
+        arg[j] = s->y[j] + h * acc[j];
+    if (fixed && n == 2 && s->fun1 != NULL) {
+        K[st_i][0] = arg[1];
+        K[st_i][1] = s->fun1(s->ctx, t + tab->C[st_i] * h, arg[0], arg[1]);
+        return RK_OK;
+    }
+    return call_rhs(s, t + tab->C[st_i] * h, arg, K[st_i], errp);
+}
 
 /* rk._Compiled.rk_step: the stages, y_new, f_new = f(t_new, y_new), the error estimates and the tableau's
- * error norm; K[s][j] receives the n_stages stages. Inlined with n a constant where the state size is known
- * (attempt_2: one degree of freedom, the rigid block's rocking modes), so that the component loops unroll */
-static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, int n, double t, double h, double t_new,
-                                            double *y_new, double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
+ * error norm; K[s][j] receives the n_stages stages. fixed: tab and n are constants (step_n), the loops over
+ * the stages and their terms unrolled */
+static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, const rk_tableau *tab, int n, int fixed, double t,
+                                            double h, double t_new, double *y_new, double K[][RK_MAX_Y],
+                                            double *err_norm, rk_error *errp)
 {
-    const rk_tableau *tab = s->tab;
     const double *y = s->y;
-    double arg[RK_MAX_Y], sc[RK_MAX_Y], er[2][RK_MAX_Y], acc[RK_MAX_Y];
+    double sc[RK_MAX_Y], er[2][RK_MAX_Y], acc[RK_MAX_Y];
     double err;
     int ns = tab->n_stages, st_i, j, m;
     rk_status st;
     for (j = 0; j < n; j++)
         K[0][j] = s->f[j];
-    for (st_i = 1; st_i < ns - 1; st_i++) {
-        lincomb_all(&tab->A[st_i], K, n, acc);
-        for (j = 0; j < n; j++)
-            arg[j] = y[j] + h * acc[j];
-        st = call_rhs(s, t + tab->C[st_i] * h, arg, K[st_i], errp);
-        if (st != RK_OK)
-            return st;
+    if (fixed) {
+        RK_UNROLL
+        for (st_i = 1; st_i < ns - 1; st_i++)
+            if ((st = stage(s, tab, st_i, n, 1, t, h, K, errp)) != RK_OK)
+                return st;
+    } else {
+        for (st_i = 1; st_i < ns - 1; st_i++)
+            if ((st = stage(s, tab, st_i, n, 0, t, h, K, errp)) != RK_OK)
+                return st;
     }
-    lincomb_all(&tab->B, K, n, acc);
+    lincomb_all(&tab->B, K, n, acc, fixed);
     for (j = 0; j < n; j++)
         y_new[j] = y[j] + h * acc[j];
-    st = call_rhs(s, t_new, y_new, K[ns - 1], errp);
-    if (st != RK_OK)
+    if (fixed && n == 2 && s->fun1 != NULL) {
+        K[ns - 1][0] = y_new[1];
+        K[ns - 1][1] = s->fun1(s->ctx, t_new, y_new[0], y_new[1]);
+    } else if ((st = call_rhs(s, t_new, y_new, K[ns - 1], errp)) != RK_OK) {
         return st;
+    }
     for (m = 0; m < tab->n_errors; m++)
-        lincomb_all(&tab->E[m], K, n, er[m]);
+        lincomb_all(&tab->E[m], K, n, er[m], fixed);
     /* mixed error scale atol_j + rtol max(|y_j|, |y_new_j|) */
     for (j = 0; j < n; j++)
         sc[j] = s->atol[j] + py_max(fabs(y[j]), fabs(y_new[j])) * s->rtol;
@@ -385,35 +425,17 @@ static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, int n, double t
     return RK_OK;
 }
 
-static rk_status attempt_2(const rk_stepper *s, double t, double h, double t_new, double *y_new,
-                           double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
+/* One accepted step (rk.ExplicitRK.step) of a stepper with n > 0 components under the tableau tab: inlined with
+ * tab and n constants for DOP853 on one degree of freedom (the rigid block's rocking modes), so that the stage
+ * loops unroll into straight-line code with the coefficients as constants and the two components side by side
+ * (the same operations in the same order: the same bits) */
+static RK_ALWAYS_INLINE rk_status step_n(rk_stepper *s, const rk_tableau *tab, int n, int fixed, double t_bound,
+                                         rk_error *err)
 {
-    return attempt_n(s, 2, t, h, t_new, y_new, K, err_norm, errp);
-}
-
-static rk_status attempt(const rk_stepper *s, double t, double h, double t_new, double *y_new,
-                         double K[][RK_MAX_Y], double *err_norm, rk_error *errp)
-{
-    return attempt_n(s, s->n, t, h, t_new, y_new, K, err_norm, errp);
-}
-
-rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
-{
-    const rk_tableau *tab = s->tab;
     double K[RK_MAX_STAGES][RK_MAX_Y], y_new[RK_MAX_Y];
     double t = s->t, min_step, h_abs, h, t_new, e, err_exp;
-    int n = s->n, rejected = 0;
+    int rejected = 0, i, j;
     rk_status st;
-    rk_error_clear(err);
-    if (n == 0) {
-        h = py_min(s->max_step, t_bound - t);
-        s->t_old = t;
-        s->t = (h >= t_bound - t) ? t_bound : t + h;
-        s->n_steps += 1;
-        s->n_K = 0;
-        s->dense_ready = 0;
-        return RK_OK;
-    }
     err_exp = -1.0 / (tab->error_order + 1.0);
     min_step = 10.0 * fabs(nextafter(t, INFINITY) - t);
     h_abs = py_min(s->h_abs, s->max_step);
@@ -428,7 +450,7 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
             h = t_new - t;
             h_abs = fabs(h);
         }
-        st = n == 2 ? attempt_2(s, t, h, t_new, y_new, K, &e, err) : attempt(s, t, h, t_new, y_new, K, &e, err);
+        st = attempt_n(s, tab, n, fixed, t, h, t_new, y_new, K, &e, err);
         if (st != RK_OK)
             return st;
         if (e < 1.0 || h_abs <= min_step) {
@@ -438,7 +460,6 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
                     /* even the smallest step does not give a finite state: the motion has overflowed */
                     char ys[RK_MSG_LEN];
                     size_t pos = 0;
-                    int j;
                     ys[pos++] = '[';
                     for (j = 0; j < n && pos < sizeof ys - 32; j++) {
                         if (j > 0) {
@@ -473,17 +494,38 @@ rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
         s->n_rejected += 1;
     }
     s->t_old = t;
-    memcpy(s->y_old, s->y, sizeof(double) * (size_t)n);
-    memcpy(s->f_old, s->f, sizeof(double) * (size_t)n);
     s->t = t_new;
-    memcpy(s->y, y_new, sizeof(double) * (size_t)n);
-    memcpy(s->f, K[tab->n_stages - 1], sizeof(double) * (size_t)n);
-    /* the stage rows in one block copy (their unused tails included): one call instead of one per stage */
-    memcpy(s->K, K, sizeof K[0] * (size_t)tab->n_stages);
+    for (j = 0; j < n; j++) {
+        s->y_old[j] = s->y[j];
+        s->f_old[j] = s->f[j];
+        s->y[j] = y_new[j];
+        s->f[j] = K[tab->n_stages - 1][j];
+    }
+    /* the n components of each stage (the rows' unused tails are never read) */
+    for (i = 0; i < tab->n_stages; i++)
+        for (j = 0; j < n; j++)
+            s->K[i][j] = K[i][j];
     s->n_K = tab->n_stages;
     s->dense_ready = 0;
     s->n_steps += 1;
     return RK_OK;
+}
+
+rk_status rk_step(rk_stepper *s, double t_bound, rk_error *err)
+{
+    rk_error_clear(err);
+    if (s->n == 0) {
+        double t = s->t, h = py_min(s->max_step, t_bound - t);
+        s->t_old = t;
+        s->t = (h >= t_bound - t) ? t_bound : t + h;
+        s->n_steps += 1;
+        s->n_K = 0;
+        s->dense_ready = 0;
+        return RK_OK;
+    }
+    if (s->n == 2 && s->tab == &RK_TABLEAU_DOP853)
+        return step_n(s, &RK_TABLEAU_DOP853, 2, 1, t_bound, err);
+    return step_n(s, s->tab, s->n, 0, t_bound, err);
 }
 
 void rk_hermite_mid(const rk_stepper *s, double *y_mid)
@@ -538,7 +580,7 @@ rk_status rk_dense_eval(rk_stepper *s, double t, double *y, rk_error *err)
     rk_status st;
     rk_error_clear(err);
     if (t == s->t) {
-        memcpy(y, s->y, sizeof(double) * (size_t)n);
+        rk_copy(y, s->y, n);
         return RK_OK;
     }
     if (n == 0)

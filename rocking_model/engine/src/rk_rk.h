@@ -33,6 +33,9 @@ extern "C" {
 
 /** dy = f(t, y) of size n; returns RK_OK, or a status that aborts the step (propagated by rk_step). */
 typedef rk_status (*rk_rhs_fn)(void *ctx, double t, const double *y, double *dy);
+/** The second component of f(t, y) of a two-component system whose first is y1 (r_ddot of one degree of freedom),
+ *  from and to registers; bit for bit what the rk_rhs_fn of the same stepper writes; never fails. */
+typedef double (*rk_rhs1_fn)(void *ctx, double t, double y0, double y1);
 /** G(t, y): the event functions (n_events values) of the current mode. */
 typedef rk_status (*rk_event_fn)(void *ctx, double t, const double *y, double *g);
 /** G(t, y)[i] alone where that is cheaper than all of G and bit for bit the same value: *done = 1 with *gi set, or
@@ -53,6 +56,9 @@ typedef struct rk_stepper {
     rk_rhs_fn fun;                  /**< set by the driver before every call (not part of the copied state's
                                          meaning: the driver re-binds it after a restore) */
     void *ctx;
+    /** optional (NULL: none; bound with fun, by the driver): fun as an rk_rhs1_fn, which rk_step's stages of DOP853 on
+     *  two components call instead */
+    rk_rhs1_fn fun1;
     int n;                          /**< state size (0: nothing moves, steps only advance t) */
     double t, y[RK_MAX_Y], f[RK_MAX_Y];          /**< current point and its derivative (FSAL) */
     double t_old, y_old[RK_MAX_Y], f_old[RK_MAX_Y];
