@@ -119,8 +119,9 @@ class TendonBlock(Block):
 def rocking_block(block: Block, t_end, ag=lambda t: 0.0, ag_v=lambda t: 0.0, phi_0=0.0, phi_dot_0=0.0,
                   breaks=()):
     """Rigid block from (phi_0, phi_dot_0) (phi_0 = 0, at rest: full contact): uplift when |ag| exceeds
-    tan(alpha) (g + ag_v) (`Block.uplift_acceleration`; a `TendonBlock` adds its tendon), rocking on one corner, Housner impacts at phi = 0. Modes: 'full', 'left', 'right'.
-    States: [phi, phi_dot]."""
+    tan(alpha) (g + ag_v) (`Block.uplift_acceleration`; a `TendonBlock` adds its tendon), rocking on one corner,
+    Housner impacts at phi = 0. Modes: 'full', 'left', 'right'. States: [phi, phi_dot]."""
+
     def step(t0, t1, state):
         mode, y0 = state
         if mode == "full":
