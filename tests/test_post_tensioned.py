@@ -189,7 +189,7 @@ def test_impact_outcome_is_the_free_blocks():
 
 # ---------------------------------------------------------------------------------------------- 5. tendon force
 #: (model keywords, ag, ag_v, the modes the scene must visit): a vertical pulse that throws the block into flight
-#: (g + ag_v + P0/m < 0 for 0.1 s) while a horizontal one rocks it, landing with slip (the later sticking phases on
+#: (g + ag_v + P0/m < 0 for 0.15 s) while a horizontal one rocks it, landing with slip (the later sticking phases on
 #: a shifted base); a pulse that makes the pivot slide as the block rocks (mu = 0.21), then rocks on the slid base;
 #: and both at mu = 0.15, with sliding in flight, the tendon slack and overturning (frozen outputs)
 FORCE_SCENES = {
