@@ -7,7 +7,9 @@ by function build this small module instead: `kernels()` returns (ffi, lib) with
     int k_call(const char *fn, int mode, const double *a, const double *b, double ag, double ag_v,
                double *out, double *out2)                                      -> a count / status
 
-on one model instance held by the module. Skips the calling test when no C compiler is available.
+on one model instance held by the module; ``int k_set_offset(double x)`` sets its base offset m->offset [m],
+which the mode kernels of a model with ground-anchored forces read (the event-driven driver's shift). Skips the
+calling test when no C compiler is available.
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ int k_init(const char *kind, const double *params, int n, char *msg);
 int k_call(const char *fn, int mode, const double *a, const double *b, double ag, double ag_v, double *out,
            double *out2);
 int k_info(int *n_dof, int *n_contacts, int *n_outputs);
+int k_set_offset(double offset);
 """
 
 SHIM = r"""
@@ -47,6 +50,12 @@ int k_init(const char *kind, const double *params, int n, char *msg)
         msg[511] = 0;
         return -1;
     }
+    return 0;
+}
+
+int k_set_offset(double offset)
+{
+    K.offset = offset;
     return 0;
 }
 

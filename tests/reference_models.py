@@ -79,19 +79,54 @@ class Block:
         k = 3.0 / (4.0 * self.R)
         return k * (ag * math.cos(self.alpha - s * phi) - s * (self.g + ag_v) * math.sin(self.alpha - s * phi))
 
+    def uplift_acceleration(self, ag_v):
+        """|ag| [m/s2] above which the block at rest lifts off: the moment of the inertial force m ag h about a
+        corner exceeds that of the weight, m (g + ag_v) b."""
+        return math.tan(self.alpha) * (self.g + ag_v)
+
+
+@dataclass(frozen=True)
+class TendonBlock(Block):
+    """Post-tensioned block: the rigid block of mass m [kg] with a vertical unbonded tendon from the ground at
+    the base centre (0, 0) to the top centre, of force T = max(0, P0 + k_t (L - 2h)) [N] (P0 [N], k_t [N/m])."""
+
+    m: float = 1.0
+    P0: float = 0.0
+    k_t: float = 0.0
+
+    def tendon_length(self, phi):
+        """L [m] rocking on either corner: |top anchor - ground anchor|, the top anchor on a circle about the
+        pivot (law of cosines): L^2 = 4h^2 + 2b^2 (1 - cos phi) + 4bh |sin phi|."""
+        b, h = self.b, self.h
+        return math.sqrt(4 * h * h + 2 * b * b * (1 - math.cos(phi)) + 4 * b * h * abs(math.sin(phi)))
+
+    def tendon_force(self, phi):
+        return max(0.0, self.P0 + self.k_t * (self.tendon_length(phi) - 2 * self.h))
+
+    def phi_ddot(self, phi, s, ag, ag_v):
+        """The free block's rocking plus the tendon's moment about the pivot, -T dL/dphi / I_O, with
+        dL/dphi = (b^2 sin phi + 2 s b h cos phi)/L (its mirror image on the right corner, s = -1)."""
+        b, h = self.b, self.h
+        I_O = 4.0 / 3.0 * self.m * self.R ** 2
+        dL = (b * b * math.sin(phi) + 2 * s * b * h * math.cos(phi)) / self.tendon_length(phi)
+        return super().phi_ddot(phi, s, ag, ag_v) - self.tendon_force(phi) * dL / I_O
+
+    def uplift_acceleration(self, ag_v):
+        """At rest the tendon adds P0 to the weight (its line passes through the centroid, at b from a corner)."""
+        return math.tan(self.alpha) * (self.g + ag_v + self.P0 / self.m)
+
 
 def rocking_block(block: Block, t_end, ag=lambda t: 0.0, ag_v=lambda t: 0.0, phi_0=0.0, phi_dot_0=0.0,
                   breaks=()):
     """Rigid block from (phi_0, phi_dot_0) (phi_0 = 0, at rest: full contact): uplift when |ag| exceeds
-    tan(alpha) (g + ag_v), rocking on one corner, Housner impacts at phi = 0. Modes: 'full', 'left', 'right'.
-    States: [phi, phi_dot]."""
-    tan_a = math.tan(block.alpha)
+    tan(alpha) (g + ag_v) (`Block.uplift_acceleration`; a `TendonBlock` adds its tendon), rocking on one corner,
+    Housner impacts at phi = 0. Modes: 'full', 'left', 'right'. States: [phi, phi_dot]."""
 
     def step(t0, t1, state):
         mode, y0 = state
         if mode == "full":
             # the ground pushes until |ag| = tan(alpha) (g + ag_v); the block then lifts on the driven side
-            ev = lambda t, y: abs(ag(t)) - tan_a * (block.g + ag_v(t))
+            ev = lambda t, y: abs(ag(t)) - block.uplift_acceleration(ag_v(t))
             ev.terminal, ev.direction = True, 1
             sol = solve_ivp(lambda t, y: [0.0], (t0, t1), [0.0], events=ev, rtol=RTOL, atol=ATOL,
                             dense_output=True)
