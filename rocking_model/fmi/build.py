@@ -313,8 +313,8 @@ def _zero(t):
 CROSS_CHECK = {
     "RigidRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.5), "ag_v": _zero}),
     "FlexibleRockingOscillator": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(3.0), "ag_v": _zero}),
-    # default start values (the rules): P0 = k_t = 0, the tendon idle, so the scene is the free block's
-    "PostTensionedRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.5), "ag_v": _zero}),
+    # default start values (the rules): the pier with its tendon; 0.5 g rocks it (its uplift needs 0.302 g)
+    "PostTensionedRockingBlock": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(5.0), "ag_v": _zero}),
     "GroundMotionSource": dict(stop=2.0, step=0.01, rel_tol=1e-8, inputs={}),
     "LinearBuildingStorey": dict(stop=3.0, step=0.01, rel_tol=1e-8, inputs={"ag": _pulse(2.0, 0.5, 0.1)}),
 }

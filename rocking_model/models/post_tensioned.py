@@ -29,10 +29,18 @@ from .rigid_block import RigidBlock
 @dataclass(frozen=True)
 class PostTensionedBlock(RigidBlock):
     """Rigid block with a vertical unbonded post-tensioned tendon: b, h [m], m [kg], g [m/s2], e_N [1], P0 [N]
-    initial tendon force, k_t [N/m] tendon axial stiffness (P0 = k_t = 0: the free `RigidBlock`)."""
+    initial tendon force, k_t [N/m] tendon axial stiffness (P0 = k_t = 0: the free `RigidBlock`).
 
-    P0: float = param(0.0, "N", "Initial post-tensioning force of the tendon (>= 0)", lo=0.0, hi=1e15)
-    k_t: float = param(0.0, "N/m", "Axial stiffness of the tendon, E_t A_t / L_t (>= 0)", lo=0.0, hi=1e15)
+    Defaults: a precast rocking bridge pier of 1 m x 5 m and 20 t (b = 0.5 m, h = 2.5 m, m = 2e4 kg) with a
+    tendon of about 560 mm2 of strand over 5 m (k_t = E_t A_t / L_t = 2e7 N/m) post-tensioned to P0 = 100 kN,
+    half the pier's weight: representative values, not a tested specimen. Uplift from rest then needs
+    |ag| > tan(alpha) (g + P0/m) = 0.302 g."""
+
+    b: float = param(0.5, "m", "Half-width of the block", lo=1e-6, hi=1e3)
+    h: float = param(2.5, "m", "Half-height of the block", lo=1e-6, hi=1e3)
+    m: float = param(2e4, "kg", "Mass of the block", lo=1e-9, hi=1e12)
+    P0: float = param(1e5, "N", "Initial post-tensioning force of the tendon (>= 0)", lo=0.0, hi=1e15)
+    k_t: float = param(2e7, "N/m", "Axial stiffness of the tendon, E_t A_t / L_t (>= 0)", lo=0.0, hi=1e15)
 
     kind: ClassVar[str] = "post_tensioned"
     fmu_name: ClassVar[str] = "PostTensionedRockingBlock"
