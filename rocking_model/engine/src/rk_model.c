@@ -617,18 +617,22 @@ static void stick_monitors(const rk_model *m, int mode, const double *y, double 
 
 /* the switches of the force laws on the reduced state y of mode, before the overturning margin g[n - 1]: the
  * margin moves to the end (n + n_switches functions) */
-static int with_switches(const rk_model *m, int mode, const double *y, double *g, int n)
+static RK_NOINLINE int add_switches(const rk_model *m, int mode, const double *y, double *g, int n)
 {
     int nsw = m->ops->n_switches;
     double q[RK_MAX_DOF], v[RK_MAX_DOF];
-    if (nsw == 0)
-        return n;
     rk_embed_any(m, mode, y, q, v);
     if (!rk_mode_sliding(m, mode) && rk_closed_of(m, mode))
         q[m->ops->slide_index] += m->offset;
     g[n - 1 + nsw] = g[n - 1];
     m->ops->switches(m, q, v, g + n - 1);
     return n + nsw;
+}
+
+/* (a model without switches pays one test: the event functions are evaluated at every step) */
+static inline int with_switches(const rk_model *m, int mode, const double *y, double *g, int n)
+{
+    return m->ops->n_switches == 0 ? n : add_switches(m, mode, y, g, n);
 }
 
 int rk_mode_monitors(const rk_model *m, int mode, const double *y, double ag, double ag_v, double *g, double *totals,
