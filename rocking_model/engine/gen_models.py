@@ -92,6 +92,15 @@ def _simplify(e):
     return e
 
 
+def _map_condition(c, f):
+    """A Piecewise condition with f applied to the sides of its comparisons."""
+    if isinstance(c, sp.core.relational.Relational):
+        return c.func(f(c.lhs), f(c.rhs))
+    if isinstance(c, (sp.And, sp.Or, sp.Not)):
+        return c.func(*[_map_condition(a, f) for a in c.args])
+    return c
+
+
 class _Derived:
     """The parameter-only subexpressions of a model, computed once per instance into m->d[]."""
 
@@ -132,13 +141,8 @@ class _Derived:
             return e.func(*rest)
         return e.func(*[self.hoist(a) for a in e.args])
 
-
     def _hoist_condition(self, c):
-        if isinstance(c, sp.core.relational.Relational):
-            return c.func(self.hoist(c.lhs), self.hoist(c.rhs))
-        if isinstance(c, (sp.And, sp.Or, sp.Not)):
-            return c.func(*[self._hoist_condition(a) for a in c.args])
-        return c
+        return _map_condition(c, self.hoist)
 
 
 def _c_double(x: float) -> str:
@@ -380,11 +384,7 @@ class ModelCode:
         return sp.Add(*out)
 
     def _canonical_condition(self, c):
-        if isinstance(c, sp.core.relational.Relational):
-            return c.func(self._canonical(c.lhs), self._canonical(c.rhs))
-        if isinstance(c, (sp.And, sp.Or, sp.Not)):
-            return c.func(*[self._canonical_condition(a) for a in c.args])
-        return c
+        return _map_condition(c, self._canonical)
 
     def _collect(self, e):
         """e grouped by the ground accelerations (fewer products than the expanded sum)."""
