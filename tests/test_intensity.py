@@ -285,3 +285,25 @@ def test_cumulative_arias_is_nondecreasing_and_ends_at_arias():
     c = cumulative_arias(t, a)
     assert c[0] == 0.0 and np.all(np.diff(c) >= 0)
     assert c[-1] == intensity_measures((t, a))["Arias"]
+
+
+# ------------------------------------------------------------------------------------- CLI
+def test_cli_im_prints_the_measures(tmp_path, capsys):
+    import json
+
+    from rocking_model.cli import main
+    from rocking_model.records import read_record, write_csv
+
+    t, a = _record()
+    path = write_csv(tmp_path / "rec.csv", t, a, units="m/s2")
+    assert main(["im", str(path), "--periods", "0.5", "1", "--b", "0.2", "--h", "1.0", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    ref = intensity_measures(read_record(path), [0.5, 1.0], block=RigidBlock(b=0.2, h=1.0))
+    assert got == pytest.approx(ref, rel=1e-15)
+    assert main(["im", str(path), "--periods", "0.2:1:3", "--scale", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "Sa(0.6)" in out and f"{2 * ref['PGA']:12.6g} m/s2" in out
+    assert main(["im", str(path), "--b", "0.2"]) == 2
+    assert "rocking im: error: --b and --h go together" in capsys.readouterr().err
+    assert main(["im", str(path), "--zeta", "-0.1"]) == 2
+    assert "rocking im: error: zeta = -0.1 is out of range" in capsys.readouterr().err
