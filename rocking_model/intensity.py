@@ -44,6 +44,20 @@ ROCKING_MEASURES = ("PGA/(g tan alpha)", "PGV p/(g tan alpha)")
 #: units of the measures (``Sa(T)``: m/s2)
 UNITS = {"PGA": "m/s2", "PGV": "m/s", "PGD": "m", "Arias": "m/s", "CAV": "m/s", "D5_95": "s", "Sa": "m/s2",
          "PGA/(g tan alpha)": "1", "PGV p/(g tan alpha)": "1"}
+#: one-line definition of each measure (``Sa``: of every ``Sa(T)``), as the module docstring states them
+DEFINITIONS = {
+    "PGA": "peak ground acceleration [m/s2]: max |ag| over the samples",
+    "PGV": "peak ground velocity [m/s]: max |v| over the samples, v the exact integral of ag from rest",
+    "PGD": "peak ground displacement [m]: max |d| over the samples, d the exact integral of v from rest",
+    "Arias": "Arias intensity [m/s]: pi/(2 g) times the integral of ag^2 over the record",
+    "CAV": "cumulative absolute velocity [m/s]: the integral of |ag| over the record",
+    "D5_95": "significant duration [s]: t_95 - t_5 of the normalised cumulative Arias intensity (linear "
+             "between the samples)",
+    "Sa": "pseudo-spectral acceleration [m/s2]: omega^2 max |u| over the samples of the damped linear "
+          "oscillator of period T = 2 pi/omega under -ag, from rest (Sa(0) = PGA)",
+    "PGA/(g tan alpha)": "PGA over the block's g tan(alpha) [1]",
+    "PGV p/(g tan alpha)": "PGV times the block's frequency parameter p over its g tan(alpha) [1]",
+}
 #: [1, relative to the mean step] sample times within this of a uniform grid count as uniform (the tolerance
 #: the records readers use for a time step: rocking_model.records.DT_RTOL)
 DT_RTOL = 1e-6

@@ -72,8 +72,8 @@ def test_mle_likelihood_equals_a_direct_optimisation(seed, n):
                 for th in (0.1, 0.5, 1.5) for b in (0.1, 0.5, 1.5)), key=lambda r: r.fun)
     assert fit.loglik == pytest.approx(-best.fun, abs=1e-9)
     assert fit.loglik >= -best.fun - 1e-10
-    assert fit.theta == pytest.approx(best.x[0], rel=1e-5)
-    assert fit.beta == pytest.approx(best.x[1], rel=1e-5)
+    assert fit.theta == pytest.approx(best.x[0], rel=1e-7)           # measured 5e-9
+    assert fit.beta == pytest.approx(best.x[1], rel=1e-7)
 
 
 def test_stripes_with_none_or_all_exceeded_and_degenerate_data():
