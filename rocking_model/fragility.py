@@ -525,8 +525,8 @@ def plot_fragility(fits, im_grid=None, *, observed=None, bands=None, ax=None, im
 
     fits: a FragilityFit, a sequence or a mapping {label: fit}. observed: per fit, (im_levels, n_cases,
     n_exceeded) or (im_levels, fractions), aligned with fits (a mapping by label, a sequence, or one tuple for
-    one fit). bands: FragilityBands per fit, aligned likewise. im_grid: IM values of the curves (default: the
-    bands' grid, else a span of the medians and the stripes)."""
+    one fit). bands: FragilityBands per fit, aligned likewise. im_grid: IM values of the curves (default:
+    0 to 1.5 times the largest median or stripe)."""
     if ax is None:
         from .plotting import _pyplot
 
@@ -541,12 +541,8 @@ def plot_fragility(fits, im_grid=None, *, observed=None, bands=None, ax=None, im
         for o in obs:
             if o is not None:
                 pts += list(np.asarray(o[0], dtype=float))
-        for b in bs:
-            if b is not None:
-                pts += [b.im_grid.min(), b.im_grid.max()]
-        pts = [p for p in pts if p > 0]
-        lo, hi = (min(pts) / 2, max(pts) * 2) if pts else (0.01, 10.0)
-        im_grid = np.linspace(0.0, hi, 300) if lo <= 0 else np.linspace(lo / 4, hi, 300)
+        pts = [p for p in pts if 0 < p < math.inf] or [float(b.im_grid.max()) / 1.5 for b in bs if b is not None]
+        im_grid = np.linspace(0.0, 1.5 * max(pts) if pts else 1.0, 301)
     grid = np.asarray(im_grid, dtype=float)
     for i, ((label, f), o, b) in enumerate(zip(named, obs, bs)):
         color = f"C{i % 10}"
