@@ -7,6 +7,7 @@
     rocking ensemble --pulse sine --amplitude-ratios 1:6:11 --frequency-ratios 1:10:10 --workers 2
     rocking build-fmu [--dest dist]          (needs a C compiler and the Python headers)
     rocking benchmark [--quick] [--ensemble] (source checkout only)
+    rocking im RECORD --periods 0.5 1 2 [--b 0.2 --h 1.0]   (a record's intensity measures)
 
 Only argument handling and reporting live here; the physics is in `rocking_model.simulation`. Bad input
 prints one line ``rocking <command>: error: ...`` and exits with status 2 (never a traceback).
@@ -460,6 +461,43 @@ def cmd_ensemble(args) -> int:
     return 0 if s["n_errors"] == 0 else 1
 
 
+def cmd_im(args) -> int:
+    """Print a record's intensity measures (rocking_model.intensity), one per line, or as JSON."""
+    from .intensity import UNITS, intensity_measures
+    from .records import G_N, load_motion
+    from .validation import check_real
+
+    if (args.b is None) != (args.h is None):
+        raise UsageError("--b and --h go together (the rigid block of the rocking measures)")
+    g = check_real("--g", args.g, lo=0.0, lo_open=True)
+    block = None
+    if args.b is not None:
+        from .models.rigid_block import RigidBlock
+
+        block = RigidBlock(b=args.b, h=args.h, g=g)
+    rec = load_motion(args.record, args.units)
+    if args.resample:
+        rec = rec.resampled(args.resample)
+    if args.scale != 1.0:
+        rec = rec.scaled(args.scale)
+    m = intensity_measures(rec, _flat(args.periods) or (), zeta=args.zeta, g=g, block=block,
+                           baseline=args.baseline)
+    if args.json:
+        import json
+
+        print(json.dumps({k: (v if math.isfinite(v) else None) for k, v in m.items()}, indent=2))
+        return 0
+    print(f"record {rec.name}: {rec.t.size} samples, dt = {rec.dt:g} s, {rec.t[-1] - rec.t[0]:g} s"
+          + (f"; rigid block b = {args.b:g} m, h = {args.h:g} m (alpha = {block.alpha:.4f} rad, "
+             f"p = {block.p:.3f} rad/s)" if block is not None else ""))
+    width = max(len(k) for k in m)
+    for k, v in m.items():
+        unit = UNITS["Sa" if k.startswith("Sa(") else k]
+        extra = f"  ({v / G_N:.4g} g)" if unit == "m/s2" else ""
+        print(f"{k:<{width}}  {v:12.6g} {'' if unit == '1' else unit}{extra}".rstrip())
+    return 0
+
+
 # --------------------------------------------------------------------------------------------- parser
 #: the model parameters of `rocking ensemble` that are case fields of their own (b, h: grids of geometries);
 #: the models' other declared parameters are options of one value each (the case field ``params``)
@@ -606,6 +644,28 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.add_argument("--plot", help="overturning spectrum PNG (default: <out stem>_spectrum.png)")
     g.add_argument("--no-plot", action="store_true", help="skip the spectrum PNG")
+
+    i = sub.add_parser("im", help="a record's intensity measures (PGA, PGV, PGD, Arias, CAV, D5-95, Sa(T))",
+                       description="Print the intensity measures of a record (rocking_model.intensity: the record "
+                                   "integrated as sampled, exactly for a piecewise-linear acceleration, no baseline "
+                                   "correction unless --baseline; peaks over the samples); the horizontal "
+                                   "component. Lists accept numbers and start:stop:num.")
+    i.add_argument("record", help="PEER .AT2 or .csv file (time, ag), or synthetic[:seed]")
+    i.add_argument("--units", help="units of a CSV record when its header does not state them (g, m/s2, cm/s2...)")
+    i.add_argument("--periods", type=_values, nargs="+", metavar="T",
+                   help="oscillator periods T [s] of the pseudo-spectral accelerations Sa(T) (T = 0: PGA)")
+    i.add_argument("--zeta", type=float, default=0.05, help="oscillator damping ratio [1] (default 0.05)")
+    i.add_argument("--g", type=float, default=9.81,
+                   help="gravity [m/s2] of the Arias intensity and the rocking measures (default 9.81)")
+    i.add_argument("--b", type=float, help="half-width [m] of a rigid block: adds PGA/(g tan alpha) and "
+                                           "PGV p/(g tan alpha) (with --h)")
+    i.add_argument("--h", type=float, help="half-height [m] of the rigid block (with --b)")
+    i.add_argument("--scale", type=float, default=1.0, help="scale factor on the record [1]")
+    i.add_argument("--resample", type=float, help="resample the record every DT [s] first (linear; a record "
+                                                  "must be uniformly sampled)")
+    i.add_argument("--baseline", choices=("linear",), help="remove the least-squares line through the "
+                                                          "acceleration samples first")
+    i.add_argument("--json", action="store_true", help="print a JSON object {name: value} (SI units)")
     return p
 
 
@@ -623,6 +683,8 @@ def main(argv: list[str] | None = None) -> int:
             return cmd_build_fmu(args)
         if args.command == "benchmark":
             return cmd_benchmark(args, extra)
+        if args.command == "im":
+            return cmd_im(args)
         return cmd_ensemble(args)
     except (UsageError, ValueError, FileNotFoundError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
