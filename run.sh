@@ -33,6 +33,22 @@ libtbb() {
     fi
 }
 
+# The sanitized builds and the fuzz harnesses (tests/test_sanitize.py, tests/sanitize.py) need clang with its
+# sanitizer and libFuzzer runtimes: Debian's clang-14 and libclang-rt-14-dev, installed the same way; without
+# them those tests skip naming the packages.
+sanitizers() {
+    if command -v clang-14 >/dev/null 2>&1 && [ -e "$(clang-14 -print-file-name=libclang_rt.fuzzer-x86_64.a)" ]; then
+        return 0
+    fi
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        say "installing clang-14 and libclang-rt-14-dev for the sanitized builds and fuzzing (apt-get)"
+        { apt-get install -y -q clang-14 libclang-rt-14-dev || { apt-get update -q && apt-get install -y -q clang-14 libclang-rt-14-dev; }; } \
+            >/dev/null 2>&1 || say "apt-get could not install clang-14 libclang-rt-14-dev: the sanitizer tests will skip"
+    else
+        say "clang-14 / libclang-rt-14-dev are missing (not root or no apt-get): the sanitizer tests will skip"
+    fi
+}
+
 case "${1:-}" in
     demo)
         setup plot
@@ -44,6 +60,7 @@ case "${1:-}" in
     test)
         setup test,ecos
         libtbb
+        sanitizers
         shift
         say "running the tests (pytest $*)"
         "$VENV/bin/python" -m pytest "$@"

@@ -159,7 +159,10 @@ class RockingSlave(Fmi2Slave):
         row = self._row
         if row is None:
             row = self._row = self._eng.output_row()
-        return _PY_TYPES[self._specs[name].type](row[self._out_pos[name]])
+        spec = self._specs[name]
+        if spec.type == "Integer":            # a count past the largest fmi2Integer saturates there
+            return int(min(row[self._out_pos[name]], _INT32[1]))
+        return _PY_TYPES[spec.type](row[self._out_pos[name]])
 
     def _setter(self, spec: Var):
         # pythonfmu's own path to a variable (the importer's calls go through _set)
@@ -487,7 +490,7 @@ class RockingSlave(Fmi2Slave):
         for name, py in self._outputs:
             if name not in out:
                 raise KeyError(f"Simulator.outputs() has no entry {name!r}")
-            values[name] = py(out[name])
+            values[name] = py(out[name]) if py is not int else int(min(out[name], _INT32[1]))
         if self.freeze_output is not None and out.get(self.freeze_output) and not self._frozen:
             self._freeze()
 
@@ -790,6 +793,9 @@ _BIG = sys.float_info.max
 _MAX_TEXT = 4096
 #: FMI 2.0 fmi2Integer is a 32-bit int
 _INT32 = (-2**31, 2**31 - 1)
+#: the simulator's counts exposed as Integer outputs (any count >= 0 in a state) saturate at 2147483647, the
+#: largest fmi2Integer: a run that counts past it saves states the FMU must take back
+_SATURATES = " (saturates at 2147483647, the largest fmi2Integer)"
 
 
 #: magnitude (in the parameter's own unit) below which a nonzero parameter is named as the likely cause of an
@@ -851,7 +857,7 @@ class ModelSlave(RockingSlave):
         extra_outputs = (
             Var("contact", "output", 0, type="Integer", min=0, max=model_class.max_contact_code(),
                 description="Contact state: " + model_class.contact_description()),
-            Var("impacts", "output", 0, type="Integer", description="Number of impacts so far"),
+            Var("impacts", "output", 0, type="Integer", description="Number of impacts so far" + _SATURATES),
             Var("overturned", "output", False, type="Boolean",
                 description="True once the structure has overturned (|phi| reached pi/2): from then on the "
                             "outputs are frozen at the pose reached, at rest (velocities 0, energy of that "
@@ -864,7 +870,7 @@ class ModelSlave(RockingSlave):
                             "mu; values near 1e6 mean a lift-off where sticking needs unbounded friction)"),
             Var("painleve", "output", 0, type="Integer",
                 description="Painleve situations met so far (sliding with no or several consistent "
-                            "accelerations, each resolved by an impact without collision)"),
+                            "accelerations, each resolved by an impact without collision)" + _SATURATES),
         )
         return model_variables(model_class, SOLVER_PARAMETERS, (MAX_STEPS_PARAMETER,), (AG_INPUT, AG_V_INPUT),
                                extra_outputs)

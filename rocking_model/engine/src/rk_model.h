@@ -218,8 +218,9 @@ static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
         *c = w->trig_c;
         return;
     }
-#if defined(__GNUC__) && defined(__GLIBC__)
-    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy) */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
+    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy; clang
+     * has no __builtin_sincos and merges the two calls itself) */
     __builtin_sincos(x, s, c);
 #else
     *s = sin(x);

@@ -223,6 +223,21 @@ static int input_var(int k) {
     return -1;
 }
 
+/* the largest fmi2Integer: the engine's counts (impacts, painleve; 64-bit, any value >= 0 in a state) saturate
+ * there in their Integer outputs (documented in the variables' descriptions). Saturated rather than refused: a
+ * run that counts past it serializes states with such counts, which the FMU must take back. */
+#define RK_FMU_COUNT_MAX 2147483647.0
+static double count_value(long long n) { return n > 2147483647LL ? RK_FMU_COUNT_MAX : (double)n; }
+
+/* a value held as a double as an fmi2Integer: saturated at the type's range (nan: 0), never an out-of-range
+ * conversion (undefined behaviour in C) */
+static fmi2Integer to_integer(double x) {
+    if (!(x == x)) return 0;
+    if (x >= 2147483647.0) return 2147483647;
+    if (x <= -2147483648.0) return -2147483647 - 1;
+    return (fmi2Integer)x;
+}
+
 /* RockingSlave._update_outputs: the outputs from the engine; the freeze once overturned (with its warning) */
 static void update_outputs(Instance *S) {
     Slave *s = &S->s;
@@ -234,10 +249,10 @@ static void update_outputs(Instance *S) {
         switch (v->role) {
         case RK_ROLE_OUTPUT: s->values[i] = out[v->index]; break;
         case RK_ROLE_CONTACT: s->values[i] = rk_engine_contact_code(S->engine); break;
-        case RK_ROLE_IMPACTS: s->values[i] = (double)rk_engine_impacts(S->engine); break;
+        case RK_ROLE_IMPACTS: s->values[i] = count_value(rk_engine_impacts(S->engine)); break;
         case RK_ROLE_OVERTURNED: s->values[i] = overturned ? 1.0 : 0.0; break;
         case RK_ROLE_FRICTION_DEMAND: s->values[i] = rk_engine_friction_demand(S->engine); break;
-        case RK_ROLE_PAINLEVE: s->values[i] = (double)rk_engine_painleve(S->engine); break;
+        case RK_ROLE_PAINLEVE: s->values[i] = count_value(rk_engine_painleve(S->engine)); break;
         default: break;
         }
     }
@@ -413,7 +428,7 @@ fmi2Status fmi2c_backend_get_real(fmi2c_instance *c, const fmi2ValueReference vr
         return fmi2OK;                                                                                      \
     }
 
-INT_GETTER(get_integer, GetInteger, fmi2Integer, RK_INTEGER, (fmi2Integer)x)
+INT_GETTER(get_integer, GetInteger, fmi2Integer, RK_INTEGER, to_integer(x))
 INT_GETTER(get_boolean, GetBoolean, fmi2Boolean, RK_BOOLEAN, x != 0.0 ? fmi2True : fmi2False)
 
 fmi2Status fmi2c_backend_get_string(fmi2c_instance *c, const fmi2ValueReference vr[], size_t nvr,
