@@ -12,7 +12,7 @@ expected) plus a closed form or a comparison between the schemes. Tests that fai
 integrator bug keep their strict assertion and are marked ``xfail(strict=True)`` with the bug's number
 (the list in the issue / the report), so that a fix shows up as XPASS.
 
-Round-off (issue 12): the long and violent scenes (free rocking to rest under a long quiet input, large
+Round-off: the long and violent scenes (free rocking to rest under a long quiet input, large
 steps, the stored 30 s record, a one-sine pulse that overturns) are named scenes of `roundoff`; they
 are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
 that overturn are checked to the end, the final fall and the frozen overturned state included (issue 15).

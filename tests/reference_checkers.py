@@ -1,4 +1,4 @@
-"""The FMUs under the reference checkers (issue 33): the FMU Compliance Checker (modelica-tools
+"""The FMUs under the reference checkers: the FMU Compliance Checker (modelica-tools
 FMUComplianceChecker, `fmuCheck.linux64`, built with FMI Library) and Reference-FMUs' `fmusim` (tag v0.0.39)
 run every FMU the project builds (the pythonfmu FMUs and the self-contained ones) on its cross-check scene
 (rocking_model/fmi/build.py: CROSS_CHECK, the input table sampled at the communication points); each must run

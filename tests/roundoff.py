@@ -1,4 +1,4 @@
-"""Round-off robustness of the suite's long and violent scenes (issue 12).
+"""Round-off robustness of the suite's long and violent scenes.
 
 A long rocking history is chaotic: round-off (another CPU's BLAS kernel, libm variant or SIMD path) moves
 it, and a test whose verdict round-off can flip fails on some machine sooner or later. The scenes of the

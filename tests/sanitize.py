@@ -1,4 +1,4 @@
-"""Sanitized builds and fuzzing of the C core (issue 33): AddressSanitizer + UndefinedBehaviorSanitizer builds
+"""Sanitized builds and fuzzing of the C core: AddressSanitizer + UndefinedBehaviorSanitizer builds
 of the self-contained FMUs and of the Python extension, the FMU fault suite and the engine tests run under
 them, and the libFuzzer harnesses of fuzz/ (fuzz/README.md) run for a bounded time.
 

@@ -2,7 +2,7 @@
 communication steps and non-uniformly sampled records. Helpers (Trace, assert_sane, ...) are those of
 tests/hard_cases.py; the documented tolerances are stated there.
 
-Round-off (issue 12): the long and violent scenes below are registered with `roundoff.scene`; each asserts
+Round-off: the long and violent scenes below are registered with `roundoff.scene`; each asserts
 invariants on a scene whose verdict is far from a decision boundary, and is run again with a 1-ulp
 perturbation of its initial state and input (in-process) and in a subprocess with other arithmetic kernels
 (`roundoff.kernel_env`); the verdicts must be the same (test_same_verdicts_*), the margins must hold."""

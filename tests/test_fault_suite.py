@@ -1,4 +1,4 @@
-"""Conformance and fault suite (issue 12): classes of misuse and bad input over the five FMUs
+"""Conformance and fault suite: classes of misuse and bad input over the five FMUs
 (RigidRockingBlock, FlexibleRockingOscillator, PostTensionedRockingBlock, GroundMotionSource,
 LinearBuildingStorey), driving every
 FMI 2.0 co-simulation function through fmpy's low-level ``FMU2Slave``.

@@ -1,4 +1,4 @@
-"""Each FMU runs the code it was built with (issue 12): FMUs loaded into one process share sys.modules, so the
+"""Each FMU runs the code it was built with: FMUs loaded into one process share sys.modules, so the
 bundled package is imported under the digest of its sources (build_fmu.bundled_script). Checked with a
 deliberately modified copy of the package built into an FMU of the same name, loaded next to the original
 (and next to a host that imported, and changed, its own rocking_model first), in one subprocess."""

@@ -1,4 +1,4 @@
-"""The Integer outputs impacts and painleve of the self-contained FMUs (issue 33): the engine counts them in 64
+"""The Integer outputs impacts and painleve of the self-contained FMUs: the engine counts them in 64
 bits, and a state may hold any count >= 0 (a long run counts past 2**31 - 1; anyone writing a state can put
 one there, recomputing both CRC-32s). fmi2GetInteger saturates them at 2147483647, the largest fmi2Integer (as
 the variables' descriptions say), where it used to convert the count to int unchecked (undefined behaviour; the

@@ -3,7 +3,7 @@
 beyond the documented tolerance, no energy increase with ag = 0 (zeta >= 0, e_N = 0), and the FMU agrees
 with the Python API bit for bit.
 
-Round-off (issue 12): the runs are short (0.6 s) but can be violent (pulses up to 1.5 g). `run` runs every
+Round-off: the runs are short (0.6 s) but can be violent (pulses up to 1.5 g). `run` runs every
 example a second time with a 1-ulp perturbation of its initial state and of a non-zero input amplitude
 (`roundoff.Perturbation`, in-process) and asserts that the verdicts of the three invariants (finite, no
 penetration beyond PEN_TOL, energy not increasing when ag = 0) are the same. (The test functions are left

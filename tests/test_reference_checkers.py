@@ -1,4 +1,4 @@
-"""The reference checkers on every FMU the project builds (issue 33): the FMU Compliance Checker
+"""The reference checkers on every FMU the project builds: the FMU Compliance Checker
 (fmuCheck.linux64) and Reference-FMUs' fmusim (v0.0.39) must run both kinds of FMU on their cross-check scenes
 with no error or warning and give fmpy's results (tests/reference_checkers.py). Runs where the checkers are on
 PATH or named by $FMUCHECK / $FMUSIM; skips otherwise (how to build them offline: docs/reference-checkers.md)."""

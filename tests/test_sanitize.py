@@ -1,4 +1,4 @@
-"""The C core under ASan + UBSan (issue 33), bounded for CI: tests/sanitize.py builds the sanitized
+"""The C core under ASan + UBSan, bounded for CI: tests/sanitize.py builds the sanitized
 self-contained FMUs, the fuzz harnesses (fuzz/) and the sanitized extension once, runs the committed fuzz
 reproducers, each libFuzzer harness for SANITIZE_FUZZ_SECONDS (default 30 s per harness, split over the three
 models: the whole suite's 15-minute budget on two busy cores), the fault suite's 435 cases of the

@@ -1299,6 +1299,18 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         d_prev = ed_ratio(s, lam);
         ed_note_ratio(e, d_prev);
     }
+    if (g_prev[ev.n - 1] <= 0.0) {
+        /* at or past |phi| = pi/2 already (a step that jumped over an impact and the overturning at once, from
+         * a state whose time or velocity leaves them below its time resolution): the structure has overturned,
+         * in the pose at |phi| = pi/2 */
+        int idx[RK_MAX_DOF], j, nd = rk_dofs_of(m, mode, idx);
+        for (j = 0; j < nd; j++)
+            if (idx[j] == m->ops->phi_index)
+                s->y[j] = s->y[j] < 0.0 ? -RK_HALF_PI : RK_HALF_PI;
+        ED_TRY(ed_handle(e, ED_OVERTURN, ev.n - 1, s->t, &f, err));
+        *event = 1;
+        return RK_OK;
+    }
     if (ed_lands_now(e, kinds, ev.n, g_prev)) {
         ED_TRY(ed_handle(e, ED_IMPACT, -1, s->t, &f, err));
         *event = 1;
