@@ -49,6 +49,30 @@ sanitizers() {
     fi
 }
 
+# The cross-platform tests (tests/test_cross_platform.py) build the self-contained FMUs' win64 and aarch64-linux
+# binaries and run them under wine and qemu-user, and rebuild the FMUs with fmpy's compile (CMake): Debian's
+# cross compilers, wine, qemu-user-static and cmake are installed here when missing and this is a root shell
+# with apt-get (one line of output); otherwise (or if apt-get fails) those tests skip, naming the package.
+cross_tools() {
+    local pkgs=()
+    command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 || pkgs+=(gcc-mingw-w64-x86-64)
+    { command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 && [ -d /usr/aarch64-linux-gnu/lib ]; } \
+        || pkgs+=(gcc-aarch64-linux-gnu libc6-dev-arm64-cross)
+    { command -v wine >/dev/null 2>&1 || command -v wine64 >/dev/null 2>&1; } || pkgs+=(wine64 wine)
+    { command -v qemu-aarch64-static >/dev/null 2>&1 || command -v qemu-aarch64 >/dev/null 2>&1; } \
+        || pkgs+=(qemu-user-static)
+    command -v cmake >/dev/null 2>&1 || pkgs+=(cmake)
+    [ "${#pkgs[@]}" -eq 0 ] && return 0
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        say "installing ${pkgs[*]} for the cross-platform tests (apt-get; a few minutes on a first run)"
+        local install=(env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${pkgs[@]}")
+        { "${install[@]}" || { apt-get update -q && "${install[@]}"; }; } >/dev/null 2>&1 \
+            || say "apt-get could not install ${pkgs[*]}: the cross-platform tests will skip"
+    else
+        say "${pkgs[*]} missing (not root or no apt-get): the cross-platform tests will skip"
+    fi
+}
+
 case "${1:-}" in
     demo)
         setup plot
@@ -61,6 +85,7 @@ case "${1:-}" in
         setup test,ecos
         libtbb
         sanitizers
+        cross_tools
         shift
         say "running the tests (pytest $*)"
         "$VENV/bin/python" -m pytest "$@"

@@ -78,6 +78,7 @@ def venv(wheel, tmp_path_factory) -> Path:
 def _clean_env() -> dict:
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "PYTHONSAFEPATH")}
     env["PYTHONNOUSERSITE"] = "1"
+    env["ROCKING_FMU_PLATFORMS"] = "linux64"   # the cross binaries: tests/test_cross_platform.py
     return env
 
 

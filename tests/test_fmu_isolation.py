@@ -5,6 +5,7 @@ deliberately modified copy of the package built into an FMU of the same name, lo
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -103,7 +104,8 @@ def two_versions(tmp_path_factory):
     with open(copy / "rocking_model" / "fmi" / "slave.py", "a") as f:
         f.write(MODIFICATION)
     subprocess.run([sys.executable, str(copy / "build_fmu.py"), "--dest", str(tmp / "modified"),
-                    "--no-cross-check", "RigidRockingBlock"], check=True, capture_output=True, cwd=tmp)
+                    "--no-cross-check", "RigidRockingBlock"], check=True, capture_output=True, cwd=tmp,
+                   env={**os.environ, "ROCKING_FMU_PLATFORMS": "linux64"})   # (the cross binaries: another test)
     return original, tmp / "modified" / "RigidRockingBlock.fmu"
 
 

@@ -143,7 +143,8 @@ def test_zip_content_size_and_no_build_path(standalone):
             names = zf.namelist()
             blob = b"".join(zf.read(n) for n in names)
         assert {"modelDescription.xml", f"binaries/linux64/{name}.so", "sources/buildDescription.xml",
-                "sources/fmi2_engine.c", "sources/rk_engine.h", "sources/rk_fmu_vars.h",
+                "sources/fmi2_engine.c", "sources/rk_engine.h", "sources/rk_fmu_vars.h", "sources/rk_fp.h",
+                "sources/rk_version.h",
                 "documentation/index.html"} <= set(names)
         assert [n for n in names if n.startswith("resources/")] == ["resources/README.txt"]
         # no path of this machine: the checkout, the home folder, the temporary build folder
@@ -205,10 +206,13 @@ def test_sources_build_a_working_binary_from_the_build_description(standalone, t
     bd = ET.parse(src / "buildDescription.xml").getroot()
     files = [e.get("name") for e in bd.iter("SourceFile")]
     defines = [f"-D{e.get('name')}={e.get('value')}" for e in bd.iter("PreprocessorDefinition")]
+    std = {"C99": "-std=c99"}[next(bd.iter("SourceFileSet")).get("language")]
+    libs = [f"-l{e.get('name')}" for e in bd.iter("Library")]
     so = tmp_path / "fmu" / "binaries" / "linux64" / f"{RIGID}.so"
     so.unlink()
-    proc = subprocess.run([CC, "-shared", "-fPIC", "-std=c99", "-O2", "-ffp-contract=off", "-I.", *defines,
-                           *files, "-o", str(so), "-lm"], capture_output=True, text=True, cwd=src, timeout=300)
+    # no flag of ours (no -ffp-contract=off): the sources pin their floating-point contract (rk_fp.h)
+    proc = subprocess.run([CC, "-shared", "-fPIC", std, "-O2", "-I.", *defines, *files, "-o", str(so), *libs],
+                          capture_output=True, text=True, cwd=src, timeout=300)
     assert proc.returncode == 0, proc.stderr
     ag = [2.5 * math.sin(2 * math.pi * 0.01 * k) for k in range(100)]
     mine = Run(standalone[RIGID], str(tmp_path / "fmu"), "rebuilt").run(ag, 0.01)

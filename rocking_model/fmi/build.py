@@ -3,7 +3,12 @@
 The registered models (`rocking_model.models.MODELS`: the rigid block, the flexible oscillator, the
 post-tensioned block) are also built as self-contained FMUs,
 <dest>/standalone/<Name>.fmu: the compiled C engine (rocking_model/engine/src) under the C FMI layer
-rocking_model/fmi/binary/standalone/fmi2_engine.c, no Python needed (`build_standalone`).
+rocking_model/fmi/binary/standalone/fmi2_engine.c, no Python needed (`build_standalone`). They carry the
+binaries of binaries/linux64, binaries/win64 and binaries/aarch64-linux (`TARGETS`), each built where its
+compiler is installed (natively, or with the cross compilers x86_64-w64-mingw32-gcc and aarch64-linux-gnu-gcc);
+the build prints one line naming the platforms built and the Debian packages for the others
+(`platforms_summary`). sources/ builds every platform to the same numbers (the sources pin their
+floating-point contract, engine/src/rk_fp.h, and carry their version, sources/rk_version.h).
 
 Usage:  rocking build-fmu [--dest dist] [--no-cross-check] [Name ...]
         python build_fmu.py ...   (in a checkout: the same, with dist/ of the checkout as default)
@@ -54,6 +59,7 @@ import sys
 import sysconfig
 import tempfile
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -428,9 +434,192 @@ STANDALONE_DIR = "standalone"
 ENGINE_SRC = PACKAGE / "engine" / "src"
 STANDALONE_SRC = FMI_BINARY / "standalone"
 #: portable flags: strict C99, IEEE arithmetic as written (no contraction into FMAs, no fast-math), no
-#: -march: the binary runs on any x86-64 (or whatever the compiler targets) and the results are the engine's
-#: (-O3 as setup.py builds the extension: the same bits)
-PORTABLE_CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-fno-fast-math", "-fPIC"]
+#: -march: the binary runs on any x86-64 (or aarch64, whatever the compiler targets) and the results are the
+#: engine's (-O3 as setup.py builds the extension: the same bits). The sources pin the contraction themselves
+#: too (engine/src/rk_fp.h), for importers that compile sources/ with flags of their own.
+PORTABLE_CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-fno-fast-math"]
+
+
+@dataclass(frozen=True)
+class Target:
+    """A platform the self-contained FMUs carry a binary for: its folder under binaries/ (the FMI 2.0 names for
+    x86-64, the FMI 3.0 platform tuple for 64-bit ARM, as FMI 2.0.4 prescribes), the library suffix, the
+    system and machine names (`platform.system()`, `platform.machine()`) of a host that builds it natively,
+    and the cross compiler (GCC's target triple) with the Debian package that installs it."""
+
+    folder: str
+    suffix: str
+    system: str
+    machines: tuple
+    cross: str
+    package: str
+
+    @property
+    def env(self) -> str:
+        """The environment variable naming this platform's compiler instead (e.g. ROCKING_CC_AARCH64_LINUX)."""
+        return "ROCKING_CC_" + self.folder.upper().replace("-", "_")
+
+
+#: the platforms of the self-contained FMUs, each built where its compiler is installed: natively ($CC, cc) on
+#: a host of that platform, else by its cross compiler (or $ROCKING_CC_<FOLDER>). Darwin: no cross compiler
+#: (and no way to test a binary here): a Mac builds its own (`DARWIN_TARGETS`), every importer can build sources/.
+TARGETS = (
+    Target("linux64", ".so", "Linux", ("x86_64", "amd64"), "x86_64-linux-gnu-gcc", "gcc-x86-64-linux-gnu"),
+    Target("win64", ".dll", "Windows", ("amd64", "x86_64"), "x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64"),
+    Target("aarch64-linux", ".so", "Linux", ("aarch64", "arm64"), "aarch64-linux-gnu-gcc", "gcc-aarch64-linux-gnu"),
+)
+DARWIN_TARGETS = (
+    Target("darwin64", ".dylib", "Darwin", ("x86_64",), "", ""),
+    Target("aarch64-darwin", ".dylib", "Darwin", ("arm64", "aarch64"), "", ""),
+)
+
+
+def host_target() -> Target | None:
+    """The platform of this machine among `TARGETS` and `DARWIN_TARGETS`, or None (32-bit, another system)."""
+    system, machine = platform.system(), platform.machine().lower()
+    if sys.maxsize <= 2**32:
+        return None
+    for target in TARGETS + DARWIN_TARGETS:
+        if target.system == system and machine in target.machines:
+            return target
+    return None
+
+
+#: the environment variable that restricts the platforms built (comma-separated folders, e.g. "linux64"; unset:
+#: every platform whose compiler is installed)
+PLATFORMS_ENV = "ROCKING_FMU_PLATFORMS"
+
+
+def standalone_compilers() -> dict:
+    """{folder: compiler command or None} of the self-contained FMUs' platforms on this machine: this
+    machine's own platform with the system C compiler (`find_compiler`), the others of `TARGETS` with their
+    cross compilers where installed ($ROCKING_CC_<FOLDER> first; None when absent). Only the platforms of
+    $ROCKING_FMU_PLATFORMS when it is set."""
+    host = host_target()
+    found = {}
+    if host is not None:
+        found[host.folder] = os.environ.get(host.env) or find_compiler()
+    for target in TARGETS:
+        if target.folder not in found:
+            found[target.folder] = os.environ.get(target.env) or shutil.which(target.cross)
+    wanted = [f.strip() for f in os.environ.get(PLATFORMS_ENV, "").split(",") if f.strip()]
+    if wanted:
+        unknown = sorted(set(wanted) - set(found))
+        if unknown:
+            raise BuildError(f"{PLATFORMS_ENV} names {unknown}; the platforms here are {sorted(found)}")
+        found = {f: cc for f, cc in found.items() if f in wanted}
+    return found
+
+
+def platforms_summary(compilers: dict | None = None) -> str:
+    """The one line the build prints: the platforms it built binaries for and, for the others, what to
+    install (the Debian/Ubuntu package of the cross compiler) or that $ROCKING_FMU_PLATFORMS left them out."""
+    compilers = standalone_compilers() if compilers is None else compilers
+    built = [f for f, cc in compilers.items() if cc]
+    missing = [f"{t.folder} (install {t.package})" for t in TARGETS if t.folder in compilers
+               and not compilers[t.folder]]
+    missing += [f"{t.folder} ({PLATFORMS_ENV})" for t in TARGETS if t.folder not in compilers
+                and (host_target() is None or t.folder != host_target().folder)]
+    line = "self-contained FMUs: binaries for " + (", ".join(built) or "no platform")
+    if missing:
+        line += "; not for " + ", ".join(missing)
+    return line + "; sources/ for any platform"
+
+
+def _target(folder: str) -> Target:
+    for target in TARGETS + DARWIN_TARGETS:
+        if target.folder == folder:
+            return target
+    raise ValueError(f"no platform {folder!r}; the platforms are {[t.folder for t in TARGETS + DARWIN_TARGETS]}")
+
+
+def target_flags(target: Target) -> tuple:
+    """(compile flags, link flags) of the self-contained FMU's binary for ``target``."""
+    cflags = [*PORTABLE_CFLAGS, "-I."]
+    if target.system == "Windows":
+        # mingw-w64: printf-family formatting (the messages) by mingw's C99 implementation, as glibc's, not
+        # msvcrt's; the DLL imports KERNEL32 and msvcrt only (libgcc linked in); neither the link time nor an
+        # image base drawn from the output's path in the PE headers (the same sources give the same bytes)
+        return cflags + ["-D__USE_MINGW_ANSI_STDIO=1"], ["-shared", "-static-libgcc", "-s", "-lm",
+                                                           "-Wl,--no-insert-timestamp,--disable-auto-image-base"]
+    cflags += ["-fPIC", "-fvisibility=hidden"]
+    if target.system == "Linux":
+        # every symbol resolved at link time (libc, libm: NEEDED), stripped
+        return cflags, ["-shared", "-Wl,--no-undefined", "-s", "-lm"]
+    return cflags, ["-shared", "-lm"]
+
+
+_INCLUDE = re.compile(rb'^\s*#\s*include\s*"([^"]+)"', re.MULTILINE)
+
+
+def _dependencies(src: Path, name: str, texts: dict) -> list:
+    """``name`` and the files of ``src`` it includes (#include "...", transitively), sorted."""
+    seen, todo = set(), [name]
+    while todo:
+        n = todo.pop()
+        if n in seen or n not in texts:
+            continue
+        seen.add(n)
+        todo.extend(m.decode() for m in _INCLUDE.findall(texts[n]))
+    return sorted(seen)
+
+
+#: object files compiled in this process, by everything that makes them (the compiler, its flags, the bytes of
+#: the source and of every header it includes): the engine's objects are shared by the FMUs and by the
+#: platforms' builds of later test modules (a compile cache, as ccache; the link runs every time)
+_OBJECTS: dict = {}
+
+
+def _compile_targets(name: str, src: Path, out_dir: Path, compilers: dict) -> dict:
+    """Compile sources/ (``src``) for every platform of ``compilers`` ({folder: cc}) -- each source to an object
+    (concurrently, `_OBJECTS` reused), then the link -- and return {folder: path of the binary}."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    texts = {p.name: p.read_bytes() for p in src.iterdir() if p.is_file()}
+    c_sources = sorted(n for n in texts if n.endswith(".c"))
+    deps = {c: _dependencies(src, c, texts) for c in c_sources}
+    jobs, links = [], []
+    for folder, cc in compilers.items():
+        target = _target(folder)
+        cflags, ldflags = target_flags(target)
+        obj_dir = out_dir / folder / "obj"
+        obj_dir.mkdir(parents=True, exist_ok=True)
+        objects = []
+        for c in c_sources:
+            obj = obj_dir / (c[:-2] + ".o")
+            key = hashlib.sha256(repr([cc, cflags, c]).encode()
+                                 + b"".join(d.encode() + b"\0" + texts[d] + b"\0" for d in deps[c])).hexdigest()
+            if key in _OBJECTS:
+                obj.write_bytes(_OBJECTS[key])
+            else:
+                jobs.append((folder, [cc, "-c", *cflags, c, "-o", str(obj)], obj, key))
+            objects.append(str(obj))
+        out = out_dir / folder / f"{name}{target.suffix}"
+        links.append((folder, [cc, *objects, "-o", str(out), *ldflags], out))
+
+    def run(cmd):
+        try:
+            return subprocess.run(cmd, cwd=src, capture_output=True, text=True)
+        except OSError as exc:
+            return exc
+
+    failures = []
+    with ThreadPoolExecutor(max_workers=max(2, os.cpu_count() or 2)) as pool:
+        for (folder, cmd, obj, key), proc in zip(jobs, pool.map(run, [j[1] for j in jobs])):
+            if isinstance(proc, OSError):
+                failures.append(f"{folder}: cannot run the C compiler {cmd[0]}: {proc}")
+            elif proc.returncode != 0:
+                failures.append(f"{folder} ({' '.join(cmd)}):\n{proc.stderr.strip()}")
+            else:
+                _OBJECTS[key] = obj.read_bytes()
+        if not failures:
+            for (folder, cmd, out), proc in zip(links, pool.map(run, [link[1] for link in links])):
+                if isinstance(proc, OSError) or proc.returncode != 0:
+                    failures.append(f"{folder} ({' '.join(cmd)}):\n"
+                                    f"{proc if isinstance(proc, OSError) else proc.stderr.strip()}")
+    if failures:
+        raise BuildError(f"compiling the standalone FMU {name} failed for " + "\n".join(failures))
+    return {folder: out for folder, _, out in links}
 #: the FMI 2.0 headers shipped in sources/ (from fmpy's copy of the standard's headers, BSD-2-Clause)
 FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 #: fixed zip timestamps: the same sources give the same FMU bytes
@@ -459,6 +648,19 @@ def _engine_sources() -> list[Path]:
     return sorted(p for p in ENGINE_SRC.glob("*.c") if p.suffix == ".c") + sorted(ENGINE_SRC.glob("*.h"))
 
 
+#: the engine's version header (engine/src/rk_version.h): the FMUs' sources/ carry it with the version written in
+VERSION_HEADER = "rk_version.h"
+
+
+def version_header(version: str = __version__) -> str:
+    """sources/rk_version.h of the self-contained FMUs: the engine's version as a macro, so that a library built
+    from sources/ by an importer (who passes no -D) reports it (rk_engine_version)."""
+    return (f"/* rk_version.h -- the engine's version, written by rocking_model/fmi/build.py into the FMU's sources\n"
+            f" * (rocking_model {version}); rk_engine_version() returns it. */\n"
+            f"#ifndef RK_VERSION_H\n#define RK_VERSION_H\n\n#ifndef RK_ENGINE_VERSION_STRING\n"
+            f"#define RK_ENGINE_VERSION_STRING {json.dumps(version)}\n#endif\n\n#endif /* RK_VERSION_H */\n")
+
+
 def _slave_class(fmu):
     """The slave class of ``fmu``: an FMU name (`rocking_model.fmi.fmus.FMUS`) or the path of an FMU script
     (imported under a name of its own, the class named like the script)."""
@@ -476,11 +678,12 @@ def _slave_class(fmu):
     return getattr(module, script.stem)
 
 
-def build_standalone_one(fmu, dest: Path) -> Path:
+def build_standalone_one(fmu, dest: Path, platforms=None) -> Path:
     """Build the self-contained FMU ``fmu`` (a name, or the path of its script) into ``dest``/<Name>.fmu: the
     modelDescription, the C variable table and the documentation generated from the slave's declarations, the
     engine and the FMI layer compiled in a folder of their own (relative paths: no path of this machine in the
-    binary), the sources shipped under sources/ with their buildDescription.xml."""
+    binary) for every platform whose compiler is here (`standalone_compilers`; or those of ``platforms``, FMI
+    folder names), the sources shipped under sources/ with their buildDescription.xml and the version header."""
     from . import standalone
 
     slave_class = _slave_class(fmu)
@@ -498,36 +701,37 @@ def build_standalone_one(fmu, dest: Path) -> Path:
             own_kernels = plugin.source_of(model_class, export=False).encode()
     kernels_name = "rk_models_gen.c"
     fmi_files = [FMI_BINARY / f for f in standalone.FMI_SOURCES]
-    digest = b"".join(p.name.encode() + b"\0" + (own_kernels if own_kernels is not None and p.name == kernels_name
-                                                   else p.read_bytes()) for p in engine_files + fmi_files)
+    def text(p):
+        if own_kernels is not None and p.name == kernels_name:
+            return own_kernels
+        return version_header().encode() if p.name == VERSION_HEADER else p.read_bytes()
+
+    digest = b"".join(p.name.encode() + b"\0" + text(p) for p in engine_files + fmi_files)
     c_sources = sorted(p.name for p in engine_files + fmi_files if p.suffix == ".c")
     xml, guid = standalone.model_description(slave, c_sources, digest)
-    folder, suffix = _binary_platform()
-    cc = find_compiler()
-    version = __version__
+    compilers = standalone_compilers()
+    if platforms is not None:
+        unknown = set(platforms) - set(compilers)
+        if unknown:
+            raise BuildError(f"no compiler for the platform(s) {sorted(unknown)} on this machine: "
+                             + platforms_summary(compilers))
+        compilers = {f: cc for f, cc in compilers.items() if f in platforms}
+    compilers = {f: cc for f, cc in compilers.items() if cc}
     with tempfile.TemporaryDirectory(prefix="rocking_sa_") as tmp:
         src = Path(tmp) / "sources"
         src.mkdir()
         for p in engine_files + fmi_files:
             if own_kernels is not None and p.name == kernels_name:
                 (src / p.name).write_bytes(own_kernels)
+            elif p.name == VERSION_HEADER:
+                (src / p.name).write_text(version_header())
             else:
                 shutil.copy2(p, src / p.name)
         for h in FMI2_HEADERS:
             shutil.copy2(fmi_headers() / h, src / h)
         (src / "rk_fmu_vars.h").write_text(standalone.vars_header(slave, guid))
-        (src / "buildDescription.xml").write_bytes(standalone.build_description(name, c_sources, version))
-        binary = Path(tmp) / f"{name}{suffix}"
-        cmd = [cc, "-shared", *PORTABLE_CFLAGS, "-fvisibility=hidden", "-I.",
-               f'-DRK_ENGINE_VERSION_STRING="{version}"', *c_sources, "-o", str(binary), "-lm"]
-        if platform.system() == "Linux":
-            cmd += ["-Wl,--no-undefined", "-s"]
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, cwd=src)
-        except OSError as exc:
-            raise BuildError(f"cannot run the C compiler {cc}: {exc}") from None
-        if proc.returncode != 0:
-            raise BuildError(f"compiling the standalone FMU {name} failed ({' '.join(cmd)}):\n{proc.stderr.strip()}")
+        binaries = _compile_targets(name, src, Path(tmp) / "binaries", compilers)
+        (src / "buildDescription.xml").write_bytes(standalone.build_description(name, c_sources))
         dest.mkdir(parents=True, exist_ok=True)
         fmu = dest / f"{name}.fmu"
         tmp_fmu = fmu.with_suffix(".fmu.tmp")
@@ -540,7 +744,8 @@ def build_standalone_one(fmu, dest: Path) -> Path:
 
         with zipfile.ZipFile(tmp_fmu, "w") as zf:
             put(zf, "modelDescription.xml", xml)
-            put(zf, f"binaries/{folder}/{name}{suffix}", binary.read_bytes())
+            for folder in sorted(binaries):
+                put(zf, f"binaries/{folder}/{binaries[folder].name}", binaries[folder].read_bytes())
             for p in sorted(src.iterdir()):
                 put(zf, f"sources/{p.name}", p.read_bytes())
             put(zf, "documentation/index.html", standalone.documentation(slave).encode())
@@ -551,13 +756,15 @@ def build_standalone_one(fmu, dest: Path) -> Path:
     return fmu
 
 
-def build_standalone(dest="dist", names=None) -> list[Path]:
-    """Build (and validate) the self-contained FMUs of the registered models into ``dest``/standalone."""
+def build_standalone(dest="dist", names=None, platforms=None) -> list[Path]:
+    """Build (and validate) the self-contained FMUs of the registered models into ``dest``/standalone, with the
+    binaries of every platform whose compiler is installed (or of ``platforms``, see `build_standalone_one`)."""
     dest = Path(dest)
     if not dest.is_absolute():
         dest = Path.cwd() / dest
     wanted = registered_fmu_names()
-    return [build_standalone_one(name, dest / STANDALONE_DIR) for name in fmu_names(names) if name in wanted]
+    return [build_standalone_one(name, dest / STANDALONE_DIR, platforms) for name in fmu_names(names)
+            if name in wanted]
 
 
 def build_script(script: Path, dest="dist") -> Path:
@@ -636,6 +843,8 @@ def main(argv=None, default_dest="dist", prog="build_fmu") -> int:
         return 1
     for fmu in fmus:
         print(f"built and validated {fmu}")
+    if wanted:
+        print(platforms_summary())
     if not args.no_cross_check:
         print(f"cross-check folders in {Path(args.dest) / CROSS_CHECK_DIR}")
     return 0

@@ -179,19 +179,22 @@ def vars_header(slave, guid: str) -> str:
     return "\n".join(lines)
 
 
-def build_description(name: str, sources: List[str], version: str = "unknown") -> bytes:
-    """sources/buildDescription.xml (FMI 3.0, also read by FMI 2.0.4 importers): one build configuration
-    compiling every source with the include folder sources/."""
+def build_description(name: str, sources: List[str]) -> bytes:
+    """sources/buildDescription.xml (FMI 3.0, which FMI 2.0.4 importers read in preference to <SourceFiles>):
+    one build configuration compiling every source with the include folder sources/, linked with the C math
+    library (``<Library name="m" external="true">``: not in the FMU, the system's; on Windows it is part of the
+    C run-time). No preprocessor definition and no compiler option is needed: the sources carry their version
+    (rk_version.h) and pin their floating-point contract (rk_fp.h) themselves."""
     root = Element("fmiBuildDescription", {"fmiVersion": "3.0"})
     config = SubElement(root, "BuildConfiguration", {"modelIdentifier": name,
                                                     "description": "C99 + libm; no other dependency"})
     files = SubElement(config, "SourceFileSet", {"language": "C99"})
     for src in sources:
         SubElement(files, "SourceFile", {"name": src})
-    SubElement(files, "PreprocessorDefinition", {"name": "RK_ENGINE_VERSION_STRING", "value": f'"{version}"',
-                                                 "description": "the engine's version (rk_engine_version)"})
     SubElement(files, "IncludeDirectory", {"name": "."})
-    SubElement(config, "Library", {"name": "m", "description": "the C math library (libm)"})
+    SubElement(config, "Library", {"name": "m", "external": "true",
+                                   "description": "the C math library (libm: -lm; part of the C run-time on "
+                                                  "Windows)"})
     return b'<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="utf-8")
 
 

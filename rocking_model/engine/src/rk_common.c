@@ -1,4 +1,5 @@
 /* rk_common.c -- error buffer, tolerances and options defaults, reports (architect). */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_common.h"
 
 #include <math.h>

@@ -7,6 +7,7 @@
  * rk_next_mode's argument; NULL: RK_DEFAULT_TOLERANCES), both schemes pass the user's; mode_forces needs none
  * (every closed contact forced: one active set, forces independent of lcp_exact and lcp_hint).
  * The numpy products (W^T v, M^-1 f, the Delassus blocks) are plain loops in index order (DESIGN.md 7.4). */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_contact.h"
 
 #include <math.h>

@@ -14,6 +14,7 @@
  * The ground motion is evaluated where the Python evaluates it: a constant input as its value (ag.value),
  * any other at the time of the call (ag(t)); the kernels get values only.
  * No allocation; every work array is on the stack. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_internal.h"
 
 #include <math.h>

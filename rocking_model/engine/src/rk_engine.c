@@ -4,6 +4,7 @@
  * (the checks of integrators/state.py, note_demand).
  *
  * Dispatch on options.scheme: rk_ed_* (rk_ed.c, part D) or rk_mj_* (rk_mj.c). */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_internal.h"
 
 #include <math.h>
@@ -12,9 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifndef RK_ENGINE_VERSION_STRING
-#define RK_ENGINE_VERSION_STRING "unknown"
-#endif
+#include "rk_version.h" /* RK_ENGINE_VERSION_STRING, unless the build defines it */
 
 /** [1] smallest dt_max (other than 0) relative to the model's time scale: simulation.DT_MIN_REL */
 #define RK_DT_MIN_REL 1e-6

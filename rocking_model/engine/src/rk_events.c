@@ -6,6 +6,7 @@
  * The event functions are evaluated as the Python does: G(t, dense(t)) with dense the interpolant of the
  * stepper's last step (rk_dense_eval: exact end values at the step's end), except dip_search's midpoint,
  * G(tm, hermite_mid). Errors of the callbacks: as in rk_rk.c (a message written by the callback is kept). */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_rk.h"
 
 #include <math.h>

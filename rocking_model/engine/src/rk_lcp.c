@@ -14,6 +14,7 @@
  *
  * No allocation: every work array is on the stack. The Python's _SETS_CACHE becomes an enumeration of the
  * sets in the same order into a local array. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_contact.h"
 
 #include <math.h>

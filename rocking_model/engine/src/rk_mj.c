@@ -11,6 +11,7 @@
  * Same operation order as the Python (DESIGN.md "Numerics"); the products numpy does with BLAS (K @ v,
  * W_N.T @ v, Winv @ rhs) are plain loops in index order, np.linalg.inv an LU with partial pivoting: pinned
  * to the Python at 1e-13 (tests/test_engine_moreau_jean.py). */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_internal.h"
 
 #include <math.h>

@@ -8,6 +8,7 @@
  * kernel that leaves an optional pointer NULL gets them. Helpers shared by the kernels: the Python's parameter
  * checks and messages (Param.check / check_real / check_choice), repr() of a float, math.hypot, the modes of
  * the two-corner models. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_model.h"
 #include "rk_contact.h"
 

@@ -1,6 +1,7 @@
 /* rk_motion.c -- the ground motions as C data (part E): the formulas of rocking_model/ground_motion.py,
  * expression by expression, so that the driver reads the same ag bit for bit (DESIGN.md "Numerics").
  * Pinned: tests/test_engine_api.py compares every kind with the Python class. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_motion.h"
 
 #include <math.h>

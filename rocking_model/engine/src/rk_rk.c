@@ -10,6 +10,7 @@
  * Errors of the callbacks: every public function clears err on entry; a callback that fails may write its own
  * message into the error it shares through its context and return its status: that message is kept. A callback
  * that returns a status without a message gets a generic one naming the time. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_rk.h"
 
 #include <math.h>

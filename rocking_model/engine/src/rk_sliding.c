@@ -10,6 +10,7 @@
  *
  * and r_ddot follows from a = J r_ddot + J_dot r_dot (J = [J_stick, e_x]). numpy's products and solves are
  * plain loops in index order and the small solves of rk_model.c: pinned to the Python at 1e-13 relative. */
+#include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_model.h"
 
 #include <math.h>

@@ -20,6 +20,7 @@
 #if !defined(_WIN32) && !defined(_POSIX_C_SOURCE)
 #define _POSIX_C_SOURCE 200809L /* stat() */
 #endif
+#include "rk_fp.h" /* before any function: no contraction into multiply-adds (engine/src/rk_fp.h) */
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
