@@ -16,7 +16,7 @@ by maximum likelihood (`rocking_model.fragility.fit_fragility`), with bootstrap 
 IDA (`run_ida`): per record and configuration, a hunt-and-fill on the IM level (Vamvatsikos and Cornell 2002):
 levels ``start`` x ``ratio``^k until the block overturns (and ``n_above`` levels more, to see what lies above),
 then bisection (geometric) between the highest level below and the lowest level reaching each damage state,
-overturning first, down to a relative gap ``tolerance``, then the largest gaps are halved, up to ``max_runs``
+overturning first, down to a relative gap ``rtol``, then the largest gaps are halved, up to ``max_runs``
 runs per record. A rocking block's IDA curve is not monotonic: it can overturn at one level and not at a higher
 one. The curve reports its first overturning (the lowest level run that overturned) and the non-overturning
 levels above it ("resurrections", in pockets of consecutive levels); a damage state's capacity is the lowest
@@ -87,7 +87,7 @@ def damage_state(spec) -> DamageState:
     if isinstance(spec, DamageState):
         return spec
     m = _DS.match(str(spec))
-    numeric = [k for k in E.RESULT_FIELDS if k in E._FLOATS or k in E._INTS]
+    numeric = [k for k in E.RESULT_FIELDS if (k in E._FLOATS or k in E._INTS) and k not in ("alpha", "p", "wall_time")]
     allowed = "overturned, " + ", ".join(QUANTITIES) + " or a result field (" + ", ".join(numeric) + ")"
     if not m:
         raise ValueError(f"damage state {spec!r}: give [name:]quantity>=value or [name:]overturned; quantity: "
@@ -493,7 +493,7 @@ def fit_capacities(curves: Sequence[IDACurve], damage_states=None, *, method: st
     return out
 
 
-def run_ida(records: Sequence[str], im: str, out, *, start: float, ratio: float = 1.5, tolerance: float = 0.02,
+def run_ida(records: Sequence[str], im: str, out, *, start: float, ratio: float = 1.5, rtol: float = 0.02,
             max_runs: int = 30, n_above: int = 2, im_max: float = math.inf, damage_states=None,
             zeta: float = 0.05, method: str = "auto", n_boot: int = 200, seed: int = 0, workers: int = 0,
             address: str | None = None, resume: bool = True, progress: bool = False,
@@ -502,7 +502,7 @@ def run_ida(records: Sequence[str], im: str, out, *, start: float, ratio: float 
     workers=0, or on Dask, the records' next runs in parallel): per record and configuration (`suite`), the
     hunt-and-fill of the module docstring on the IM level.
 
-    start: first IM level [the measure's units]; ratio: the hunt's step factor (> 1); tolerance: relative gap
+    start: first IM level [the measure's units]; ratio: the hunt's step factor (> 1); rtol: relative gap
     of the bisections and the fill (e.g. 0.02: the first overturning within 2 %); max_runs: runs per record;
     n_above: hunt levels run above the first overturning (the pockets above it are searched there); im_max:
     no level above it [the measure's units]. Capacities per damage state (overturning always included) are
@@ -511,7 +511,7 @@ def run_ida(records: Sequence[str], im: str, out, *, start: float, ratio: float 
 
     start = check_real("start", start, lo=0.0, lo_open=True)
     ratio = check_real("ratio", ratio, lo=1.0, lo_open=True, hi=100.0)
-    tolerance = check_real("tolerance", tolerance, lo=1e-6, hi=1.0)
+    rtol = check_real("rtol", rtol, lo=1e-6, hi=1.0)
     max_runs = int(check_real("max_runs", max_runs, lo=1))
     n_above = int(check_real("n_above", n_above, lo=0))
     if not (im_max > 0):
@@ -520,7 +520,7 @@ def run_ida(records: Sequence[str], im: str, out, *, start: float, ratio: float 
     if not any(d.field == "overturned" for d in dss):
         dss = dss + [_OVERTURNED]
     s = suite(records, im, zeta=zeta, **case_options)
-    hunts = [_Hunt(i, dss, start, ratio, tolerance, max_runs, n_above, im_max) for i in range(len(s.templates))]
+    hunts = [_Hunt(i, dss, start, ratio, rtol, max_runs, n_above, im_max) for i in range(len(s.templates))]
     run = E.EnsembleRun(out, workers=workers, address=address, resume=resume, progress=progress,
                         batch_size=batch_size, processes=processes)
     n_cases = n_skipped = 0
