@@ -221,3 +221,20 @@ def test_cli_fragility_errors_are_one_line(tmp_path, capsys, extra, msg):
     assert main(["fragility", "--records", "synthetic:1", "--workers", "0", "--out", str(tmp_path)] + extra) == 2
     err = capsys.readouterr().err
     assert err.startswith("rocking fragility: error: ") and msg in err and err.count("\n") == 1
+
+
+def test_example_fragility_runs_shortened(tmp_path):
+    """examples/fragility.py on 3 records of 6 s x 5 stripes, serially: three fitted damage states and the
+    plot in the directory given."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "fragility.py"
+    spec = importlib.util.spec_from_file_location("example_fragility", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.main([str(tmp_path), "--records", "3", "--stripes", "5", "--duration", "6", "--workers", "0",
+                     "--bootstrap", "10"]) == 0
+    fits = json.loads((tmp_path / "fragility.json").read_text())
+    assert [f["name"] for f in fits] == ["phi/alpha>=0.2", "phi/alpha>=0.5", "overturned"]
+    assert (tmp_path / "fragility.png").stat().st_size > 10_000
