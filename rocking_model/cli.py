@@ -8,6 +8,8 @@
     rocking build-fmu [--dest dist]          (needs a C compiler and the Python headers)
     rocking benchmark [--quick] [--ensemble] (source checkout only)
     rocking im RECORD --periods 0.5 1 2 [--b 0.2 --h 1.0]   (a record's intensity measures)
+    rocking fragility --records records/ --im "Sa(1)" --stripes 0.5:5:10 --out results/fragility
+    rocking fragility --records synthetic:1 synthetic:2 --im "PGA/(g tan alpha)" --ida 0.8 --workers 0
 
 Only argument handling and reporting live here; the physics is in `rocking_model.simulation`. Bad input
 prints one line ``rocking <command>: error: ...`` and exits with status 2 (never a traceback).
@@ -461,6 +463,75 @@ def cmd_ensemble(args) -> int:
     return 0 if s["n_errors"] == 0 else 1
 
 
+def cmd_fragility(args) -> int:
+    """Fragility curves of a suite of records: MSA on --stripes or IDA from --ida, per damage state."""
+    from . import assessment as A
+    from . import ensemble as E
+    from .models import model_class
+
+    if (args.stripes is None) == (args.ida is None):
+        raise UsageError("give either --stripes LEVEL... (multiple-stripe analysis) or --ida START (incremental "
+                         "dynamic analysis)")
+    declared = {p.name: p for p in model_class(args.model).parameters()}
+    geometries = [(b, h) for b in (_flat(args.b) or [declared["b"].default])
+                  for h in (_flat(args.h) or [declared["h"].default])]
+    params = _given_parameters(args, skip=ENSEMBLE_GRID)
+    vscales = _flat(args.vertical_scales)
+    if args.vertical and len(args.vertical) != len(args.record):
+        raise UsageError(f"--vertical: give one vertical record per --records entry ({len(args.record)}), got "
+                         f"{len(args.vertical)} ('' for a record without one)")
+    common = dict(geometries=geometries, schemes=args.scheme, model=args.model, e_N=args.e_N, mu=args.mu,
+                  t_end=args.t_end, output_interval=args.output_interval, tolerance=args.tolerance,
+                  dt_max=args.dt_max, params=params or None, units=args.units, vertical=args.vertical,
+                  ag_v_scales=vscales, zeta=args.im_zeta, damage_states=args.damage_states, n_boot=args.bootstrap,
+                  workers=args.workers, address=args.address, resume=not args.no_resume,
+                  progress=not args.no_progress, batch_size=args.batch_size)
+    A.damage_states(args.damage_states)                 # a bad spec is refused before anything runs
+    out = Path(args.out)
+    results = out / ("cases.parquet" if args.parquet else "cases.csv")
+    im = A.canonical_measure(args.im)
+    kind = "IDA" if args.ida is not None else "MSA"
+    print(f"{kind} of {len(A.record_files(args.record))} record(s) x {len(geometries)} geometr"
+          f"{'y' if len(geometries) == 1 else 'ies'} on {im} -> {out}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", E.RepairWarning)
+            warnings.showwarning = lambda msg, *a, **k: print(f"rocking fragility: warning: {msg}", file=sys.stderr)
+            if args.ida is not None:
+                r = A.run_ida(args.record, im, results, start=args.ida, ratio=args.ida_ratio,
+                              rtol=args.ida_tolerance, max_runs=args.ida_max_runs, n_above=args.ida_above,
+                              im_max=args.ida_max if args.ida_max is not None else math.inf, **common)
+            else:
+                r = A.run_msa(args.record, im, _flat(args.stripes), results, **common)
+    except KeyboardInterrupt:
+        print(f"interrupted: the finished cases are in {results}; run the same command to resume", file=sys.stderr)
+        return 130
+    except E.EnsembleError as exc:
+        print(f"rocking fragility: error: {exc}", file=sys.stderr)
+        return 1
+    s = r.summary
+    print(f"ran {s['n_run']} cases ({s['n_skipped']} already in {results}): {s['n_overturned']} overturned, "
+          f"{s['n_errors']} errors")
+    written = [results]
+    if args.ida is not None:
+        written.append(A.write_curves(r.curves, out / "ida_curves.csv"))
+        for c in r.curves:
+            name = Path(c.record).name if not c.record.startswith("synthetic") else c.record
+            pockets = ", ".join(f"{lo:.4g}-{hi:.4g}" for lo, hi in c.resurrections) or "none"
+            print(f"  {name}{' ' + c.group if c.group else ''}: first overturning at {c.first_overturning:.4g} "
+                  f"({len(c.levels)} runs); non-overturning above it: {pockets}")
+    for f in r.fragilities:
+        band = ""
+        if f.bands is not None and math.isfinite(f.bands.theta_band[0]):
+            band = f" [{f.bands.theta_band[0]:.4g}, {f.bands.theta_band[1]:.4g}]"
+        print(f"  {f.label}: theta = {f.fit.theta:.4g}{band}, beta = {f.fit.beta:.3g}"
+              + (f" ({f.fit.note})" if f.fit.note else ""))
+    written += A.write_fragilities(r.fragilities, out, im_label=im, plot=not args.no_plot,
+                                   title=f"{kind}, {model_class(args.model).title}")
+    print("wrote " + ", ".join(map(str, written)))
+    return 0 if s["n_errors"] == 0 else 1
+
+
 def cmd_im(args) -> int:
     """Print a record's intensity measures (rocking_model.intensity), one per line, or as JSON."""
     from .intensity import UNITS, intensity_measures
@@ -645,6 +716,57 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--plot", help="overturning spectrum PNG (default: <out stem>_spectrum.png)")
     g.add_argument("--no-plot", action="store_true", help="skip the spectrum PNG")
 
+    from .assessment import DEFAULT_DAMAGE_STATES
+
+    f = sub.add_parser("fragility", help="fragility curves of a suite of records (MSA or IDA), resumable",
+                       description="Scale a suite of records to target values of an intensity measure and run "
+                                   "a multiple-stripe analysis (--stripes) or an incremental dynamic analysis "
+                                   "(--ida, hunt-and-fill per record); fit a lognormal fragility per damage state "
+                                   "(bootstrap bands over records). Writes <out>/cases.csv (one row per run; a rerun "
+                                   "resumes), fragility.csv/.json, fragility.png and, for IDA, ida_curves.csv. "
+                                   "Lists accept numbers and start:stop:num.")
+    _model_options(f, lists=True)
+    g = f.add_argument_group("records and intensity measure")
+    g.add_argument("--records", dest="record", nargs="+", required=True, metavar="RECORD",
+                   help="record files (.AT2, .csv), folders of them, or synthetic:<seed>")
+    g.add_argument("--units", help="units of CSV records without stated units")
+    g.add_argument("--vertical", nargs="+", metavar="FILE", help="one vertical record per --records entry ('' for "
+                   "none); scaled with its record")
+    g.add_argument("--vertical-scales", dest="vertical_scales", type=_values, nargs="+", metavar="F",
+                   help=f"factors on the vertical components [1], in [-{VERTICAL_SCALE_MAX:g}, "
+                        f"{VERTICAL_SCALE_MAX:g}] (as rocking ensemble)")
+    g.add_argument("--im", default="PGA", help="intensity measure: PGA, PGV, PGD, Arias, CAV, Sa(T) (e.g. "
+                   "\"Sa(1)\"), \"PGA/(g tan alpha)\", \"PGV p/(g tan alpha)\" (default PGA; SI units)")
+    g.add_argument("--im-zeta", dest="im_zeta", type=float, default=0.05,
+                   help="damping ratio of the oscillator of Sa(T) [1] (default 0.05)")
+    g = f.add_argument_group("analysis")
+    g.add_argument("--stripes", type=_values, nargs="+", metavar="IM",
+                   help="MSA: the IM levels of the stripes [the measure's units]")
+    g.add_argument("--ida", type=_positive, metavar="START", help="IDA: the first IM level of the hunt")
+    g.add_argument("--ida-ratio", type=float, default=1.5, help="IDA: hunt step factor (default 1.5)")
+    g.add_argument("--ida-tolerance", type=float, default=0.02,
+                   help="IDA: relative gap of the bisections and the fill (default 0.02)")
+    g.add_argument("--ida-max-runs", type=_count(1), default=30, help="IDA: runs per record (default 30)")
+    g.add_argument("--ida-above", type=_count(0), default=2,
+                   help="IDA: hunt levels above the first overturning (default 2)")
+    g.add_argument("--ida-max", type=_positive, help="IDA: highest IM level (default: none)")
+    g.add_argument("--damage-states", nargs="+", metavar="DS",
+                   help="[name:]quantity>=value or overturned; quantity phi/alpha, phi [rad], slip [m], tendon [N], "
+                        "impacts or a result field (default: " + " ".join(DEFAULT_DAMAGE_STATES)
+                        + "); overturning reaches every one")
+    g.add_argument("--bootstrap", type=_count(0), default=200,
+                   help="bootstrap resamples over records of the bands (default 200; 0: none)")
+    _solver_options(f, many=True)
+    g = f.add_argument_group("execution and output")
+    g.add_argument("--out", default="results/fragility", help="output directory (default results/fragility)")
+    g.add_argument("--parquet", action="store_true", help="cases as a .parquet directory instead of CSV")
+    g.add_argument("--workers", type=_count(0), default=2, help="local Dask workers (default 2; 0: serial, no Dask)")
+    g.add_argument("--address", help="scheduler address of an existing Dask cluster")
+    g.add_argument("--batch-size", type=_count(1), help="cases per Dask task")
+    g.add_argument("--no-resume", action="store_true", help="fail if the cases file exists instead of resuming")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g.add_argument("--no-plot", action="store_true", help="skip the PNG")
+
     i = sub.add_parser("im", help="a record's intensity measures (PGA, PGV, PGD, Arias, CAV, D5-95, Sa(T))",
                        description="Print the intensity measures of a record (rocking_model.intensity: the record "
                                    "integrated as sampled, exactly for a piecewise-linear acceleration, no baseline "
@@ -685,6 +807,8 @@ def main(argv: list[str] | None = None) -> int:
             return cmd_benchmark(args, extra)
         if args.command == "im":
             return cmd_im(args)
+        if args.command == "fragility":
+            return cmd_fragility(args)
         return cmd_ensemble(args)
     except (UsageError, ValueError, FileNotFoundError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)

@@ -59,15 +59,19 @@ SCHEMES = tuple(sorted(_SCHEME_CLASSES, key=lambda name: -_SCHEME_CLASSES[name].
 #: case fields, in output column order
 CASE_FIELDS = ("case_id", "model", "b", "h", "e_N", "mu", "params", "motion", "A", "omega_p", "a_ratio", "w_ratio",
                "record", "units", "scale", "vertical", "ag_v_scale", "scheme", "t_end", "output_interval",
-               "tolerance", "dt_max")
+               "tolerance", "dt_max", "im", "im_level")
 #: the case fields of the vertical ground acceleration and their values in a case without one (the rows of
 #: result files written before they existed, the cases whose ids stay those of earlier versions)
 VERTICAL_DEFAULTS = {"vertical": "", "ag_v_scale": 0.0}
 #: the case field of the model's other parameters and its value in a case without any (as VERTICAL_DEFAULTS)
 PARAMS_DEFAULTS = {"params": ""}
+#: the fields of a record scaled to a target intensity measure (`rocking_model.assessment`: stripes, IDA): the
+#: measure's name (`rocking_model.intensity`) and its target value [its units]; and the result field of the
+#: models with a tendon; their values in a case (or a row of an older file) without them
+IM_DEFAULTS = {"im": "", "im_level": math.nan, "max_tendon_force": math.nan}
 #: the case fields added since the first version, in the order they were added, with their values in a case
 #: (or a row of an older file) without them
-ADDED_FIELDS = (VERTICAL_DEFAULTS, PARAMS_DEFAULTS)
+ADDED_FIELDS = (VERTICAL_DEFAULTS, PARAMS_DEFAULTS, IM_DEFAULTS)
 #: the case fields set by `pulse_cases` / `record_cases` themselves, not through ``params``
 _OWN_FIELDS = ("b", "h", "e_N", "mu")
 #: [1] allowed range of ag_v_scale: a vertical component up to 10 times the record's (or the horizontal's);
@@ -75,13 +79,13 @@ _OWN_FIELDS = ("b", "h", "e_N", "mu")
 AG_V_SCALE_MAX = 10.0
 #: result fields appended by `run_case`
 RESULT_FIELDS = ("alpha", "p", "max_abs_phi", "max_phi_over_alpha", "overturned", "t_overturn", "impacts",
-                 "max_abs_slip", "friction_demand", "wall_time", "error")
+                 "max_abs_slip", "friction_demand", "max_tendon_force", "wall_time", "error")
 FIELDS = CASE_FIELDS + RESULT_FIELDS
 
 _FLOATS = {"b", "h", "e_N", "mu", "max_abs_slip", "friction_demand", "A", "omega_p", "a_ratio", "w_ratio", "scale",
            "ag_v_scale", "t_end", "output_interval",
            "tolerance", "dt_max", "alpha", "p", "max_abs_phi", "max_phi_over_alpha", "t_overturn",
-           "wall_time"}
+           "wall_time", "im_level", "max_tendon_force"}
 _INTS = {"impacts"}
 _BOOLS = {"overturned"}
 
@@ -95,6 +99,12 @@ def case_id(case: dict) -> str:
         del key["vertical"], key["ag_v_scale"]      # no vertical component: the ids of earlier versions
     if key.get("params") in (None, ""):
         del key["params"]         # the model's defaults: the ids of earlier versions
+    if key.get("im") in (None, ""):
+        del key["im"], key["im_level"]      # not scaled to a measure: the ids of earlier versions
+    else:
+        # a record scaled to a measure's level is that level: the scale factor (and the PGA and ratio that
+        # follow from it) is derived from the record's measure, whose last bits may differ between machines
+        del key["scale"], key["A"], key["a_ratio"]
     return hashlib.sha1(json.dumps(key, sort_keys=True, default=repr).encode()).hexdigest()[:16]
 
 
@@ -167,8 +177,9 @@ def _block_scales(model: str, b: float, h: float, params: str) -> tuple[float, f
 
 
 def _finish(case: dict) -> dict:
+    defaults = {k: v for added in ADDED_FIELDS for k, v in added.items()}
     case = {k: case.get(k, "" if k in ("record", "units") else math.inf if k == "mu" else
-                        VERTICAL_DEFAULTS.get(k, PARAMS_DEFAULTS.get(k, math.nan))) for k in CASE_FIELDS}
+                        defaults.get(k, math.nan)) for k in CASE_FIELDS}
     case["case_id"] = case_id(case)
     return case
 
@@ -403,7 +414,8 @@ def run_case(case: dict) -> dict:
     except (TypeError, ValueError):
         row = {"error_case": repr(case)[:200]}
     row.update(alpha=math.nan, p=math.nan, max_abs_phi=math.nan, max_phi_over_alpha=math.nan, overturned=False,
-               t_overturn=math.nan, impacts=-1, max_abs_slip=math.nan, friction_demand=math.nan, error="")
+               t_overturn=math.nan, impacts=-1, max_abs_slip=math.nan, friction_demand=math.nan,
+               max_tendon_force=math.nan, error="")
     try:
         row["case_id"] = _key(case)
         if "error_case" in row:
@@ -435,7 +447,9 @@ def _simulate_case(case: dict) -> dict:
                    output_interval=case["output_interval"], **kw)
     phi = np.abs(res.phi)
     over = np.asarray(res.overturned, dtype=bool)
+    tendon = res.values.get("tendon_force")          # the models with a tendon (post-tensioned block) [N]
     return dict(alpha=alpha, p=p, max_abs_phi=float(phi.max()),
+                max_tendon_force=math.nan if tendon is None else float(np.max(np.abs(tendon))),
                 max_phi_over_alpha=float(phi.max() / alpha) if rigid else math.nan,
                 overturned=bool(over[-1]), t_overturn=float(res.t[np.argmax(over)]) if over[-1] else math.nan,
                 impacts=int(res.impacts[-1]), max_abs_slip=float(np.max(np.abs(res.slip))),
@@ -628,7 +642,9 @@ def _repair_csv(path: Path) -> list[str]:
         notes.append(f"{path}: written before the columns {', '.join(missing)} existed: added to its header and "
                      "rows (" + "; ".join(what for what, group in (("no vertical component", VERTICAL_DEFAULTS),
                                                                    ("the model's default parameters",
-                                                                    PARAMS_DEFAULTS))
+                                                                    PARAMS_DEFAULTS),
+                                                                   ("no intensity-measure target",
+                                                                    IM_DEFAULTS))
                                           if any(k in group for k in missing))
                      + "; its cases keep their ids)")
     problem = _header_problem(path, head, bool(sep))
@@ -1042,6 +1058,147 @@ def default_batch_size(n_cases: int, n_workers: int) -> int:
     return max(1, min(MAX_BATCH, -(-n_cases // (TASKS_PER_WORKER * max(1, n_workers)))))
 
 
+class EnsembleRun:
+    """An open run on one output, for drivers that choose their next cases from the results of earlier ones
+    (`rocking_model.assessment`: the IDA's hunt-and-fill) and for `run_ensemble`: ``with EnsembleRun(out, ...)
+    as run: rows = run.run(cases)``. It holds ``out``'s `OutputLock` from ``__enter__`` to ``__exit__``,
+    repairs the output first (`RepairWarning`), keeps the rows already in it (``rows``: {case_id: row}) and
+    starts its Dask cluster (or none: workers=0) on the first case that has to run, once for all the calls of
+    `run`. The arguments are `run_ensemble`'s; ``stats`` accumulates its summary fields."""
+
+    def __init__(self, out, *, workers: int = 2, address: str | None = None, resume: bool = True,
+                 progress: bool = True, batch_size: int | None = None, processes: bool = True,
+                 on_row: Callable[[dict], None] | None = None, no_workers_timeout: float = NO_WORKERS_TIMEOUT):
+        from .validation import check_real
+
+        self.out = Path(out)
+        if address is None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+            raise ValueError(f"workers = {workers!r} is out of range; allowed: an integer in [0, inf)")
+        if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
+                                       or batch_size < 1):
+            raise ValueError(f"batch_size = {batch_size!r} is out of range; allowed: an integer in [1, inf)")
+        check_real("no_workers_timeout", no_workers_timeout, lo=0.0, lo_open=True)
+        self.workers, self.address, self.resume, self.progress = workers, address, resume, progress
+        self.batch_size, self.processes, self.on_row = batch_size, processes, on_row
+        self.no_workers_timeout = no_workers_timeout
+        self.lock = self.writer = self.bar = self.client = self.cluster = None
+        self.rows: dict[str, dict] = {}
+        self.stats = dict(n_run=0, n_errors=0, n_overturned=0, wall_time=0.0, setup_time=0.0, workers=workers,
+                          address=address or "", repairs=[])
+
+    def __enter__(self) -> "EnsembleRun":
+        self.lock = OutputLock(self.out).acquire()
+        try:
+            if not self.resume and self.out.exists():
+                raise ValueError(f"{self.out} exists; remove it or resume (the default)")
+            self.writer = _writer(self.out)
+            for note in self.writer.repairs:
+                warnings.warn(note, RepairWarning, stacklevel=2)
+            self.stats["repairs"] = list(self.writer.repairs)
+            self.rows = {r["case_id"]: r for r in read_results(self.out)} if self.resume else {}
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            if self.writer is not None:
+                self.writer.close()
+            if self.bar is not None:
+                self.bar.close()
+            # bounded: a cluster whose workers are being killed may never shut down cleanly, and the run must
+            # end (its rows are written) rather than wait for it
+            for closing in (self.client, self.cluster):
+                if closing is not None:
+                    try:
+                        closing.close(timeout=CLOSE_TIMEOUT)
+                    except Exception:             # noqa: BLE001 - a cluster that cannot close is abandoned
+                        pass
+        finally:
+            self.writer = self.bar = self.client = self.cluster = None
+            if self.lock is not None:
+                self.lock.release()
+                self.lock = None
+
+    def todo(self, cases: Iterable[dict]) -> list[dict]:
+        """The cases whose ids are not in the output yet, each id once."""
+        todo, seen = [], set()
+        for c in cases:
+            k = _key(c)
+            if k not in self.rows and k not in seen:
+                seen.add(k)
+                todo.append(c)
+        return todo
+
+    def _take(self, rows: list[dict]) -> None:
+        self.writer.write(rows)
+        for r in rows:
+            self.rows[r["case_id"]] = r
+            self.stats["n_run"] += 1
+            self.stats["n_errors"] += bool(r["error"])
+            self.stats["n_overturned"] += bool(r["overturned"])
+            if self.on_row is not None:
+                self.on_row(r)
+        if self.bar is not None:
+            self.bar.update(len(rows))
+
+    def progress_total(self, total: int, done: int = 0) -> None:
+        """Show (or grow) the progress bar: ``total`` cases, ``done`` of them finished before this run."""
+        if self.bar is None:
+            self.bar = _progress(total, done, self.progress)
+        elif total > self.bar.total:
+            self.bar.total = total
+            self.bar.refresh()
+
+    def _start(self) -> None:
+        """Start (or join) the Dask cluster once, and warm its workers up before the clock starts."""
+        t_setup = time.perf_counter()
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise ImportError("ensembles on Dask need dask.distributed: pip install "
+                              "'rocking-model[ensemble]' (or run serially with workers=0)") from None
+        if self.address:
+            self.client = Client(self.address, timeout="10s")
+            self.stats["workers"] = len(self.client.scheduler_info().get("workers", {}))
+        else:
+            # silence_logs: shutdown chatter (a worker's last heartbeat to a closed scheduler) is noise; a
+            # cluster that loses all its workers is reported by `_collect` instead
+            self.cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=self.processes,
+                                        dashboard_address=":0", silence_logs=logging.CRITICAL)
+            self.client = Client(self.cluster)
+            self.client.wait_for_workers(self.workers)
+        # import the package and run one short case on every worker
+        self.client.run(_warm_up)
+        self.stats["setup_time"] += time.perf_counter() - t_setup
+
+    def run(self, cases: Sequence[dict]) -> list[dict]:
+        """The rows of ``cases``, in their order: those already in the output as they are, the others run
+        (serially, or on Dask in batches) and written as they arrive."""
+        cases = list(cases)
+        todo = self.todo(cases)
+        if todo:
+            serial = self.workers == 0 and self.address is None
+            if not serial and self.client is None:
+                self._start()
+            t0 = time.perf_counter()
+            try:
+                if serial:
+                    for c in todo:
+                        self._take([run_case(c)])
+                else:
+                    n_w = max(1, len(self.client.scheduler_info().get("workers", {})))
+                    size = self.batch_size or default_batch_size(len(todo), n_w)
+                    self.stats["batch_size"] = size
+                    batches = [todo[i:i + size] for i in range(0, len(todo), size)]
+                    _collect(self.client, self.client.map(run_batch, batches, pure=False), self._take,
+                             self.no_workers_timeout, self.out)
+            finally:
+                self.stats["wall_time"] += time.perf_counter() - t0
+        return [self.rows[_key(c)] for c in cases]
+
+
 def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str | None = None,
                  resume: bool = True, progress: bool = True, batch_size: int | None = None, processes: bool = True,
                  on_row: Callable[[dict], None] | None = None,
@@ -1062,102 +1219,23 @@ def run_ensemble(cases: Sequence[dict], out, *, workers: int = 2, address: str |
     this one), only appends to ``out``, and first repairs what an interruption broke (`RepairWarning`, also
     listed in the summary's ``repairs``). A case that fails becomes a row with its ``error`` (see `run_case`).
     Rows are written as they arrive, so when the run ends early (`WorkersLost`, Ctrl-C) the finished cases
-    stay in ``out`` and a rerun resumes.
+    stay in ``out`` and a rerun resumes. (`EnsembleRun` is the same run for a driver that chooses its cases
+    as it goes.)
     Returns a summary: n_cases, n_skipped, n_run, n_errors, n_overturned, wall_time [s] (from the first
     submission to the last row), throughput [cases/s], setup_time [s] (cluster start), workers, repairs.
     """
-    from .validation import check_real
-
-    out = Path(out)
-    if address is None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
-        raise ValueError(f"workers = {workers!r} is out of range; allowed: an integer in [0, inf)")
-    if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
-                                   or batch_size < 1):
-        raise ValueError(f"batch_size = {batch_size!r} is out of range; allowed: an integer in [1, inf)")
-    check_real("no_workers_timeout", no_workers_timeout, lo=0.0, lo_open=True)
     cases = list(cases)
-    lock = OutputLock(out).acquire()
-    writer = bar = client = cluster = None
-    try:
-        if not resume and out.exists():
-            raise ValueError(f"{out} exists; remove it or resume (the default)")
-        writer = _writer(out)
-        for note in writer.repairs:
-            warnings.warn(note, RepairWarning, stacklevel=2)
-        done = {r["case_id"] for r in read_results(out)} if resume else set()
-        todo, seen = [], set()
-        for c in cases:
-            k = _key(c)
-            if k not in done and k not in seen:
-                seen.add(k)
-                todo.append(c)
-        n_total = len(done | {_key(c) for c in cases})
-        summary = dict(n_cases=len(cases), n_skipped=len(cases) - len(todo), n_run=0, n_errors=0,
-                       n_overturned=0, wall_time=0.0, throughput=math.nan, setup_time=0.0, workers=workers,
-                       address=address or "", repairs=list(writer.repairs), n_total_in_output=len(done))
-        if not todo:
-            return summary
-        bar = _progress(len(cases), len(cases) - len(todo), progress)
-
-        def take(rows):
-            writer.write(rows)
-            for r in rows:
-                summary["n_run"] += 1
-                summary["n_errors"] += bool(r["error"])
-                summary["n_overturned"] += bool(r["overturned"])
-                if on_row is not None:
-                    on_row(r)
-            if bar is not None:
-                bar.update(len(rows))
-
-        t_setup = time.perf_counter()
-        if workers == 0 and address is None:
-            t0 = time.perf_counter()
-            for c in todo:
-                take([run_case(c)])
-        else:
-            try:
-                from dask.distributed import Client, LocalCluster
-            except ImportError:
-                raise ImportError("ensembles on Dask need dask.distributed: pip install "
-                                  "'rocking-model[ensemble]' (or run serially with workers=0)") from None
-            if address:
-                client = Client(address, timeout="10s")
-                summary["workers"] = len(client.scheduler_info().get("workers", {}))
-            else:
-                # silence_logs: shutdown chatter (a worker's last heartbeat to a closed scheduler) is noise;
-                # a cluster that loses all its workers is reported by `_collect` instead
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
-                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
-                client = Client(cluster)
-                client.wait_for_workers(workers)
-            # import the package and run one short case on every worker before the clock starts
-            client.run(_warm_up)
-            summary["setup_time"] = time.perf_counter() - t_setup
-            t0 = time.perf_counter()
-            n_w = max(1, len(client.scheduler_info().get("workers", {})))
-            if batch_size is None:
-                batch_size = default_batch_size(len(todo), n_w)
-            summary["batch_size"] = batch_size
-            batches = [todo[i:i + batch_size] for i in range(0, len(todo), batch_size)]
-            _collect(client, client.map(run_batch, batches, pure=False), take, no_workers_timeout, out)
-    finally:
-        try:
-            if writer is not None:
-                writer.close()
-            if bar is not None:
-                bar.close()
-            # bounded: a cluster whose workers are being killed may never shut down cleanly, and the run must
-            # end (its rows are written) rather than wait for it
-            for closing in (client, cluster):
-                if closing is not None:
-                    try:
-                        closing.close(timeout=CLOSE_TIMEOUT)
-                    except Exception:             # noqa: BLE001 - a cluster that cannot close is abandoned
-                        pass
-        finally:
-            lock.release()
-    summary["wall_time"] = time.perf_counter() - t0
+    run = EnsembleRun(out, workers=workers, address=address, resume=resume, progress=progress,
+                      batch_size=batch_size, processes=processes, on_row=on_row,
+                      no_workers_timeout=no_workers_timeout)
+    with run:
+        n_done = len(run.rows)
+        todo = run.todo(cases)
+        n_total = len(set(run.rows) | {_key(c) for c in cases})
+        if todo:
+            run.progress_total(len(cases), len(cases) - len(todo))
+            run.run(todo)
+    summary = dict(n_cases=len(cases), n_skipped=len(cases) - len(todo), **run.stats)
     summary["throughput"] = summary["n_run"] / summary["wall_time"] if summary["wall_time"] > 0 else math.nan
-    summary["n_total_in_output"] = n_total
+    summary["n_total_in_output"] = n_total if todo else n_done
     return summary

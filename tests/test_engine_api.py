@@ -602,3 +602,21 @@ def test_the_engine_reads_each_tolerances_object_it_is_given():
     ns.gap = "not a number"
     with pytest.raises(TypeError):
         _engine.Engine(*args, state=integ._start, **kwargs)
+
+
+def test_record_runs_on_the_sampled_path_bit_for_bit():
+    """A records.Record (a SampledMotion with a name and a vertical component) is evaluated by the engine itself,
+    as its plain SampledMotion, not through a Python callback, with the same results."""
+    from rocking_model.engine import motion_spec
+    from rocking_model.ground_motion import SampledMotion
+    from rocking_model.models import RigidBlock
+    from rocking_model.records import Record, synthetic_record
+    from rocking_model.simulation import simulate
+
+    t, a = synthetic_record(duration=4.0, pga_g=0.5, seed=3)
+    rec = Record(t, a, "r", vertical=0.3 * a)
+    assert motion_spec(rec.horizontal)[0] == "sampled"
+    assert motion_spec(rec.vertical)[0] == "sampled"
+    m = RigidBlock(b=0.15, h=1.0)
+    r1, r2 = simulate(m, rec.horizontal, 6.0), simulate(m, SampledMotion(t, a), 6.0)
+    assert np.array_equal(r1.phi, r2.phi) and r1.impacts[-1] == r2.impacts[-1]

@@ -254,16 +254,17 @@ def test_result_file_written_before_vertical_resumes_with_zero_new_cases(tmp_pat
     assert [c["case_id"] for c in cases] == old_ids
     out = tmp_path / "old.csv"
     shutil.copy(BEFORE_VERTICAL, out)
-    with pytest.warns(RepairWarning, match="params, vertical, ag_v_scale existed: added"):
+    with pytest.warns(RepairWarning, match="params, vertical, ag_v_scale, im, im_level, max_tendon_force existed: added"):
         s = run_ensemble(cases, out, workers=0, progress=False)
     assert s["n_run"] == 0 and s["n_skipped"] == len(cases)
     lines = out.read_text().splitlines()
     assert lines[0] == ",".join(FIELDS)
     i, j = FIELDS.index("vertical"), FIELDS.index("params")
+    m = [FIELDS.index(k) for k in ("im", "im_level", "max_tendon_force")]
     for old, new in zip(old_text.splitlines()[1:], lines[1:]):
         cells = new.split(",")
-        assert cells[i:i + 2] == ["", "0.0"] and cells[j] == ""
-        assert [c for k, c in enumerate(cells) if k not in (i, i + 1, j)] == old.split(",")
+        assert cells[i:i + 2] == ["", "0.0"] and cells[j] == "" and [cells[k] for k in m] == ["", "nan", "nan"]
+        assert [c for k, c in enumerate(cells) if k not in (i, i + 1, j, *m)] == old.split(",")
     rows = {r["case_id"]: r for r in read_results(out)}
     assert set(rows) == set(old_ids) and all(r["ag_v_scale"] == 0.0 for r in rows.values())
     more = pulse_cases("sine", amplitudes=[2.0], frequencies=[1.0], model="flexible", geometries=[(0.25, 1.5)],
@@ -371,10 +372,11 @@ def test_result_file_written_before_params_resumes_with_zero_new_cases(tmp_path)
     out = tmp_path / "old.csv"
     run_ensemble(cases, out, workers=0, progress=False)
     old = [r for r in csv.reader(out.open(newline=""))]
-    j = old[0].index("params")
+    # (and without the columns added after it)
+    drop = [old[0].index(k) for k in ("params", "im", "im_level", "max_tendon_force")]
     with out.open("w", newline="") as f:
-        csv.writer(f, lineterminator="\r\n").writerows([r[:j] + r[j + 1:] for r in old])
-    with pytest.warns(RepairWarning, match="before the columns params existed: added"):
+        csv.writer(f, lineterminator="\r\n").writerows([[c for k, c in enumerate(r) if k not in drop] for r in old])
+    with pytest.warns(RepairWarning, match="before the columns params, im, im_level, max_tendon_force existed: added"):
         s = run_ensemble(cases, out, workers=0, progress=False)
     assert s["n_run"] == 0 and s["n_skipped"] == 2
     assert [r for r in csv.reader(out.open(newline=""))] == old
