@@ -2,6 +2,7 @@
 # Set-up and entry points. Usage:
 #   bash run.sh demo   # create .venv, install, build the FMUs into dist/, run the demo scene through fmpy
 #   bash run.sh test   # create .venv, install with test extras, run the whole test suite
+#   bash run.sh docs   # create .venv, install with the docs extras, build the documentation site into site/
 # Each phase prints one line first (the install is silent and takes about 40 s on a first run).
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -90,8 +91,14 @@ case "${1:-}" in
         say "running the tests (pytest $*)"
         "$VENV/bin/python" -m pytest "$@"
         ;;
+    docs)
+        setup docs,plot
+        say "building the documentation site into site/ (mkdocs build --strict; the gallery runs examples/)"
+        "$VENV/bin/python" -m mkdocs build --strict --site-dir site "${@:2}"
+        say "open site/index.html"
+        ;;
     *)
-        echo "usage: bash run.sh demo|test [pytest args]" >&2
+        echo "usage: bash run.sh demo|test|docs [pytest args]" >&2
         exit 2
         ;;
 esac

@@ -116,7 +116,7 @@ class ConstantMotion(GroundMotion):
 
 
 class LinearMotion(GroundMotion):
-    """ag(t) = value + rate (t - t_ref) on the window [t_start, t_end] [s]: the first-order hold of a
+    """ag(t) = value + rate (t - t_ref) for t_start <= t <= t_end [s]: the first-order hold of a
     co-simulation step whose master passed the input's derivative (``fmi2SetRealInputDerivatives``). Smooth
     inside the step; its peak over the window is at an end, which the simulators check against AG_MAX."""
 

@@ -10,7 +10,7 @@ the build prints one line naming the platforms built and the Debian packages for
 (`platforms_summary`). sources/ builds every platform to the same numbers (the sources pin their
 floating-point contract, engine/src/rk_fp.h, and carry their version, sources/rk_version.h).
 
-Usage:  rocking build-fmu [--dest dist] [--no-cross-check] [Name ...]
+Usage: ``rocking build-fmu [--dest dist] [--no-cross-check] [Name ...]``
         python build_fmu.py ...   (in a checkout: the same, with dist/ of the checkout as default)
 
 Everything needed ships with the package (the FMI layer's C sources in rocking_model/fmi/binary, the engine's
