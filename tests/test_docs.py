@@ -1,6 +1,7 @@
 """What users read is true: the README and docs/ name files that exist, cite nothing a user cannot follow
 (no "issue N", "bug N" of the project's tracker), describe the simulator state the code has, and quote only
-performance figures that a generated benchmark page contains; the README's command-line examples run."""
+performance figures that a generated benchmark page contains; the command-line examples of the README and of
+docs/ run. (The Python code blocks: tests/test_doc_blocks.py; the site's build: tests/test_doc_site.py.)"""
 from __future__ import annotations
 
 import re
@@ -16,7 +17,7 @@ DOCS = sorted([ROOT / "README.md"] + list((ROOT / "docs").rglob("*.md")))
 #: written by another generator (tests/test_fault_suite.py writes its table), checked there
 NOT_CHECKED_FOR_TRACKER_REFS: set = set()
 #: folders whose files are outputs of a run (git-ignored), not files of the repository
-GENERATED = ("dist/", "results/", "benchmarks/results/", ".venv/")
+GENERATED = ("dist/", "results/", "benchmarks/results/", ".venv/", "site/", "docs/gallery/")
 
 
 def rel(path: Path) -> str:
@@ -32,7 +33,7 @@ def tracked_files() -> set[str]:
     return set(out.stdout.splitlines())
 
 
-TOP = sorted({p.name for p in ROOT.iterdir() if not p.name.startswith(".") or p.name == ".ci"} - {".venv"})
+TOP = sorted({p.name for p in ROOT.iterdir() if not p.name.startswith(".") or p.name == ".ci"} - {".venv", "site"})
 #: a repository path in running text: starts with a top-level folder of the repository, optional ::name
 _PATH = re.compile(r"(?<![\w./-])((?:%s)/[\w./*-]*)(?![\w./*<-])(?:::(\w+))?"
                    % "|".join(re.escape(t) for t in TOP if (ROOT / t).is_dir()))
@@ -49,7 +50,10 @@ def referenced_paths(doc: Path, text: str | None = None):
             if re.match(r"[a-z]+:", target) or target.startswith("#"):
                 continue
             target = target.split("#")[0]
-            yield (doc.parent / target).resolve().relative_to(ROOT).as_posix(), None, n
+            path = (doc.parent / target).resolve().relative_to(ROOT).as_posix()
+            if any(path.startswith(g) for g in GENERATED):      # the site's gallery, drawn at build time
+                continue
+            yield path, None, n
         for path, name in _PATH.findall(line):
             path = path.rstrip(".")                  # the end of a sentence
             if any(path.startswith(g) for g in GENERATED):
@@ -190,22 +194,21 @@ def page_has(page: str, number: str, unit: str) -> bool:
     return False
 
 
-def test_readme_quotes_only_figures_of_the_generated_pages():
-    """Every figure (time, ratio, error, count) inside a README block marked
+def test_docs_quote_only_figures_of_the_generated_pages():
+    """Every figure (time, ratio, error, count) inside a block of the README or a docs/ page marked
     ``<!-- figures from PAGE ... -->`` ... ``<!-- end of figures -->`` is printed on one of the named pages,
-    with its unit, as the benchmark scripts wrote it (rounding is not allowed: quote the page)."""
-    readme = (ROOT / "README.md").read_text()
-    blocks = _BLOCK.findall(readme)
-    assert len(blocks) >= 2, "the README's performance paragraphs are marked"
+    with its unit, as the benchmark scripts wrote them (rounding is not allowed: quote the page)."""
+    blocks = [(doc, pages, body) for doc in DOCS for pages, body in _BLOCK.findall(doc.read_text())]
+    assert len(blocks) >= 2, "the pages' performance paragraphs are marked"
     bad = []
-    for pages, body in blocks:
+    for doc, pages, body in blocks:
         text = "\n".join((ROOT / p).read_text() for p in pages.split())
         found = list(figures(body))
         assert found, body[:200]
         for number, unit in found:
             if not page_has(text, number, unit):
-                bad.append(f"{number} {unit} (from {pages})")
-    assert not bad, "README figures not on their pages:\n" + "\n".join(bad)
+                bad.append(f"{rel(doc)}: {number} {unit} (from {pages})")
+    assert not bad, "figures not on their pages:\n" + "\n".join(bad)
 
 
 def test_figure_parser():
@@ -221,13 +224,14 @@ def test_figure_parser():
 
 # ------------------------------------------------------------------------------------------------ CLI examples
 def readme_cli_examples() -> list[str]:
-    readme = (ROOT / "README.md").read_text()
+    """The `rocking simulate` and `rocking ensemble` lines of the bash blocks of the README and docs/."""
     cmds = []
-    for block in re.findall(r"```bash\n(.*?)```", readme, re.S):
+    for block in re.findall(r"```bash\n(.*?)```", "\n".join(d.read_text() for d in DOCS), re.S):
         for line in block.splitlines():
             line = line.split("  #")[0].strip()
             if line.startswith("rocking simulate") or (line.startswith("rocking ensemble") and "..." not in line):
-                cmds.append(line)
+                if line not in cmds:
+                    cmds.append(line)
     return cmds
 
 

@@ -199,11 +199,11 @@ def test_flexible_oscillator_slides_and_rocks(scheme):
     assert res.slip[-1] == pytest.approx(-0.0226, abs=1e-3) and not res.overturned[-1]
 
 
-def test_readme_friction_example_shows_what_it_says():
-    """The README's contact-laws example: b = 0.3, h = 0.6, mu = 0.52 under a 0.8 g one-sine pulse of 0.5 s
+def test_docs_friction_example_shows_what_it_says():
+    """The contact-laws page's example (docs/guide/contact-laws.md): b = 0.3, h = 0.6, mu = 0.52 under a 0.8 g one-sine pulse of 0.5 s
     rocks, slides on its pivot and ends about 9.6 mm off, at a friction demand equal to mu."""
     from pathlib import Path
-    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    text = (Path(__file__).resolve().parent.parent / "docs" / "guide" / "contact-laws.md").read_text()
     assert "RigidBlock(b=0.3, h=0.6, mu=0.52)" in text and "about -9.6 mm, 0.52" in text
     block = RigidBlock(b=0.3, h=0.6, mu=0.52)
     res = simulate(block, lambda t: 0.8 * G * math.sin(4 * math.pi * t) if t < 0.5 else 0.0, 2.0)
