@@ -8,6 +8,8 @@ time, never committed.
   ``variables`` in `rocking_model.fmi.fmus`): causality, type, unit, start, range, description.
 - ``<!-- generated: api-public -->``: an mkdocstrings entry per public name of `rocking_model` (its ``__all__``,
   resolved to the submodule that defines it).
+- Math: the LaTeX of the pages (pymdownx.arithmatex, generic mode) becomes MathML (latex2mathml) in the built
+  HTML, which browsers render natively: no script, nothing loaded from outside.
 - The example gallery: the scripts of ``examples/`` are run into a temporary folder and their figures added to
   the site as ``gallery/<name>.png``. ``ROCKING_DOCS_GALLERY=skip`` leaves them out (the gallery page then says so);
   ``ROCKING_DOCS_GALLERY=<folder>`` reuses the figures of an earlier build kept there.
@@ -209,3 +211,19 @@ def gallery_markdown() -> str:
             "libcosimpy): see [co-simulation](guide/cosimulation.md). This figure is the tracked "
             "`examples/system/system.png`.", ""]
     return "\n".join(out)
+
+
+# --------------------------------------------------------------------------------------------------- math
+_MATH = re.compile(r'<(span|div) class="arithmatex">\s*\\([(\[])(.*?)\\[)\]]\s*</\1>', re.S)
+
+
+def on_page_content(html, page, config, files, **kw):
+    import html as html_lib
+
+    from latex2mathml.converter import convert
+
+    def repl(m):
+        latex = html_lib.unescape(m.group(3))
+        mathml = convert(latex, display="block" if m.group(2) == "[" else "inline")
+        return mathml if m.group(1) == "span" else f'<div class="math">{mathml}</div>'
+    return _MATH.sub(repl, html)
