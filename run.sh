@@ -74,6 +74,21 @@ cross_tools() {
     fi
 }
 
+# The site's browser test (tests/test_doc_site.py) opens the built documentation in Debian's chromium (driven by
+# playwright, no browser download): installed here when missing and this is a root shell with apt-get; otherwise
+# (or if apt-get fails) that test skips, naming the package.
+browser() {
+    command -v chromium >/dev/null 2>&1 && return 0
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        say "installing chromium for the documentation site's browser test (apt-get)"
+        local install=(env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends chromium)
+        { "${install[@]}" || { apt-get update -q && "${install[@]}"; }; } >/dev/null 2>&1 \
+            || say "apt-get could not install chromium: the browser test of the site will skip"
+    else
+        say "chromium missing (not root or no apt-get): the browser test of the site will skip"
+    fi
+}
+
 case "${1:-}" in
     demo)
         setup plot
@@ -83,10 +98,11 @@ case "${1:-}" in
         "$VENV/bin/python" examples/demo.py
         ;;
     test)
-        setup test,ecos
+        setup test,ecos,docs
         libtbb
         sanitizers
         cross_tools
+        browser
         shift
         say "running the tests (pytest $*)"
         "$VENV/bin/python" -m pytest "$@"

@@ -1,4 +1,4 @@
-"""Adding a model, as the README describes it: one file declares it, and it runs in both schemes and builds both
+"""Adding a model, as docs/architecture.md describes it: one file declares it, and it runs in both schemes and builds both
 FMU kinds, with no C written for it.
 
 The model here is new to the package: a rigid block carrying a lumped mass m_top at the centre of its top face

@@ -392,7 +392,7 @@ def test_fmpy_compile_gives_the_shipped_binarys_bits(xfmus, hosts, outputs, linu
     <SourceFiles>, no definition, no flag of ours) of each FMU: the rebuilt library reports the package's
     version and gives the shipped linux64 binary's results bit for bit on every scene. fmpy builds FMI 2.0
     FMUs from <SourceFiles> and ignores buildDescription.xml (its library list): the rebuilt library may lack
-    NEEDED libm; a host must then have libm loaded (the README says so): here LD_PRELOAD, as documented."""
+    NEEDED libm; a host must then have libm loaded (docs/guide/fmus.md says so): here LD_PRELOAD, as documented."""
     cmake = shutil.which("cmake")
     need(cmake, "cmake", "cmake")
     from fmpy.build import build_platform_binary

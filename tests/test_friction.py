@@ -103,7 +103,7 @@ def test_mu_above_the_friction_demand_gives_the_sticking_results(scheme):
 
 
 def _overturning_pulse_run(scheme, mu):
-    """The README quickstart's first pulse (3 m/s2 one-sine of 1 s) that overturns a slender block b = 0.2,
+    """The first pulse of an earlier README quickstart (3 m/s2 one-sine of 1 s) that overturns a slender block b = 0.2,
     h = 1: (lowest corner over the run [m], inexact reports, final outputs)."""
     t = np.linspace(0.0, 5.0, 501)
     ag = 3.0 * np.sin(2 * np.pi * t) * (t < 1)

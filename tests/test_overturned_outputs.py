@@ -1,6 +1,6 @@
 """Outputs after overturning (issue 20): they describe no motion the model no longer computes.
 
-Convention (README, "Overturning"): from the first output at which ``overturned`` is true, the outputs are
+Convention (docs/guide/schemes.md, "Overturning"): from the first output at which ``overturned`` is true, the outputs are
 those of the pose reached at |phi| = pi/2 (event-driven: located to round-off; Moreau-Jean: the end of the
 step that crossed it) at rest: every velocity 0, ``energy`` the potential (and strain) energy of that pose
 relative to rest (a rigid block on its side: m g (b - h)), ``contact`` = OVERTURNED (10), and none of them

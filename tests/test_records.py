@@ -361,7 +361,7 @@ def test_synthetic_record_fixed_numbers():
 # ------------------------------------------------------------------------------------------- exports, writers
 def test_package_exports_every_public_ground_motion():
     """Every public GroundMotion subclass of rocking_model.ground_motion (and the readers' Record) can be imported
-    from the package itself, as the README's ground-motion table names them (`from rocking_model import
+    from the package itself, as the ground-motion table of docs/guide/ground-motions.md names them (`from rocking_model import
     CosinePulse` used to fail while SinePulse worked)."""
     import inspect
 

@@ -461,7 +461,7 @@ def scene(draw):
 def test_random_scenes_with_both_components(case):
     """Random geometry, e_N, mu, impact law, initial state and pulses on both components (the vertical one
     down to -1.6 g: flight): finite outputs and no corner below the ground beyond the documented tolerance at
-    every communication point: PEN_TOL L event-driven; Moreau-Jean's 2 dt v (README: a corner closing at speed v
+    every communication point: PEN_TOL L event-driven; Moreau-Jean's 2 dt v (docs/guide/bad-input.md: a corner closing at speed v
     inside a step; v the largest normal corner speed seen so far), reached without any vertical component too
     (squat blocks after an impact; 0.07 of it at most over 300 random scenes)."""
     model, init, gm, scheme = case

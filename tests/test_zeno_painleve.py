@@ -1,6 +1,6 @@
 """The Zeno rule and the Painleve count of the event-driven scheme (issue 20, "Outputs and API that mislead").
 
-Zeno rule (README, "Impact accumulation (Zeno)"; `ContactTolerances`): after an impact a corner at the ground is
+Zeno rule (docs/guide/schemes.md, "Impact accumulation (Zeno)"; `ContactTolerances`): after an impact a corner at the ground is
 closed plastically if (velocity test) it leaves slower than v_Zeno = zeno_tol sqrt(g L), or (bounce test, only
 while every corner leaves in free flight and none is closed) its free-flight bounce U+^2 / (2 |a_N|) stays
 within gap = 1e-9 L of the ground, i.e. U+ < sqrt(2 |a_N| 1e-9 L) ~ 44.7 v_Zeno at |a_N| = g and the default
@@ -39,7 +39,7 @@ U_BOUNCE = math.sqrt(2.0 * G * DEFAULT_TOLERANCES.gap * R)
 
 # ============================================================================================== Zeno rule
 def test_bounce_threshold_is_45_v_zeno():
-    """The figure quoted in the README and in `rocking_model.tolerances`: sqrt(2 g 1e-9 L) / (1e-6 sqrt(g L)),
+    """The figure quoted in docs/guide/schemes.md and in `rocking_model.tolerances`: sqrt(2 g 1e-9 L) / (1e-6 sqrt(g L)),
     with the defaults that every entry point shares."""
     import inspect
 
@@ -187,7 +187,7 @@ def test_critical_mu_of_the_scene():
     theta = ALPHA + PHI_P
     closed = (1 + 3 * math.sin(theta) ** 2) / (-3 * math.sin(theta) * math.cos(theta))
     assert critical_mu(PHI_P) == pytest.approx(closed, rel=1e-12) == pytest.approx(1.357, abs=1e-3)
-    # the README's figure: at least 4/3, reached at tan(theta) = 1/2 (phi = -alpha - atan(1/2) = -0.661 rad)
+    # the figure of docs/guide/contact-laws.md: at least 4/3, reached at tan(theta) = 1/2 (phi = -alpha - atan(1/2) = -0.661 rad)
     phis = np.linspace(-1.5, -ALPHA - 0.01, 3001)
     assert min(critical_mu(p) for p in phis) == pytest.approx(4.0 / 3.0, rel=1e-6)
     assert critical_mu(-ALPHA - math.atan(0.5)) == pytest.approx(4.0 / 3.0, rel=1e-12)
