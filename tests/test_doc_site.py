@@ -93,6 +93,16 @@ def test_generated_tables_are_the_declarations(site):
             assert f"<td><code>{v.name}</code></td>" in fmus, (name, v.name)
 
 
+def test_fmu_page_quotes_the_value_references():
+    """The non-Python host recipe of docs/guide/fmus.md names the value references of ag and phi that the FMU has."""
+    from rocking_model.fmi.fmus import FMUS
+    from rocking_model.fmi.standalone import slave_instance
+    vrs = {var.name: vr for vr, var in slave_instance(FMUS["RigidRockingBlock"]).vars.items()}
+    text = " ".join((ROOT / "docs" / "guide" / "fmus.md").read_text().split())
+    assert f"value references {vrs['ag']} for `ag` and {vrs['phi']} for `phi`" in text
+    assert f" {vrs['ag']} {vrs['phi']} 3.0 1.0 0.01" in text
+
+
 def test_api_reference_has_every_public_name_and_module(site):
     import rocking_model
     api = (site / "api.html").read_text()

@@ -103,16 +103,19 @@ def parameter_table(kind: str) -> str:
 
 def fmu_table(name: str) -> str:
     from rocking_model.fmi.fmus import FMUS
+    from rocking_model.fmi.standalone import slave_instance
 
     cls = FMUS[name]
+    # the value references pythonfmu gives the variables (their registration order), as in the modelDescription
+    vrs = {var.name: vr for vr, var in slave_instance(cls).vars.items()}
     out = [f"**`{name}.fmu`**: {_cell(getattr(cls, 'description', '') or (cls.__doc__ or '').strip())}", "",
-           "| name | causality | type | unit | start | range | description |",
-           "| --- | --- | --- | --- | --- | --- | --- |"]
+           "| name | value reference | causality | type | unit | start | range | description |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for v in cls.variables:
         start = "" if v.causality == "output" else _num(v.default)
         rng = v.range_text() if (v.min is not None or v.max is not None) else ""
-        out.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '–'} | {_cell(start)} | {rng} | "
-                   f"{_cell(v.description)} |")
+        out.append(f"| `{v.name}` | {vrs[v.name]} | {v.causality} | {v.type} | {v.unit or '–'} | {_cell(start)} | "
+                   f"{rng} | {_cell(v.description)} |")
     return "\n".join(out) + "\n"
 
 
