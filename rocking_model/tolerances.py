@@ -31,8 +31,8 @@ them (Painleve). ``lcp_hint`` applies where a hint is given: Moreau-Jean's last 
 is still exact only within ``lcp_exact``); the event-driven scheme gives none. The forces of a mode held closed
 (`contact.mode_forces`) take neither: all its contacts are forced, one active set.
 
-The Zeno rule (event-driven: the end of an impact accumulation; README, "Impact accumulation (Zeno)") has two
-tests, applied after every impact to the corners at the ground, with two thresholds:
+The Zeno rule (event-driven: the end of an impact accumulation; docs/guide/schemes.md, "Impact accumulation
+(Zeno)") has two tests, applied after every impact to the corners at the ground, with two thresholds:
 
 - *velocity test*: a corner whose post-impact separation velocity U_N+ is below v_Zeno = zeno_tol sqrt(g L) is
   closed; ``zeno_tol`` [1] is a solver setting (`ZENO_TOL` by default: 3.2e-6 m/s for the 0.2 x 1.0 m block);

@@ -422,7 +422,7 @@ def write_cross_check(fmu: Path, root) -> Path:
         f"simulate_fmu with the default start values, communication step {spec['step']} s, inputs ({inputs}) "
         f"from {name}_in.csv held over each step (the table is sampled at the communication points). "
         f"The FMU embeds Python: the importer needs libpython loaded and numpy and scipy importable "
-        f"(see the README of rocking_model).\n"
+        f"(see the FMU page of rocking_model's documentation, 'Loading the FMUs in a non-Python host').\n"
         + ("\nWarnings of the reference run (expected: they belong to this reference scene):\n\n"
            + "".join(f"- {text}\n" for text in notes) if notes else ""))
     return folder
