@@ -284,6 +284,18 @@ def test_shipped_record_is_the_synthetic_record_it_says():
     assert "synthetic" in " ".join(rec.header).lower()
 
 
+def test_shipped_csv_record_is_the_at2_record():
+    """examples/records/synthetic_2017.csv (the docs' CSV example) is the shipped AT2 record read back and written
+    in cm/s2, as examples/records/make_synthetic_record.py writes it; its header states the units."""
+    import numpy as np
+
+    from rocking_model.records import read_at2, read_csv
+    folder = ROOT / "examples" / "records"
+    at2, csv = read_at2(folder / "synthetic_2017.AT2"), read_csv(folder / "synthetic_2017.csv")
+    assert (folder / "synthetic_2017.csv").read_text().splitlines()[0] == "time [s],ag [cm/s2]"
+    assert np.array_equal(at2.t, csv.t) and np.allclose(at2.ag, csv.ag, rtol=1e-12, atol=0)
+
+
 # ------------------------------------------------------------------------------------------------ benchmark pages
 def test_benchmark_cold_start_runs_for_a_source_fmu(built_fmus):
     """The cold-start benchmark steps every FMU, a source without inputs included: it used to set the output
