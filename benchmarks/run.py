@@ -566,7 +566,7 @@ def flexible_available() -> tuple[bool, str]:
 
 
 def bench_friction(args) -> dict:
-    """The friction reports of issue 15, each its own script writing its own page: the mu = inf path against
+    """The friction reports, each its own script writing its own page: the mu = inf path against
     the pre-friction baseline and the finite-mu work-precision (docs/performance/friction.md), and the
     cross-check against Siconos' NewtonImpactFrictionNSL where Siconos is installed
     (docs/performance/siconos_friction.md). Returns {script: exit code}."""

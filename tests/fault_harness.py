@@ -1,4 +1,4 @@
-"""Fault-injection worker of the conformance and fault suite (tests/test_fault_suite.py, issue 12).
+"""Fault-injection worker of the conformance and fault suite (tests/test_fault_suite.py).
 
 Every case drives the FMUs through fmpy's low-level ``fmpy.fmi2.FMU2Slave`` (every FMI 2.0 co-simulation
 function) in a process of its own, because a case may crash the process or hang. A case is a small function (or a row of a table fed to a shared function) that records,
@@ -56,7 +56,7 @@ SHORT = {RIGID: "rigid", FLEX: "flex", PT: "pt", GMS: "ground", STOREY: "storey"
 #: the model FMUs (`rocking_model.models.MODELS`), all of them `ModelSlave`s on the compiled engine
 ROCKING = (RIGID, FLEX, PT)
 WITH_INPUT = (RIGID, FLEX, PT, STOREY)
-#: the FMUs with the vertical ground acceleration input ag_v (issue 23) besides ag
+#: the FMUs with the vertical ground acceleration input ag_v besides ag
 WITH_VERTICAL = (RIGID, FLEX, PT)
 #: The post-tensioned block (PT) shares the rigid block's slave class code (`ModelSlave`), its C FMI layer and
 #: its state format: it runs the cases over every FMU, every input and every kind of FMU (statuses, messages,
@@ -1279,7 +1279,7 @@ def flex_ag_huge(h: Harness, value: float):
 
 
 add("bounded/flex-ED-ag=DBL_MAX", flex_ag_huge, value=sys.float_info.max,
-    desc="FlexibleRockingOscillator event-driven, ag = 1.797e308 (the hang of issue 12 was ag = 1.8e308, which is inf in "
+    desc="FlexibleRockingOscillator event-driven, ag = 1.797e308 (the hang once found was at ag = 1.8e308, which is inf in "
          "binary64: input/flex/ag=inf)")
 
 
@@ -2443,7 +2443,7 @@ def robustness_page() -> str:
 
 # ============================================================================================== FMU kinds
 #: the kinds of FMU the suite runs on: the pythonfmu FMUs (every FMU of fmu_src/) and the self-contained ones
-#: (issue 22: RigidRockingBlock and FlexibleRockingOscillator built from the C engine, dist/standalone/)
+#: (RigidRockingBlock and FlexibleRockingOscillator built from the C engine, dist/standalone/)
 KINDS = ("pythonfmu", "standalone")
 #: the FMUs that have a self-contained build; the system FMUs (source, storey) exist as pythonfmu FMUs only
 STANDALONE_FMUS = (RIGID, FLEX, PT)
@@ -2487,7 +2487,7 @@ STANDALONE_NA: Dict[str, str] = {
 }
 
 
-#: cases where the self-contained FMUs differ from the pythonfmu ones today (issue 22 asks for the same statuses
+#: cases where the self-contained FMUs differ from the pythonfmu ones today (they are to give the same statuses
 #: and messages): strict xfails, so that a fix shows as an unexpected pass and the entry is removed
 STANDALONE_XFAIL: Dict[str, str] = {}
 

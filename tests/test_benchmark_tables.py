@@ -1,4 +1,4 @@
-"""The benchmark's equal-error table and targets (issue 21's compiled-engine rows) on made-up runs: the
+"""The benchmark's equal-error table and targets (the compiled-engine rows) on made-up runs: the
 arithmetic only, nothing timed."""
 import math
 

@@ -1,4 +1,4 @@
-"""The self-contained FMUs (issue 22): dist/standalone/<Name>.fmu, the compiled C engine under the C FMI layer
+"""The self-contained FMUs: dist/standalone/<Name>.fmu, the compiled C engine under the C FMI layer
 rocking_model/fmi/binary/standalone/fmi2_engine.c, with no Python at all.
 
 - the modelDescription is the pythonfmu FMU's (same variables, references, units, ranges, starts,

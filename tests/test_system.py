@@ -277,7 +277,7 @@ def test_example_script_writes_csv_and_png(example_osp, tmp_path, monkeypatch):
 
 
 def test_readme_states_the_example_step_count():
-    """The README's claim about the system example (issue 14: it said 800 steps where it runs 1000)."""
+    """The README's claim about the system example (it once said 800 steps where it runs 1000)."""
     import re
     import xml.etree.ElementTree as ET
 
@@ -299,7 +299,7 @@ STANDALONE_ROUND_OFF = 1e-9
 
 @pytest.fixture(scope="module")
 def standalone_osp(fmus, build_module, tmp_path_factory):
-    """The example's OspSystemStructure.xml with the self-contained block and oscillator (issue 22)."""
+    """The example's OspSystemStructure.xml with the self-contained block and oscillator."""
     import fault_harness as fh
 
     try:

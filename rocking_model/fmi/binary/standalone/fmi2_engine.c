@@ -1,4 +1,4 @@
-/* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs of issue 22, with no
+/* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs, with no
  * Python at all. C99 + libm.
  *
  * The FMI calls (the state machine, the argument checks, the statuses, the messages, the FMU states) are
