@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import summary
+
 LEVELS = ("1e-02", "1e-03", "1e-04", "1e-05", "1e-06", "1e-07", "1e-08")
 COLORS = {"package Moreau-Jean": "tab:blue", "package event-driven": "tab:red", "solve_ivp DOP853": "tab:green",
           "Siconos Moreau-Jean": "tab:purple", "compiled Moreau-Jean": "tab:cyan", "compiled event-driven": "tab:orange"}
@@ -295,10 +297,10 @@ def write_report(res, docs: Path) -> Path:
     if path.is_file():
         # the sections written by the other benchmark scripts (co-simulation accuracy, binary overhead) follow
         # this marker and are kept as they are
-        old = path.read_text()
-        if KEEP_MARKER in old:
-            kept = "\n" + KEEP_MARKER + old.split(KEEP_MARKER, 1)[1]
-    path.write_text(scrub_paths("\n".join(L) + "\n" + kept))
+        _, kept = summary.split_page(path.read_text(), KEEP_MARKER)
+        kept = KEEP_MARKER + "\n\n" + kept if kept else ""
+    # the page: the summary (one table per question) first, this full run and the kept sections collapsed
+    path.write_text(scrub_paths(summary.compose("\n".join(L) + "\n", kept, img_dir)))
     return path
 
 

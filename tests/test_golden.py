@@ -55,3 +55,10 @@ def test_golden_under_other_kernels(built_fmus):
                           env=roundoff.kernel_env(), capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert " 0 differ" in proc.stdout
+
+
+def test_golden_skip_reason_names_the_kernels_and_what_still_runs():
+    """The skip on another CPU says why (the kernels whose fingerprint differs, both hashes) and what ran."""
+    reason = golden_skip_reason(12, 300, {"libm": "aaa", "blas": "bbb"}, {"libm": "ccc", "blas": "bbb"})
+    assert "libm aaa (recorded) != ccc (here)" in reason and "blas" not in reason
+    assert "12 of 300" in reason and "other 288 arrays" in reason and "physical tests" in reason
