@@ -3,7 +3,7 @@
 #   bash run.sh demo   # create .venv, install, build the FMUs into dist/, run the demo scene through fmpy
 #   bash run.sh test   # create .venv, install with test extras, run the whole test suite
 #   bash run.sh docs   # create .venv, install with the docs extras, build the documentation site into site/
-# Each phase prints one line first (the install is silent and takes a few minutes on a first run).
+# Each phase prints one line first (the install is silent; on a first run it downloads and compiles, which takes a while).
 set -euo pipefail
 cd "$(dirname "$0")"
 PY=${PYTHON:-python3}
@@ -16,7 +16,7 @@ setup() {
         say "creating the virtual environment $VENV"
         "$PY" -m venv "$VENV"
     fi
-    say "installing rocking_model[$1] and its dependencies into $VENV (pip; a few minutes on a first run)"
+    say "installing rocking_model[$1] and its dependencies into $VENV (pip; silent, a while on a first run)"
     "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip >/dev/null
     "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[$1]"
 }

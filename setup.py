@@ -1,4 +1,4 @@
-"""Build of the compiled engine (issue 21): the extension module rocking_model._engine from the C99 sources
+"""Build of the compiled engine: the extension module rocking_model._engine from the C99 sources
 in rocking_model/engine/src (every *.c there) and the module glue rocking_model/engine/_engine.c. Everything else is declared in pyproject.toml.
 
 Flags: portable (-std=c99 -O3, no -march=native) and -ffp-contract=off, so that the compiler does not fuse

@@ -1,4 +1,4 @@
-"""Per-call overhead of the FMU binary (issue 13): the do-nothing slave (benchmarks/fmu_null/NullSlave.py, a
+"""Per-call overhead of the FMU binary: the do-nothing slave (benchmarks/fmu_null/NullSlave.py, a
 plain pythonfmu Fmi2Slave) built twice, once with pythonfmu 0.7's prebuilt wrapper and once with the project's
 binary (build_fmu.compile_binary + install_binary), both driven by fmpy's FMU2Slave in the same process:
 setReal(ag) + doStep + getReal(y) per step, and each call alone. Rounds alternate between the binaries and

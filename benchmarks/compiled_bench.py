@@ -1,4 +1,4 @@
-"""The compiled engine per communication step, its cold start from Python (issue 21).
+"""The compiled engine per communication step, its cold start from Python.
 
 Per step: the first 30 s of the synthetic record (the record scene's accelerogram, the FMU benchmark's) in
 0.01 s communication steps, ag held over each step (zero-order hold, as an FMU importer drives it), the
@@ -19,8 +19,8 @@ Models: the record scene's rigid block (b = 0.4 m, h = 2 m) and the default flex
 record scaled to 0.3 g (the flexible FMU's benchmark), each event-driven (tolerance 1e-8, the FMU default)
 and Moreau-Jean (dt_max 1e-3: ten time steps per communication step; its cost is also given per time step).
 
-A record shaped like the issue's prototype record (`PROTOTYPE_RECORD`: 40 s of 5 ms samples, about 400 impacts):
-the rigid block's C loop (`Engine.sample`) and raw loop per communication step, the figures the issue's target
+A record shaped like the C prototype's record (`PROTOTYPE_RECORD`: 40 s of 5 ms samples, about 400 impacts):
+the rigid block's C loop (`Engine.sample`) and raw loop per communication step, the figures the speed target
 (at most 1 us per communication step on such a record, 3x the prototype's C loop) compares with.
 
 Cold start: in a fresh interpreter (median of several), to the end of the first 0.01 s step of the record
@@ -224,7 +224,7 @@ def per_step(repeats: int = 3, duration: float = 30.0) -> dict:
     return {"record": "synthetic record (benchmarks.scenes.synthetic_record), first 30 s", "rows": out}
 
 
-#: a record shaped like issue 21's prototype record (a 40 s far-field record, 7991 samples of 5 ms, about 400
+#: a record shaped like the C prototype's record (a 40 s far-field record, 7991 samples of 5 ms, about 400
 #: impacts of the rigid block): the synthetic record's generator at 5 ms over 40 s, a longer strong phase and
 #: slower decay, a seed and PGA that give about 400 impacts of the record block without overturning
 PROTOTYPE_RECORD = dict(duration=40.0, dt=0.005, pga_g=0.35, t_strong=30.0, decay=0.5, seed=11)

@@ -1,5 +1,5 @@
 """Co-simulation error of the FMUs driven through a record: zero-order hold of ag over each communication
-step against the first-order hold given by fmi2SetRealInputDerivatives (issue 13), both against the
+step against the first-order hold given by fmi2SetRealInputDerivatives, both against the
 library's `simulate(..., hold="exact")` on the same record (event-driven, tolerance 1e-10).
 
 Usage: python -m benchmarks.cosim_interpolation [--peak 3.0] [--dest DIR]

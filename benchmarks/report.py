@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import summary
+
 LEVELS = ("1e-02", "1e-03", "1e-04", "1e-05", "1e-06", "1e-07", "1e-08")
 COLORS = {"package Moreau-Jean": "tab:blue", "package event-driven": "tab:red", "solve_ivp DOP853": "tab:green",
           "Siconos Moreau-Jean": "tab:purple", "compiled Moreau-Jean": "tab:cyan", "compiled event-driven": "tab:orange"}
@@ -295,10 +297,10 @@ def write_report(res, docs: Path) -> Path:
     if path.is_file():
         # the sections written by the other benchmark scripts (co-simulation accuracy, binary overhead) follow
         # this marker and are kept as they are
-        old = path.read_text()
-        if KEEP_MARKER in old:
-            kept = "\n" + KEEP_MARKER + old.split(KEEP_MARKER, 1)[1]
-    path.write_text(scrub_paths("\n".join(L) + "\n" + kept))
+        _, kept = summary.split_page(path.read_text(), KEEP_MARKER)
+        kept = KEEP_MARKER + "\n\n" + kept if kept else ""
+    # the page: the summary (one table per question) first, this full run and the kept sections collapsed
+    path.write_text(scrub_paths(summary.compose("\n".join(L) + "\n", kept, img_dir)))
     return path
 
 
@@ -417,13 +419,13 @@ def _targets(res):
 
 
 def _compiled_targets(res):
-    """Issue 21's targets measured by benchmarks/compiled_bench.py, memory.py (engine c), ensemble_bench.py."""
+    """The compiled engine's targets measured by benchmarks/compiled_bench.py, memory.py (engine c), ensemble_bench.py."""
     out = []
     comp = res.get("compiled", {})
     rows = {(r["kind"], r["scheme"]): r for r in comp.get("per_step", {}).get("rows", [])}
     proto = comp.get("prototype", {})
     if "sample_us" in proto and ("rigid", "event_driven") in rows:
-        # the issue compares with its prototype's C loop (0.33 us per sample on a 40 s record of 5 ms samples):
+        # the target compares with the C prototype's loop (0.33 us per sample on a 40 s record of 5 ms samples):
         # the C loop per communication step on a record of that shape, the benchmark record's alongside
         r = rows[("rigid", "event_driven")]
         v = proto["sample_us"]
@@ -525,7 +527,7 @@ def _compiled_section(res, w):
     proto = comp.get("prototype", {})
     if "sample_us" in proto:
         rec = proto["record"]
-        w(f"A record shaped like the issue's prototype record (a 40 s far-field record of 5 ms samples with about 400 "
+        w(f"A record shaped like the C prototype's record (a 40 s far-field record of 5 ms samples with about 400 "
           f"impacts; here `synthetic_record` over {rec['duration']:g} s at {rec['dt']:g} s, PGA {rec['pga_g']:g} g, "
           f"strong phase to {rec['t_strong']:g} s, decay {rec['decay']:g}, seed {rec['seed']}: {proto['steps']} "
           f"communication steps), the rigid block event-driven at tolerance 1e-8: **{proto['sample_us']:.2f} µs** per "

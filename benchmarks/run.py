@@ -1,7 +1,7 @@
 """Run the whole benchmark suite and regenerate docs/performance.md and its plots.
 
-    python -m benchmarks            # full run (316 s measured on 2 cores, benchmarks/README.md)
-    python -m benchmarks --quick    # smoke run (24-49 s measured), report in benchmarks/results/quick/
+    python -m benchmarks            # full run (its measured durations, machine and load: benchmarks/README.md)
+    python -m benchmarks --quick    # smoke run, report in benchmarks/results/quick/
     python benchmarks/run.py [--quick] [--skip-siconos] [--skip-fmu] [--skip-memory] [--skip-friction] [--repeats N]
 
 Raw results go to benchmarks/results/latest.json (quick: benchmarks/results/quick/results.json), so that a
@@ -566,7 +566,7 @@ def flexible_available() -> tuple[bool, str]:
 
 
 def bench_friction(args) -> dict:
-    """The friction reports of issue 15, each its own script writing its own page: the mu = inf path against
+    """The friction reports, each its own script writing its own page: the mu = inf path against
     the pre-friction baseline and the finite-mu work-precision (docs/performance/friction.md), and the
     cross-check against Siconos' NewtonImpactFrictionNSL where Siconos is installed
     (docs/performance/siconos_friction.md). Returns {script: exit code}."""
@@ -581,7 +581,8 @@ def bench_friction(args) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="rocking_model benchmark suite")
-    ap.add_argument("--quick", action="store_true", help="smoke run (about 25-50 s on 2 cores): short scenes, two settings each")
+    ap.add_argument("--quick", action="store_true", help="smoke run: short scenes, two settings each (durations measured, with machine and load: "
+                         "benchmarks/README.md)")
     ap.add_argument("--repeats", type=int, default=None, help="timed repeats per setting (default 3; quick 1)")
     ap.add_argument("--budget", type=float, default=6.0,
                     help="stop repeating a setting once its runs took this many seconds (default 6)")

@@ -1,4 +1,4 @@
-"""The self-contained FMUs (issue 22): size, shared-library dependencies, cold start and the cost of a step
+"""The self-contained FMUs: size, shared-library dependencies, cold start and the cost of a step
 through fmpy, printed (never asserted: timing depends on the machine).
 
     python -m benchmarks.standalone_fmu [--dest dist] [--repeat 20]
@@ -68,7 +68,7 @@ def cold_start(fmu: Path, repeat: int) -> float:
 def null_binary(fmu: Path, unzip: Path) -> None:
     """Recompile the FMU's own sources/ (as buildDescription.xml lists them, the build's portable flags) with
     RK_FMU_NULL_STEP into the extracted ``unzip``: the same FMI layer and calls, fmi2DoStep without the engine
-    (the do-nothing C FMU of the issue's targets)."""
+    (the do-nothing C FMU of the targets)."""
     import xml.etree.ElementTree as ET
 
     sys.path.insert(0, str(ROOT))
@@ -140,7 +140,7 @@ def main(argv=None) -> int:
                 out = subprocess.run(["ldd", so], capture_output=True, text=True).stdout
                 print("  ldd:", "; ".join(line.strip() for line in out.splitlines()))
         print(f"  cold start (load, instantiate, initialize, first step): {cold_start(fmu, args.repeat) * 1e3:.2f} ms")
-    # the same loop, best of 3 each, in one run (the issue's target: at most 2x the do-nothing C FMU)
+    # the same loop, best of 3 each, in one run (the target: at most 2x the do-nothing C FMU)
     real = min(step_cost(fmus[NAMES[0]]) for _ in range(3))
     null = min(step_cost(fmus[NAMES[0]], null=True) for _ in range(3))
     print(f"rigid record, 3000 steps of 10 ms through fmpy (event-driven, tolerance 1e-8): standalone "

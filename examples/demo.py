@@ -1,16 +1,20 @@
 """Demo scene: the RigidRockingBlock FMU under a one-sine ground-acceleration pulse, driven by fmpy.
 
-    python build_fmu.py && python examples/demo.py
+    python build_fmu.py && python examples/demo.py [--out results]
 
 Block b = 0.2 m, h = 1.0 m (slenderness alpha = atan(b/h) = 0.197 rad; uplift needs |ag| > g tan(alpha) =
 1.96 m/s2), pulse ag = A sin(omega_p t) for one period with A = 3 m/s2, omega_p = 2 pi 2 rad/s. The block
 uplifts and keeps rocking with slowly decaying amplitude (Housner restitution ~0.94 per impact); it does
 not overturn.
 
-Writes results/demo_rigid.csv and results/demo_rigid.png (rotation, ground acceleration, contact state).
+Writes OUT/demo_rigid.csv and OUT/demo_rigid.png (rotation, ground acceleration, contact state); OUT is
+--out (default results/, git-ignored). ``run(out=folder)`` does the same from Python (the docs build calls it).
+The FMU's second input, the vertical ground acceleration ag_v, is given as zeros in the input table (fmpy
+warns about every input the table leaves out).
 """
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from pathlib import Path
@@ -35,14 +39,18 @@ CONTACT_LABELS = ["full", "left corner", "right corner", "flight"]
 
 
 def pulse_table(t_end=T_END, dt_table=1e-3):
-    """Input table for fmpy (structured array 'time', 'ag'); fmpy holds its interpolant at step starts."""
+    """Input table for fmpy (structured array 'time', 'ag', 'ag_v'; ag_v, the vertical component, zero);
+    fmpy holds its interpolant at step starts."""
     t = np.arange(0.0, t_end + 0.5 * dt_table, dt_table)
     t_p = 2.0 * math.pi / OMEGA_P
     ag = np.where(t <= t_p, A * np.sin(OMEGA_P * np.minimum(t, t_p)), 0.0)
-    return np.array(list(zip(t, ag)), dtype=[("time", np.float64), ("ag", np.float64)])
+    return np.array(list(zip(t, ag, np.zeros_like(t))),
+                    dtype=[("time", np.float64), ("ag", np.float64), ("ag_v", np.float64)])
 
 
-def main() -> int:
+def run(out: Path = RESULTS) -> int:
+    """Run the demo, write ``out``/demo_rigid.csv and ``out``/demo_rigid.png; 0 on success."""
+    out = Path(out)
     from rocking_model.fmi import FMUError, run_fmu
 
     if not FMU.exists():
@@ -72,12 +80,12 @@ def main() -> int:
         print("demo: the pulse should make the block rock without overturning", file=sys.stderr)
         return 1
 
-    RESULTS.mkdir(exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     names = ["phi", "phi_dot", "x", "y", "x_dot", "y_dot", "energy", "contact", "impacts", "overturned"]
     data = np.column_stack([t, ag] + [res[n].astype(float) for n in names])
     header = "time [s],ag [m/s2],phi [rad],phi_dot [rad/s],x [m],y [m],x_dot [m/s],y_dot [m/s],energy [J]," \
              "contact [0 full/1 left/2 right/3 flight],impacts,overturned"
-    np.savetxt(RESULTS / "demo_rigid.csv", data, delimiter=",", header=header, comments="",
+    np.savetxt(out / "demo_rigid.csv", data, delimiter=",", header=header, comments="",
                fmt=["%.6f", "%.9g"] + ["%.9g"] * 7 + ["%d", "%d", "%d"])
 
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True,
@@ -108,10 +116,16 @@ def main() -> int:
     for a in axes:
         a.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(RESULTS / "demo_rigid.png", dpi=120)
+    fig.savefig(out / "demo_rigid.png", dpi=120)
     plt.close(fig)
-    print(f"wrote {RESULTS / 'demo_rigid.csv'} and {RESULTS / 'demo_rigid.png'}")
+    print(f"wrote {out / 'demo_rigid.csv'} and {out / 'demo_rigid.png'}")
     return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=str(RESULTS), help="output folder (default results/)")
+    return run(Path(ap.parse_args(argv).out))
 
 
 if __name__ == "__main__":

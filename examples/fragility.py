@@ -1,15 +1,15 @@
 """Fragility curves of a slender rigid block for three damage states, from a multiple-stripe analysis of a
 synthetic suite of records.
 
-    python examples/fragility.py [OUT_DIR] [--records 12] [--stripes 16] [--duration 30] [--workers 2]
+    python examples/fragility.py [--out OUT_DIR] [--records 12] [--stripes 16] [--duration 30] [--workers 2]
 
 Block b = 0.15 m, h = 1.0 m (alpha = 0.149 rad, p = 2.70 rad/s); records synthetic:1 ... synthetic:12 (30 s
 Clough-Penzien accelerograms; shorter ones with --duration, written as CSV files first); stripes of
 PGA/(g tan alpha) = 0.8 ... 4 (the dimensionless measure: 1 is the uplift threshold of a block at rest);
 damage states |phi|max/alpha >= 0.2, |phi|max/alpha >= 0.5 and overturning (overturning reaches every one),
 fitted by maximum likelihood over the stripes with 200 bootstrap resamples over records for the bands.
-Writes OUT_DIR/cases.csv (a rerun resumes), fragility.csv, fragility.json and fragility.png (default
-OUT_DIR: results/fragility_example/). Equivalent command line (30 s records):
+Writes OUT_DIR/cases.csv (a rerun resumes), fragility.csv, fragility.json and fragility.png (--out, default
+results/fragility_example/, git-ignored; also as the first argument). Equivalent command line (30 s records):
 
     rocking fragility --records synthetic:1 ... synthetic:12 --im "PGA/(g tan alpha)" --b 0.15 --h 1.0 \
         --stripes 0.8:4:16 --out results/fragility_example
@@ -30,14 +30,16 @@ IM = "PGA/(g tan alpha)"
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("out", nargs="?", default=str(ROOT / "results" / "fragility_example"))
+    ap.add_argument("--out", default=str(ROOT / "results" / "fragility_example"),
+                    help="output folder (default results/fragility_example/, git-ignored)")
+    ap.add_argument("out_pos", nargs="?", metavar="OUT", help="the output folder, as --out")
     ap.add_argument("--records", type=int, default=12, help="synthetic records (default 12)")
     ap.add_argument("--stripes", type=int, default=16, help="stripes (default 16)")
     ap.add_argument("--duration", type=float, default=30.0, help="record duration [s] (default 30)")
     ap.add_argument("--workers", type=int, default=2, help="Dask workers (0: serial)")
     ap.add_argument("--bootstrap", type=int, default=200)
     args = ap.parse_args(argv)
-    out = Path(args.out)
+    out = Path(args.out_pos or args.out)
     out.mkdir(parents=True, exist_ok=True)
     records = [f"synthetic:{i}" for i in range(1, args.records + 1)]
     if args.duration != 30.0:          # shorter records (a quicker run): written once as CSV files

@@ -12,7 +12,10 @@ Each pier runs under the shipped synthetic record (examples/records/synthetic_20
 the record and the tendon force history. The tendon is linear elastic: a real one would yield near 1 MN here
 (560 mm2 at 1860 MPa), which the model does not represent. Run:
 
-    python examples/post_tensioned_pier.py [--t-end 30] [--scale 2] [--out results/post_tensioned_pier.png]
+    python examples/post_tensioned_pier.py [--t-end 30] [--scale 2] [--out results]
+
+(--out: a folder, default results/, git-ignored, the plot is OUT/post_tensioned_pier.png; or a path ending in
+.png.) ``run(out=folder)`` does the same from Python (the docs build calls it).
 """
 from __future__ import annotations
 
@@ -44,10 +47,10 @@ def summary(res) -> dict:
             "max_tendon_force": float(np.max(res.tendon_force))}
 
 
-def run(t_end: float = 30.0, out: Path | None = ROOT / "results" / "post_tensioned_pier.png",
+def run(t_end: float = 30.0, out: Path | None = ROOT / "results",
         output_interval: float = 0.01, scale: float = 2.0) -> dict:
     """Run every pier under the record times ``scale`` (up to ``t_end`` [s]) and the pulses (8 s); print the
-    table, plot to ``out`` (None: no plot); return {"table": {(pier, motion): summary}, "record": {pier:
+    table, plot to ``out``/post_tensioned_pier.png (``out`` ending in .png: that file; None: no plot); return {"table": {(pier, motion): summary}, "record": {pier:
     Result}}."""
     rec = read_at2(RECORD).scaled(scale)
     motions = {"record": (rec, t_end)}
@@ -70,7 +73,8 @@ def run(t_end: float = 30.0, out: Path | None = ROOT / "results" / "post_tension
         print(f"{pier:15s} {motion:22s} {uplift:10.3f} {s['peak_phi']:9.4f} {s['final_phi']:10.2e} "
               f"{s['impacts']:8d} {str(s['overturned']):>10s} {s['max_tendon_force'] / 1e3:10.1f}")
     if out is not None:
-        plot(record_runs, rec, t_end, Path(out), scale)
+        out = Path(out)
+        plot(record_runs, rec, t_end, out if out.suffix == ".png" else out / "post_tensioned_pier.png", scale)
     return {"table": table, "record": record_runs}
 
 
@@ -109,10 +113,16 @@ def plot(runs: dict, rec, t_end: float, out: Path, scale: float) -> None:
     print(f"wrote {out}")
 
 
-if __name__ == "__main__":
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--t-end", type=float, default=30.0, help="duration of the record runs [s]")
     ap.add_argument("--scale", type=float, default=2.0, help="scale factor of the record (PGA 0.4 g at 1)")
-    ap.add_argument("--out", type=Path, default=ROOT / "results" / "post_tensioned_pier.png", help="plot file")
-    args = ap.parse_args()
+    ap.add_argument("--out", type=Path, default=ROOT / "results",
+                    help="output folder (default results/), or the plot file (.png)")
+    args = ap.parse_args(argv)
     run(args.t_end, args.out, scale=args.scale)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

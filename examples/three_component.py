@@ -7,10 +7,13 @@ rocking oscillator (its default specimen) twice each: under the horizontal compo
 vertical acceleration is an effective gravity g + ag_v: it scales the restoring moment and moves the uplift
 threshold (g + ag_v) tan(alpha) of the block.
 
-Writes docs/three_component.png: both components with the block's uplift threshold, then for each model the
+Writes OUT/three_component.png (OUT: --out, a folder, default results/, git-ignored; a path ending in .png is
+the file itself): both components with the block's uplift threshold, then for each model the
 rotation phi with and without the vertical component and their difference. Run:
 
-    python examples/three_component.py [--t-end 35] [--out docs/three_component.png]
+    python examples/three_component.py [--t-end 35] [--out results]
+
+``run(out=folder)`` does the same from Python (the docs build calls it).
 """
 from __future__ import annotations
 
@@ -32,10 +35,13 @@ RECORD = ROOT / "examples" / "records" / "synthetic_2017.AT2"
 VERTICAL = ROOT / "examples" / "records" / "synthetic_2017-UP.AT2"
 
 
-def run(t_end: float = 35.0, out: Path = ROOT / "docs" / "three_component.png",
-        output_interval: float = 0.01) -> dict:
-    """Run both models with and without the vertical component up to ``t_end`` [s], plot to ``out``; return
-    {model title: (result without, result with the vertical)}."""
+def run(t_end: float = 35.0, out: Path = ROOT / "results", output_interval: float = 0.01) -> dict:
+    """Run both models with and without the vertical component up to ``t_end`` [s], plot to
+    ``out``/three_component.png (``out`` ending in .png: that file); return {model title: (result without,
+    result with the vertical)}."""
+    out = Path(out)
+    if out.suffix != ".png":
+        out = out / "three_component.png"
     rec = read_at2(RECORD, vertical=VERTICAL)          # one Record: ag and its vertical component ag_v
     models = {"rigid block b = 0.4 m, h = 2.0 m": RigidBlock(b=0.4, h=2.0),
               "flexible oscillator (default specimen)": FlexibleOscillator()}
@@ -91,7 +97,8 @@ def run(t_end: float = 35.0, out: Path = ROOT / "docs" / "three_component.png",
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=35.0, help="end time [s] (default 35: the record plus 5 s)")
-    ap.add_argument("--out", default=str(ROOT / "docs" / "three_component.png"), help="PNG to write")
+    ap.add_argument("--out", default=str(ROOT / "results"),
+                    help="output folder (default results/), or the PNG to write")
     args = ap.parse_args(argv)
     run(args.t_end, Path(args.out))
     return 0

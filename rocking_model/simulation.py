@@ -81,7 +81,7 @@ _ON_REPORT = {"warn": "warn", "raise": "raise", "ignore": "ignore"}
 #: the model classes already seen to be RockingModel subclasses (a set lookup instead of the ABC's isinstance)
 _MODEL_TYPES: set = set()
 
-#: version of the `Simulator.get_state` dict (2: issue 15 added the friction demand, the Painleve count and,
+#: version of the `Simulator.get_state` dict (2: Coulomb friction added the friction demand, the Painleve count and,
 #: event-driven, the base's offset; states of version 1 are refused by their version)
 STATE_VERSION = 2
 _HEADER = ("version", "scheme", "model", "n_dof")
@@ -252,7 +252,7 @@ class Simulator:
             raise ValueError(f"t_end = {t_end:.17g} is before the current time; allowed range "
                              f"[{integ.t:.17g}, inf)")
         # (a nonzero vertical component on the compiled engine goes through CompiledIntegrator.advance with the
-        # TwoComponentMotion: the C part of issue 23 reads its vertical component there)
+        # TwoComponentMotion: the C engine's two-component motion reads its vertical component there)
         gm = self._ground_motion(ag, ag_v)
         self._guarded(t_end, gm, lambda: integ.advance(t_end, gm, max_steps=self.max_steps))
 

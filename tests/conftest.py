@@ -1,4 +1,4 @@
-"""Session fixtures shared by the test modules: the FMUs are built once per session (issue 14).
+"""Session fixtures shared by the test modules: the FMUs are built once per session.
 
 ``built_fmus`` -> {FMU name: path of the .fmu} of every FMU of fmu_src/, built by build_fmu.py into a
 session folder; ``build_module`` -> the imported build_fmu module; ``extracted_fmus`` -> {name: (path,
@@ -42,3 +42,12 @@ def extracted_fmus(built_fmus, tmp_path_factory) -> dict:
     return {name: (path, fmpy.read_model_description(str(path)),
                    fmpy.extract(str(path), unzipdir=str(root / name)))
             for name, path in built_fmus.items()}
+
+
+def pytest_terminal_summary(terminalreporter):
+    """A visible line when the bit-for-bit golden comparison was skipped on this CPU (tests/test_golden.py):
+    a skip is otherwise one letter among the dots."""
+    mod = sys.modules.get("test_golden")
+    for reason in getattr(mod, "GOLDEN_NOTICES", []):
+        terminalreporter.write_sep("-", "golden outputs", yellow=True)
+        terminalreporter.write_line(reason, yellow=True)

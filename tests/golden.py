@@ -1,7 +1,7 @@
-"""Golden outputs: the benchmark scenes and the FMU cross-check runs, recorded bit for bit (issue 14).
+"""Golden outputs: the benchmark scenes and the FMU cross-check runs, recorded bit for bit.
 
-Issue 14 restructures the package (contact states per corner, declared contracts, one set of tolerances,
-event handling as pure functions) without changing a single number. This module runs every benchmark scene
+A restructuring of the package (contact states per corner, declared contracts, one set of tolerances,
+event handling as pure functions) must not change a single number. This module runs every benchmark scene
 (`benchmarks/scenes.py`, full length) on the compiled engine, with both schemes and both Runge-Kutta methods, plus stepwise and
 zero-order-hold runs as the FMUs do them, and the FMUs' own cross-check runs through fmpy, and compares
 every output with the recording in ``tests/data/golden.npz``.

@@ -1,4 +1,4 @@
-"""Shared helpers of the hard-case tests (issue 5; split by topic in issue 14): the `Trace` of a run, the
+"""Shared helpers of the hard-case tests (split by topic): the `Trace` of a run, the
 output grid, the documented penetration tolerances and the sanity checks, and the round-off machinery
 (`nominal`, `roundoff_tests`) of the named scenes. The topics: test_hard_rest.py (impact accumulation, exact
 rest, communication steps), test_hard_blocks.py (slender and squat blocks, grazing uplift, scale),
@@ -10,12 +10,12 @@ Every test checks physical invariants on the output grid (finite values, no pene
 and documented tolerance, rotation on the correct side of the pivot, |phi| < pi/2 unless overturning is
 expected) plus a closed form or a comparison between the schemes. Tests that fail because of a known
 integrator bug keep their strict assertion and are marked ``xfail(strict=True)`` with the bug's number
-(the list in the issue / the report), so that a fix shows up as XPASS.
+(the list in the report), so that a fix shows up as XPASS.
 
 Round-off: the long and violent scenes (free rocking to rest under a long quiet input, large
 steps, the stored 30 s record, a one-sine pulse that overturns) are named scenes of `roundoff`; they
 are re-run 1 ulp off and under other arithmetic kernels and must give the same verdicts (section 9). Runs
-that overturn are checked to the end, the final fall and the frozen overturned state included (issue 15).
+that overturn are checked to the end, the final fall and the frozen overturned state included.
 
 Tolerances (measured first, then set with a margin):
 - event-driven (ED): corners in contact are exact in the reduced coordinates; a corner at an event is taken
@@ -146,7 +146,7 @@ def sanity_report(tr, overturn_ok=False, pen=None) -> dict:
     ``bounded_rotation`` (|phi| < pi/2 without overturning, or <= pi/2 + 0.05 when overturning is allowed),
     ``not_overturned`` (only when overturning is not allowed), each a bool, plus ``messages`` (why not) and
     the figures ``horizon`` (samples checked: all of them since friction filled the hole of the sticking law at
-    an overturning body's lift-off, issue 15), ``min_gap`` [m] over them and ``tol`` [m]."""
+    an overturning body's lift-off), ``min_gap`` [m] over them and ``tol`` [m]."""
     q, v = np.array(tr.q), np.array(tr.v)
     out = {"finite": bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v))), "messages": []}
     phi, modes = tr.phi, tr.modes

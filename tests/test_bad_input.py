@@ -1,5 +1,5 @@
-"""Bad input (issue 5): every case through the Python API (ValueError naming the variable and its allowed
-range) and through the FMUs driven by fmpy's FMU2Slave (issue 13: fmi2Error with the same message, which
+"""Bad input: every case through the Python API (ValueError naming the variable and its allowed
+range) and through the FMUs driven by fmpy's FMU2Slave (fmi2Error with the same message, which
 reaches the logger with logging off; nothing crashes, the instance can be reset, restored or freed and other
 instances keep working)."""
 from __future__ import annotations
@@ -92,7 +92,7 @@ BAD_PARAMETERS = [
     (FLEX, {"impact_rule": 3}, "impact_rule", "allowed values: 0, 1, 'lcp', 'classical'"),
     (FLEX, {"scheme": 7}, "scheme", "allowed values: 'moreau_jean', 0, 'event_driven', 1"),
     (FLEX, {"dt_max": NAN}, "dt_max", "[0, inf)"),
-    # mu's stated minimum (issue 20: 1/mu = inf at 5e-324 hung the event-driven step in LAPACK)
+    # mu's stated minimum (1/mu = inf at 5e-324 hung the event-driven step in LAPACK)
     (RIGID, {"mu": 5e-324}, "mu", "[0.001, inf]"),
     (FLEX, {"scheme": 1, "mu": 5e-324}, "mu", "[0.001, inf]"),
     (FLEX, {"mu": 0.0}, "mu", "[0.001, inf]"),
@@ -262,7 +262,7 @@ def test_unknown_initial_values_python_api():
 @pytest.mark.parametrize("keyword, hint", [("sheme", "scheme"), ("phi0", "phi_0"), ("tolerence", "tolerance"),
                                            ("dtmax", "dt_max")])
 def test_misspelt_keyword_names_the_closest(keyword, hint):
-    """Issue 14: a misspelt solver option is not reported as an unknown initial value only."""
+    """A misspelt solver option is not reported as an unknown initial value only."""
     with pytest.raises(ValueError, match=f"'{keyword}' \\(did you mean '{hint}'\\?\\)"):
         simulate(RigidBlock(), 0.0, 0.1, **{keyword: 1})
 

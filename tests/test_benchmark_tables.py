@@ -1,4 +1,4 @@
-"""The benchmark's equal-error table and targets (issue 21's compiled-engine rows) on made-up runs: the
+"""The benchmark's equal-error table and targets (the compiled-engine rows) on made-up runs: the
 arithmetic only, nothing timed."""
 import math
 
@@ -57,3 +57,28 @@ def test_equal_error_and_targets_without_the_removed_python_engine():
            "ensemble": {"best": 9000.0, "compiled_serial": 4000.0, "best_over_serial": 2.25}}
     names = [name for name, _, _ in report._targets(res)]
     assert not any("Python engine" in n for n in names), names
+
+
+def test_performance_page_summarises_and_keeps_the_full_run_collapsed():
+    """docs/performance.md: one short table per question first (the machine and its load named), the full run
+    and the other machines' runs in collapsed sections; `python -m benchmarks.summary` rebuilds the page from
+    its own recorded tables, unchanged (the summary is read from those tables, nothing re-run)."""
+    from pathlib import Path
+
+    from benchmarks import summary
+    page_path = Path(__file__).resolve().parents[1] / "docs" / "performance.md"
+    page = page_path.read_text()
+    head = page.split("## Raw runs", 1)[0]
+    for question in ("## How long does a `simulate` take?", "## How much does an FMU step cost?",
+                     "## How many cases per second", "## Speed against error"):
+        assert question in head, question
+    assert "load average at start" in head.split("\n## ", 1)[0]
+    assert len(head.splitlines()) < 90, len(head.splitlines())
+    assert summary.RAW_OPEN in page and summary.KEPT_OPEN in page and page.rstrip().endswith(summary.KEPT_END)
+    raw, kept = summary.split_page(page, report.KEEP_MARKER)
+    again = summary.compose(raw, report.KEEP_MARKER + "\n\n" + kept, page_path.parent / "performance")
+    assert again == page
+    # every figure of the summary's first table is one of the full run's
+    _, rows = summary.table_after(raw, "<summary>Rigid block, 30 s synthetic record (")
+    ed = summary._row(rows, contender="compiled event-driven", setting=summary.DEFAULT_ED)
+    assert f"| 30 s record | rigid block | {ed['time (min)']} |" in head

@@ -1,4 +1,4 @@
-"""The project's FMU binary (rocking_model/fmi/binary/, issue 13) beyond single-instance use: it compiles without warnings,
+"""The project's FMU binary (rocking_model/fmi/binary/) beyond single-instance use: it compiles without warnings,
 exports only the FMI functions and no Python symbol is left for the loader; two different FMUs with 4 threads
 in one process give the results of a sequential run; sys.path and the interpreter survive instantiation,
 freeing and unloading; a C host under valgrind makes no invalid memory access in the binary."""

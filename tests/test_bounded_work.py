@@ -1,8 +1,8 @@
-"""Bounded work per step (issue 12, library side): every `Simulator.advance` finishes in bounded time for every
+"""Bounded work per step (library side): every `Simulator.advance` finishes in bounded time for every
 input inside the declared ranges, never returns NaN or inf, and a refused step leaves the simulator exactly as
 it was (checked with the plain-data state, `Simulator.get_state`).
 
-The measured hangs of the issue are each either refused at construction (ValueError naming the variable and
+The measured hangs are each either refused at construction (ValueError naming the variable and
 its range) or at advance (WorkLimitError naming the cause and the way out). Wall-clock limits appear only as
 a watchdog (a generous 60 s, in a thread): they are not performance assertions.
 """

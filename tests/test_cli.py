@@ -101,7 +101,7 @@ def test_console_script_entry_point():
 
 
 def test_model_options_come_from_the_declarations(tmp_path, capsys):
-    """Issue 14: the model options, their help and the allowed ones per model are read from the registered
+    """The model options, their help and the allowed ones per model are read from the registered
     models' declarations: a choice takes its name, an option of another model is refused by name."""
     from rocking_model.models import MODELS
 
@@ -121,7 +121,7 @@ def test_model_options_come_from_the_declarations(tmp_path, capsys):
 
 
 def test_outputs_are_named_after_the_scene_and_never_overwritten(tmp_path, capsys):
-    """Issue 14: without --name the files are named after the scene (two scenes, two names); running the same
+    """Without --name the files are named after the scene (two scenes, two names); running the same
     scene again is refused (exit 2, nothing touched) unless --force is given."""
     base = ["simulate", "--pulse", "sine", "--amplitude", "3", "--frequency", "2", "--t-end", "1", "--no-plot",
             "--out", str(tmp_path)]
@@ -143,7 +143,7 @@ def test_outputs_are_named_after_the_scene_and_never_overwritten(tmp_path, capsy
 
 
 def test_build_fmu_command_writes_the_cross_check_folders(tmp_path, capsys):
-    """Issue 14: `rocking build-fmu` does what `python build_fmu.py` does, cross-check folders included."""
+    """`rocking build-fmu` does what `python build_fmu.py` does, cross-check folders included."""
     import build_fmu
 
     assert main(["build-fmu", "--dest", str(tmp_path), "RigidRockingBlock"]) == 0
@@ -164,7 +164,7 @@ def test_build_fmu_command_writes_the_cross_check_folders(tmp_path, capsys):
     (["--tolerance", "1"], "tolerance = 1 is out of range; allowed range [1e-14, 0.01]"),
 ])
 def test_ensemble_refuses_bad_case_fields_before_the_cluster_starts(argv, msg, tmp_path, capsys):
-    """Issue 20: a bad case field is refused with one line naming it and its range (the models' and the
+    """A bad case field is refused with one line naming it and its range (the models' and the
     solver's declared checks), exit status 2, before the cluster starts (no banner, no output file)."""
     out = tmp_path / "o.csv"
     rc = main(["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3",
@@ -181,7 +181,7 @@ def test_ensemble_refuses_bad_case_fields_before_the_cluster_starts(argv, msg, t
     (["--no-workers-timeout", "0"], "argument --no-workers-timeout: 0 is out of range; allowed range (0, inf]"),
 ])
 def test_ensemble_execution_options_are_refused_at_parse_time(argv, msg, capsys):
-    """Issue 20: --workers -1 used to be refused only after the cluster banner."""
+    """--workers -1 used to be refused only after the cluster banner."""
     with pytest.raises(SystemExit) as e:
         main(["ensemble", "--pulse", "sine", "--amplitude-ratios", "2", "--frequency-ratios", "3"] + argv)
     cap = capsys.readouterr()
@@ -202,7 +202,7 @@ def test_version_is_the_package_version(capsys):
 
 
 def test_ensemble_reports_repairs_and_a_truncated_header_in_one_line(tmp_path, capsys):
-    """Issue 20: what a resume set aside is printed as one warning line; a header cut short is named as
+    """What a resume set aside is printed as one warning line; a header cut short is named as
     truncated (exit 2), not as a foreign file."""
     from rocking_model.ensemble import FIELDS
 

@@ -1,4 +1,4 @@
-"""Declared contracts (issue 14): the registries of schemes and models, the `Integrator` and model
+"""Declared contracts: the registries of schemes and models, the `Integrator` and model
 interfaces, one `ContactTolerances`, per-contact states, reports of inexact contact solves and failed
 steps, and the contact LCP for any number of contacts."""
 from __future__ import annotations
@@ -79,7 +79,7 @@ def test_model_contract(kind):
 
 
 def test_no_probing_of_optional_hooks():
-    """Optional model hooks are base-class methods with defaults (issue 14): the integrators and the contact
+    """Optional model hooks are base-class methods with defaults: the integrators and the contact
     layer never probe the model with getattr / hasattr."""
     for path in (PACKAGE / "integrators").glob("*.py"):
         text = path.read_text()

@@ -1,4 +1,4 @@
-"""The self-contained FMUs on three platforms (issue 33): binaries/linux64, binaries/win64 and
+"""The self-contained FMUs on three platforms: binaries/linux64, binaries/win64 and
 binaries/aarch64-linux, each run by a C host compiled for its platform (tests/c/xhost.c): natively, under wine
 (win64) and under qemu-user (aarch64), on the benchmark scenes of both models and the post-tensioned block,
 both schemes, in one start of each emulator. Equal to linux64 within 1e-12 rad (rigid blocks) and 1e-9 rad

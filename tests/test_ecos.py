@@ -1,5 +1,5 @@
 """A third importer: Ecos (C++, FMI 1/2, SSP 1.0; ``pip install rocking-model[ecos]``, whose prebuilt binary
-needs Debian's libtbb12). The rocking FMUs -- the pythonfmu ones and the self-contained ones of issue 22 --
+needs Debian's libtbb12). The rocking FMUs -- the pythonfmu ones and the self-contained ones --
 and the system example's SSP archive run in Ecos with the results of the project's fmpy master.
 
 Ecos counts time in doubles (t += h) where fmpy's master and libcosim count integer nanoseconds, so the

@@ -1,4 +1,4 @@
-"""The C engine's public API through Python (issue 21, part E): ground motions pinned to ground_motion.py, the
+"""The C engine's public API through Python : ground motions pinned to ground_motion.py, the
 Engine type, its errors, state round trips (both schemes), checkpoint / rollback, snapshots,
 bounded logs, and Simulator(engine=...)."""
 import math

@@ -1,4 +1,4 @@
-"""The compiled engine's extension module is built by ``pip install`` and reports clear errors (issue 21)."""
+"""The compiled engine's extension module is built by ``pip install`` and reports clear errors."""
 import pytest
 
 import rocking_model

@@ -1,4 +1,4 @@
-"""Hard cases of issue 5 about the input: long records, extreme input (5 g peaks, short impulses), variable
+"""Hard cases about the input: long records, extreme input (5 g peaks, short impulses), variable
 communication steps and non-uniformly sampled records. Helpers (Trace, assert_sane, ...) are those of
 tests/hard_cases.py; the documented tolerances are stated there.
 
@@ -135,7 +135,7 @@ for _m in ("rigid", "flexible"):
 def test_five_g_pulse_overturns_cleanly(model_name, scheme):
     """A 5 g, 2 Hz one-sine pulse overturns both models, by a wide margin (25 times the uplift threshold;
     the same overturning time in all 14 runs of the round-off measurement). The run is sane to the end, the
-    final fall included (before issue 15 the flexible MJ run's corner sank 2.45 mm at the pivot's lift-off);
+    final fall included (before the mu -> inf limit law the flexible MJ run's corner sank 2.45 mm at the pivot's lift-off);
     from overturning on the outputs are frozen (the flag is set, phi stays where it crossed pi/2, time still
     advances)."""
     key = f"{MOD}:five_g_{model_name}_{scheme}"

@@ -10,7 +10,7 @@ selected for the session run up front on all cores (``FAULT_SUITE_JOBS``, defaul
 each test then asserts on its case's JSON record:
 
 1. the process survived (exit code 0, no signal) and finished within the case's timeout;
-2. the statuses are exactly those of FMI 2.0 (issue 13, the project's own binary): fmi2Error for an invalid
+2. the statuses are exactly those of FMI 2.0 (the project's own binary): fmi2Error for an invalid
    argument, value or call sequence (the instance then in the error state), fmi2Discard for a step the
    simulator refuses, fmi2OK otherwise;
 3. the logged message names the variable or the call, with logging on or off;

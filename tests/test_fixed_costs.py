@@ -1,4 +1,4 @@
-"""The fixed costs of a compiled run (issue 21: a short scene's `simulate` is dominated by what surrounds the C
+"""The fixed costs of a compiled run (a short scene's `simulate` is dominated by what surrounds the C
 call): what `Simulator(engine="c")` and `simulate` no longer build, and that the results, settings and messages
 are the same as when they did. Not timed (benchmarks/ measures the times)."""
 from __future__ import annotations

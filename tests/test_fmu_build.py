@@ -1,4 +1,4 @@
-"""What the FMU build and the demo entry point print (issue 20): the cross-check reference runs are silent
+"""What the FMU build and the demo entry point print: the cross-check reference runs are silent
 about their own scenes (an overturning there is expected, noted in the folder's ReadMe.md), and run.sh says
 what each phase does before it runs."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The model FMUs on the compiled engine (issue 21, item 4): the slave classes of fmu_src/ driven directly (no
+"""The model FMUs on the compiled engine : the slave classes of fmu_src/ driven directly (no
 binary), so that the engine's own objects can be inspected. Each doStep is one `Engine.advance` between the
 engine's checkpoint and commit; the results equal the Python API bit for bit; a refused step
 leaves the instance bit-identical. No timing is asserted here (benchmarks/fmu_bench.py measures it)."""

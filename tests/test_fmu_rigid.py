@@ -243,7 +243,7 @@ def test_bad_parameter_is_an_error_not_a_crash(fmu, start_values, pattern, call)
 
 
 def test_enumeration_start_values_by_name(fmu):
-    """scheme is a choice (issue 14): run_fmu takes its names (fmpy itself passes start values through int(),
+    """scheme is a choice: run_fmu takes its names (fmpy itself passes start values through int(),
     so fmpy.simulate_fmu(start_values={"scheme": "moreau_jean"}) cannot), and a misspelt name is an FMUError
     listing the choices."""
     by_name = run_fmu(fmu, stop_time=0.3, output_interval=0.01, start_values={"scheme": "moreau_jean",
@@ -365,7 +365,7 @@ def test_readme_quickstart_shows_what_it_says(fmu):
 
 def test_generation_tool_names_the_project_and_its_version(built_fmus):
     """generationTool of every built FMU: this project and the package's version (rocking_model.__version__,
-    its one source), not the pythonfmu library the slave classes derive from (issue 20)."""
+    its one source), not the pythonfmu library the slave classes derive from."""
     import rocking_model
 
     for name, path in built_fmus.items():

@@ -1,4 +1,4 @@
-"""FMU state and co-simulation masters (issue 5): fmi2Get/SetFMUstate and (de)serialization reproduce
+"""FMU state and co-simulation masters: fmi2Get/SetFMUstate and (de)serialization reproduce
 bit-identical outputs (both FMUs, both schemes, while rocking with impacts, in flight, after overturning,
 across instances), determinism across instances and runs, 100 instances per FMU in one process, reset."""
 from __future__ import annotations

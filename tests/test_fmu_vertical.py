@@ -1,4 +1,4 @@
-"""The vertical ground acceleration input ``ag_v`` of the rocking FMUs (issue 23), both kinds (the pythonfmu
+"""The vertical ground acceleration input ``ag_v`` of the rocking FMUs, both kinds (the pythonfmu
 FMUs and the self-contained ones) and both models:
 
 - declared like ``ag``: a continuous Real input, start 0, [-1000, 1000] m/s2, unit m/s2, the sign convention

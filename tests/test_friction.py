@@ -1,4 +1,4 @@
-"""Coulomb friction (issue 15, first part): the frictional contact LCP and the Moreau-Jean scheme with a
+"""Coulomb friction : the frictional contact LCP and the Moreau-Jean scheme with a
 finite mu. Closed forms (a sliding block under constant ag, the sliding threshold |ag| = mu g), the initiation
 map from rest (slide first for mu < tan(alpha), rock first for mu > tan(alpha); Shenton 1996), mu above the
 friction demand gives the mu = inf results, and growing mu converges to the mu = inf motion of an overturning

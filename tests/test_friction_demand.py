@@ -1,4 +1,4 @@
-"""The friction demand is the maximum of the continuous demand (issue 20): the event-driven scheme reports
+"""The friction demand is the maximum of the continuous demand: the event-driven scheme reports
 the largest |sum lambda_T| / sum lambda_N along the motion to its tolerance (the left and right limits at
 events, the peak inside a step), not its values at the step ends, which missed the peak before an impact
 (0.115 for 0.147 on the free rocking below) and peaks inside steps (2-5 % under a sine); and the ratio of
@@ -83,7 +83,7 @@ def test_free_rocking_demand_is_the_closed_form_maximum():
             expected = impact_ratio(block)
         assert got == pytest.approx(expected, rel=1e-7), (t_end, n, got, expected)
     assert sim.integrator.impacts == 4 and sim.outputs()["friction_demand"] == pytest.approx(0.148515, abs=1e-6)
-    # the closed form in theta (module docstring) at the first impact: 0.1473, the issue's figure
+    # the closed form in theta (module docstring) at the first impact: 0.1473, the figure first reported
     th, th0 = block.alpha, block.alpha - 0.1
     d0 = 3 * math.sin(th) * (3 * math.cos(th) - 2 * math.cos(th0)) / (1 + 9 * math.cos(th) ** 2
                                                                       - 6 * math.cos(th) * math.cos(th0))

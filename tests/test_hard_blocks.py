@@ -1,4 +1,4 @@
-"""Hard cases (issue 5): very slender and squat blocks with e_N = 0 and 1, grazing uplift and near-threshold
+"""Hard cases: very slender and squat blocks with e_N = 0 and 1, grazing uplift and near-threshold
 pulses, and small and large blocks (the response in tau = p t). Helpers and tolerances: tests/hard_cases.py."""
 from __future__ import annotations
 

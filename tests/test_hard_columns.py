@@ -1,4 +1,4 @@
-"""Hard cases (issue 5): stiff columns and large steps, long records, constant tilts and steps of the
+"""Hard cases: stiff columns and large steps, long records, constant tilts and steps of the
 input. Helpers and tolerances: tests/hard_cases.py."""
 from __future__ import annotations
 
@@ -208,7 +208,7 @@ def test_sustained_step_lift_off_keeps_corners_above_ground(scheme):
     force reaches 0 while the sticking force is 2.9 N (m g = 9.8 N): with no sliding the contact problem has
     no solution (flight accelerates the pivot into the ground at -4.4 m/s2, contact needs lambda_N < 0). Both
     schemes used to take the least-violating answer (flight) and the pivot sank through the ground while the
-    block fell (ED -0.16 m, MJ -0.10 m before |phi| = pi/2). Since issue 15 they take the mu -> inf limit of
+    block fell (ED -0.16 m, MJ -0.10 m before |phi| = pi/2). Now they take the mu -> inf limit of
     Coulomb friction there (the pivot slides with a vanishing normal force): no corner below the ground."""
     block = RigidBlock(**SLENDER)
     ag = 1.5 * block.g * math.tan(block.alpha)

@@ -1,4 +1,4 @@
-"""Hard cases (issue 5): near the overturning boundary the schemes agree outside a band, and the README
+"""Hard cases: near the overturning boundary the schemes agree outside a band, and the README
 quickstart that overturns sinks a corner only as documented. Helpers and tolerances: tests/hard_cases.py."""
 from __future__ import annotations
 
@@ -139,7 +139,7 @@ def test_overturning_lift_off_keeps_the_corners_on_the_ground(scheme):
     """This pulse (the quickstart of earlier READMEs) overturns the block at 2.03 s. In its final fall the
     pivot's normal force reaches 0 at phi = -1.34 rad while the pivot's free normal acceleration is -6 m/s2
     (physics.md section 6): with no sliding there is no consistent contact state, and the corner used to sink
-    (ED 20.4 mm at the frozen state, MJ 0.28 mm). Since issue 15 the mu = inf law takes its limit there: the
+    (ED 20.4 mm at the frozen state, MJ 0.28 mm). Now the mu = inf law takes its limit there: the
     pivot slides with a vanishing normal force. The whole run is sane, the frozen overturned state included:
     no corner below the documented tolerance, no inexact contact solve, and the pivot has slid."""
     key = f"{MOD}:quickstart_{scheme}"
@@ -153,7 +153,7 @@ def test_overturning_lift_off_keeps_the_corners_on_the_ground(scheme):
     assert not tr.sim.last_reports
     out = tr.sim.outputs()
     assert 1e-5 < abs(out["slip"]) < 0.01 and out["friction_demand"] > 10.0
-    # the frozen state is the pose reached, at rest (issue 20): no velocity, the overturned contact code, the
+    # the frozen state is the pose reached, at rest: no velocity, the overturned contact code, the
     # potential energy of the pose (its pivot slid: a little off m g (b - h))
     q, v = tr.sim.state()
     assert not np.any(v) and out["contact"] == OVERTURNED and out["phi_dot"] == 0.0

@@ -1,4 +1,4 @@
-"""Hard cases (issue 5): impact accumulation at the end of free rocking, exact rest under a long quiet
+"""Hard cases: impact accumulation at the end of free rocking, exact rest under a long quiet
 input, and zero, tiny and variable communication steps. Helpers and tolerances: tests/hard_cases.py."""
 from __future__ import annotations
 
@@ -112,7 +112,7 @@ def test_rest_is_exact_under_long_quiet_input(model_name, scheme):
     q = np.array(tr.q[first:])
     assert np.all(phi == 0.0) and np.all(phi_dot == 0.0), (np.abs(phi).max(), np.abs(phi_dot).max())
     # the base does not drift: y at rest exactly, x where the base came to rest (it keeps the offset of a
-    # landing off its rest position, or Moreau-Jean's O(dt) drift of a rocking pivot, issue 15)
+    # landing off its rest position, or Moreau-Jean's O(dt) drift of a rocking pivot)
     rest = tr.model.rest_position()
     ix, iy = (1, 2) if model_name == "flexible" else (0, 1)
     assert np.all(q[:, iy] == rest[iy]) and np.all(q[:, ix] == q[0, ix])

@@ -1,4 +1,4 @@
-"""Hard cases of the vertical ground acceleration ag_v (issue 23) under round-off: a three-component record
+"""Hard cases of the vertical ground acceleration ag_v under round-off: a three-component record
 on both models, a flight where g + ag_v < 0, and a pulse that overturns only because of its
 vertical component. Helpers and tolerances: tests/hard_cases.py; the round-off machinery: tests/roundoff.py.
 

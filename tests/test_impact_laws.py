@@ -1,4 +1,4 @@
-"""Impact laws (issue 15): the paper's law (Newton normal, sticking tangential) can create energy when
+"""Impact laws: the paper's law (Newton normal, sticking tangential) can create energy when
 e_N > 0 and a corner slips; the energetically consistent law (tangential restitution e_T = e_N on the closing
 contacts, Glocker 2013) never does."""
 from __future__ import annotations

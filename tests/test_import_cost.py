@@ -1,4 +1,4 @@
-"""What an import pulls in (issue 21, cold start): the package's names are imported on first use (PEP 562), the
+"""What an import pulls in (cold start): the package's names are imported on first use (PEP 562), the
 compiled engine's low-level API needs neither numpy nor the Python engine, and the optional heavy dependencies
 (scipy, matplotlib, dask, fmpy) are imported only where they are used. Each check runs in a fresh interpreter
 (sys.modules of this one holds whatever the other tests imported); not timed."""

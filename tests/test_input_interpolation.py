@@ -1,4 +1,4 @@
-"""Input interpolation (issue 13): fmi2SetRealInputDerivatives of order 1 makes ag vary linearly over a
+"""Input interpolation: fmi2SetRealInputDerivatives of order 1 makes ag vary linearly over a
 communication step inside the integrator. Driven at the record's own sampling (0.01 s) with the record's
 slope, the FMU reproduces `simulate(..., hold="exact")` to round-off, where a zero-order hold is off by
 O(dt). Also: bad orders, references and rates are fmi2Error; the rate is part of the FMU state."""

@@ -1,6 +1,6 @@
 """Second, independent importer: Open Simulation Platform's libcosim through libcosimpy.
 
-Both rocking FMUs -- the pythonfmu ones and the self-contained ones of issue 22 -- run in libcosim with the
+Both rocking FMUs -- the pythonfmu ones and the self-contained ones -- run in libcosim with the
 ground acceleration set before every step by an override manipulator, and give the same outputs as fmpy: bit-identical to the fmpy master of rocking_model.cosim
 (same communication points, computed in integer nanoseconds as libcosim does) and equal to round-off to
 fmpy.simulate_fmu (whose time grid start + n h differs from libcosim's in the last bits).

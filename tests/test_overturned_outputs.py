@@ -1,4 +1,4 @@
-"""Outputs after overturning (issue 20): they describe no motion the model no longer computes.
+"""Outputs after overturning: they describe no motion the model no longer computes.
 
 Convention (docs/guide/schemes.md, "Overturning"): from the first output at which ``overturned`` is true, the outputs are
 those of the pose reached at |phi| = pi/2 (event-driven: located to round-off; Moreau-Jean: the end of the
@@ -19,7 +19,7 @@ from rocking_model.modes import OVERTURNED, Mode
 
 G = 9.81
 #: scenes far from any overturning boundary: the slender block under a 4.5 m/s2 one-sine pulse of 0.5 s
-#: (overturns at 2.98 s, ED), with mu = 0.5 its pivot slides in the final fall (the issue's case: the last
+#: (overturns at 2.98 s, ED), with mu = 0.5 its pivot slides in the final fall (the case first reported: the last
 #: mode before overturning is a sliding one); the flexible oscillator under a 5 g one-sine pulse of 0.5 s
 SCENES = {
     "rigid": (lambda: RigidBlock(b=0.2, h=1.0), SinePulse(4.5, 4 * math.pi), 5.0),

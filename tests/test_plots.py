@@ -1,4 +1,4 @@
-"""Plots of the command line (issue 14): every label in a legend beside the panels (no text drawn over the
+"""Plots of the command line: every label in a legend beside the panels (no text drawn over the
 curves), the flexible oscillator's top displacement in its own panel."""
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def test_flexible_response_plot_has_the_top_displacement():
 
 
 def test_an_overturn_is_plotted_as_an_overturn():
-    """Issue 20: after overturning the plot drew the frozen last mode (a sliding one) for the rest of the run.
+    """After overturning the plot drew the frozen last mode (a sliding one) for the rest of the run.
     Now the contact data after the overturning time are the level "overturned", never sliding; the curves of
     the motion stop at the overturning time, which every panel marks."""
     import math

@@ -1,4 +1,4 @@
-"""Property-based invariants (issue 5, hypothesis; derandomized and bounded so that the file runs in well under
+"""Property-based invariants (hypothesis; derandomized and bounded so that the file runs in well under
 60 s): random geometry, e_N, initial states and ground-motion pulses give finite outputs, no penetration
 beyond the documented tolerance, no energy increase with ag = 0 (zeta >= 0, e_N = 0), and the FMU agrees
 with the Python API bit for bit.
@@ -32,7 +32,7 @@ ENERGY_TOL = {1: 1e-9, 0: 2e-5}
 N_STEPS, H = 30, 0.02
 
 
-#: the friction coefficient: the paper's sticking law (and its mu -> inf limit), or Coulomb's (issue 15)
+#: the friction coefficient: the paper's sticking law (and its mu -> inf limit), or Coulomb's
 MU = st.one_of(st.just(math.inf), st.floats(0.1, 2.0))
 
 
@@ -97,7 +97,7 @@ def run_once(model, init, scheme, amplitude, pert: Perturbation = Perturbation()
 CASES = st.one_of(rigid_case(), flexible_case())
 #: plastic impacts (e_N = 0) only: with e_N > 0, Newton's law with sticking can create energy at impacts in
 #: flight with tangential slip (a Kane-type paradox of the paper's law, measured up to 1e-3 m g L per 0.02 s
-#: with e_N = 1; issue 15 adds an energy-consistent impact law), so "energy never increases" is no invariant
+#: with e_N = 1; the energy-consistent impact law avoids it), so "energy never increases" is no invariant
 PLASTIC_CASES = st.one_of(rigid_case(e_N=st.just(0.0)), flexible_case(e_N=st.just(0.0)))
 
 

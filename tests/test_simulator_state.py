@@ -1,4 +1,4 @@
-"""Plain-data state of the simulators (issue 12, "a state format that cannot execute code", library side):
+"""Plain-data state of the simulators ("a state format that cannot execute code", library side):
 `Simulator.get_state` / `set_state`, and the same on `MotionSource` and `StoreySimulator`.
 
 - Round trip: a Simulator rebuilt from the same parameters and loaded with ``get_state()`` (through JSON)

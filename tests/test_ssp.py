@@ -1,4 +1,4 @@
-"""The system example as an SSP 1.0 archive (issue 22): the archive's layout, the .ssd against the SSP 1.0
+"""The system example as an SSP 1.0 archive: the archive's layout, the .ssd against the SSP 1.0
 structure, the round trip through read_ssp, and the masters run on the archive with the OSP file's results
 (bit-identical: the same master algorithm on the same system)."""
 from __future__ import annotations
@@ -221,7 +221,7 @@ def test_example_script_writes_and_runs_the_ssp(example_osp, tmp_path, monkeypat
 
 
 def test_ssp_with_the_standalone_block(example_osp, build_module, tmp_path_factory, tmp_path):
-    """The archive with the self-contained block and oscillator (issue 22): they are what resources/ holds,
+    """The archive with the self-contained block and oscillator: they are what resources/ holds,
     and fmpy and libcosim run it bit for bit alike."""
     import fault_harness as fh
 

@@ -1,4 +1,4 @@
-"""The self-contained FMUs (issue 22): dist/standalone/<Name>.fmu, the compiled C engine under the C FMI layer
+"""The self-contained FMUs: dist/standalone/<Name>.fmu, the compiled C engine under the C FMI layer
 rocking_model/fmi/binary/standalone/fmi2_engine.c, with no Python at all.
 
 - the modelDescription is the pythonfmu FMU's (same variables, references, units, ranges, starts,
@@ -9,6 +9,8 @@ rocking_model/fmi/binary/standalone/fmi2_engine.c, with no Python at all.
   `env -i` where no Python can be found (the process never maps libpython);
 - statuses and messages of the pythonfmu FMUs (bad parameters, bad input, fixed parameters), the FMU state
   (get / set / serialize, corrupt blobs refused), 2 FMUs x 4 threads bit-identical to sequential runs;
+- the overturning is an event in both kinds: its step returns fmi2OK, the message is logged with fmi2OK under
+  logEvents, filtered by loggingOn and fmi2SetDebugLogging;
 - sources/ (with buildDescription.xml) compile to a working binary on their own."""
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ import shutil
 import subprocess
 import sys
 import threading
+import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
@@ -332,12 +335,12 @@ def test_input_derivatives_as_the_pythonfmu_fmu(standalone, unzipped, built_fmus
 
 
 # ---------------------------------------------------------------------------------------------- messages
-def _messages(fmu, unzip, action):
+def _messages(fmu, unzip, action, logging_on=False):
     sink: list = []
     md = read_model_description(str(fmu))
     f = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                   instanceName="msg")
-    f.instantiate(callbacks=fmpy_callbacks(sink))
+    f.instantiate(callbacks=fmpy_callbacks(sink), loggingOn=logging_on)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     try:
         action(f, vr)
@@ -385,9 +388,64 @@ def test_messages_equal_the_pythonfmu_fmu(standalone, unzipped, built_fmus, py_u
         if case == "bad_rate":
             f.setRealInputDerivatives([vr["ag"]], [2], [1.0])
 
-    a = _messages(standalone[RIGID], unzipped[RIGID], action)
-    b = _messages(built_fmus[RIGID], py_unzipped[RIGID], action)
+    # the overturning is an event (fmi2OK, logEvents): it reaches the logger with logging on only
+    logging_on = case == "overturn"
+    a = _messages(standalone[RIGID], unzipped[RIGID], action, logging_on)
+    b = _messages(built_fmus[RIGID], py_unzipped[RIGID], action, logging_on)
     assert a and a == b
+
+
+#: [m/s2] a constant ground acceleration that overturns each FMU's default structure within 1 s
+OVERTURNING_AG = {RIGID: 9.0, FLEX: 9.0, PT: 50.0}
+#: fmi2SetDebugLogging after fmi2Instantiate(loggingOn) -> whether the overturning event reaches the logger
+#: (None: not called; "off": loggingOn = false): the filter of every fmi2OK message (fmi2_common.c)
+EVENT_LOGGING = [(None, True), ([], True), (["logEvents"], True), (["logAll"], True),
+                 (["logStatusWarning", "logStatusError"], False), ("off", False)]
+
+
+@pytest.mark.parametrize("kind", ["standalone", "pythonfmu"])
+@pytest.mark.parametrize("name", NAMES)
+def test_the_overturning_is_an_event_not_a_warning(standalone, unzipped, built_fmus, py_unzipped, name, kind):
+    """Both kinds of FMU: the step in which the structure overturns returns fmi2OK (fmusim and other masters
+    stop at any status above fmi2OK), every step too; its message is logged with fmi2OK under logEvents,
+    declared in the modelDescription, and reaches the logger with logging on and the category enabled
+    (fmi2SetDebugLogging naming none, logEvents or logAll), never otherwise."""
+    fmu, unzip = (standalone[name], unzipped[name]) if kind == "standalone" else \
+        (built_fmus[name], py_unzipped[name])
+    md = read_model_description(str(fmu))
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    categories = {c.get("name"): c.get("description") for c in root.iterfind("LogCategories/Category")}
+    assert categories.get("logEvents") == "Events of the motion: the overturning that freezes the outputs", \
+        categories
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    for categories, delivered in EVENT_LOGGING:
+        sink: list = []
+        f = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="event")
+        f.instantiate(callbacks=fmpy_callbacks(sink), loggingOn=categories != "off")
+        if categories not in (None, "off"):
+            f.setDebugLogging(True, categories)
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        f.exitInitializationMode()
+        f.setReal([vr["ag"]], [OVERTURNING_AG[name]])
+        statuses, overturned_at = [], None
+        for k in range(150):
+            statuses.append(int(f.fmi2DoStep(f.component, k * 0.01, 0.01, 1)))   # the status, as returned
+            if overturned_at is None and f.getBoolean([vr["overturned"]])[0]:
+                overturned_at = k
+            if overturned_at is not None and k >= overturned_at + 3:              # frozen: steps go on
+                break
+        f.terminate()
+        f.freeInstance()
+        assert overturned_at is not None, (name, kind)
+        assert set(statuses) == {0}, (categories, statuses)                       # fmi2OK, the overturning too
+        events = [(s, c, t) for s, c, t in sink if "overturned at t =" in t]
+        assert all(s == 0 and c == "logEvents" for s, c, _ in sink), sink           # no warning, no other message
+        assert len(events) == (1 if delivered else 0), (categories, sink)
+        if delivered:
+            assert events[0][2].endswith("s: the outputs are frozen from now on"), events
 
 
 def test_step_refused_with_the_state_kept(standalone, unzipped):

@@ -300,7 +300,7 @@ STANDALONE_ROUND_OFF = 1e-9
 
 @pytest.fixture(scope="module")
 def standalone_osp(fmus, build_module, tmp_path_factory):
-    """The example's OspSystemStructure.xml with the self-contained block and oscillator (issue 22)."""
+    """The example's OspSystemStructure.xml with the self-contained block and oscillator."""
     import fault_harness as fh
 
     try:

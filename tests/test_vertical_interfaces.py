@@ -224,6 +224,8 @@ def test_three_component_example_runs_and_plots_the_difference(tmp_path):
         assert np.array_equal(ref.phi, h_only.phi), name
     assert mod.main(["--t-end", "2", "--out", str(tmp_path / "short.png")]) == 0
     assert (tmp_path / "short.png").is_file()
+    assert mod.main(["--t-end", "2", "--out", str(tmp_path / "folder")]) == 0   # a folder: the fixed name
+    assert (tmp_path / "folder" / "three_component.png").is_file()
 
 
 # ------------------------------------------------------------------------------------------- GroundMotionSource

@@ -1,9 +1,9 @@
-"""Vertical ground acceleration ag_v (issue 23), Python reference engine: both models, both schemes.
+"""Vertical ground acceleration ag_v, Python reference engine: both models, both schemes.
 
 ag_v [m/s2] is positive UPWARD; in the ground frame it adds -m_i ag_v along +y on every mass (an effective
 gravity g + ag_v). Checked here: the closed forms (uplift threshold (g + ag_v) tan(alpha), the flexible
 oscillator's lumped-mass threshold with g + ag_v, free rocking under a constant ag_v = free rocking with gravity
-g + ag_v, the issue's rocking equation), ag_v = 0 bit-identical to no vertical component, the work of the
+g + ag_v, the rocking equation with the vertical component), ag_v = 0 bit-identical to no vertical component, the work of the
 vertical inertial force between impacts and no energy gain at impacts, flight where g + ag_v < 0, friction
 scaling with g + ag_v, random scenes (hypothesis), and the bad-input messages.
 
@@ -210,7 +210,7 @@ def test_free_rocking_under_constant_ag_v_is_rocking_with_gravity_g_plus_ag_v(mo
 
 def test_rocking_equation_of_the_issue():
     """theta'' = -p^2 [(1 + a_v/g) sin(alpha sgn(theta) - theta) + (ag/g) cos(alpha sgn(theta) - theta)]
-    with the issue's convention theta = -phi (clockwise positive; the same ag), against rocking_acceleration,
+    with the convention theta = -phi (clockwise positive; the same ag), against rocking_acceleration,
     the reduced acceleration of the closed forms and the generic projection of the forces."""
     block = RigidBlock(b=0.3, h=1.2)
     p2, al, g = block.p ** 2, block.alpha, block.g

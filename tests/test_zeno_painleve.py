@@ -1,10 +1,10 @@
-"""The Zeno rule and the Painleve count of the event-driven scheme (issue 20, "Outputs and API that mislead").
+"""The Zeno rule and the Painleve count of the event-driven scheme.
 
 Zeno rule (docs/guide/schemes.md, "Impact accumulation (Zeno)"; `ContactTolerances`): after an impact a corner at the ground is
 closed plastically if (velocity test) it leaves slower than v_Zeno = zeno_tol sqrt(g L), or (bounce test, only
 while every corner leaves in free flight and none is closed) its free-flight bounce U+^2 / (2 |a_N|) stays
 within gap = 1e-9 L of the ground, i.e. U+ < sqrt(2 |a_N| 1e-9 L) ~ 44.7 v_Zeno at |a_N| = g and the default
-zeno_tol. Before issue 20 the bounce test ran on both corners of a rocking impact with the free-flight
+zeno_tol. Before this rule the bounce test ran on both corners of a rocking impact with the free-flight
 acceleration -g, so the old pivot, which rotates about the new one (its normal acceleration some 2 b p^2
 sin(alpha), 17 times smaller than g here), was closed at up to 44.7 v_Zeno and micro-rocking ended early.
 
@@ -68,7 +68,7 @@ def test_velocity_test_closes_only_below_v_zeno(k, mode):
     """Rocking impact, e_N = 0.2: the impacting corner's bounce (e_N U-, below U_BOUNCE in every case) is closed
     by the bounce test, the block rocks on about the new pivot and the old pivot leaves at
     U+ = 2 b r |phi_dot-| = k v_Zeno. Only the velocity test may close it: below v_Zeno (k = 0.5: full contact),
-    not at 3, 10 or 100 v_Zeno (k = 10 went to full contact before issue 20: both corners were tested for a
+    not at 3, 10 or 100 v_Zeno (k = 10 went to full contact under the old rule: both corners were tested for a
     free-flight bounce, sqrt(2 g 1e-9 L) = 44.7 v_Zeno)."""
     phi_dot = -k * V_ZENO / (2.0 * B * R_HOUSNER)
     assert 0.2 * 2.0 * B * abs(phi_dot) < 0.5 * U_BOUNCE          # the bounce is closed in every case
@@ -141,7 +141,7 @@ def test_grazing_micro_rocking_follows_the_exact_solution(duration, amplitude, o
     the exact solution (Housner's equations and coefficient, `_housner_reference`, its own solver) to 1e-3 of
     the amplitude (measured 1.2e-11 rad; 2.1e-9 rad where the first impacts of the longer pulse fly, which the
     reference leaves out) until the Zeno rule ends the accumulation where it says: at the impact whose leaving
-    corner is slower than v_Zeno (at 0.0337 s; 0.2283 s). Before issue 20 it switched to full contact at
+    corner is slower than v_Zeno (at 0.0337 s; 0.2283 s). Under the old rule it switched to full contact at
     0.0269 s (0.2214 s), at 36-44.7 v_Zeno (the bounce test run on the old pivot)."""
     A = 1.005 * G * math.tan(ALPHA)
     phi_ref, times, speeds = _housner_reference(A, duration, 0.2, 1.0, all_closed=duration < 0.02)
@@ -219,7 +219,7 @@ def test_painleve_landing_is_counted(mu, U_N, gap, collides):
     from physics.md): with mu above the critical 1.357 a sliding impact needs P_N = -U_N- / a_sigma < 0, so the
     corner must stick, by a tangential percussion of about a |U_T-| / (a d - c^2) = 0.66 m|U_T-|, thousands of
     times what the collision needs; the scheme reaches that state and counts it in ``painleve`` (it stayed 0
-    before issue 20: the impact LCP stuck the corner uncounted). Below the critical mu the corner keeps
+    under the old rule: the impact LCP stuck the corner uncounted). Below the critical mu the corner keeps
     sliding (P_N >= 0), nothing is counted."""
     sim, v_minus = _landing(mu, U_N, gap)
     out = sim.outputs()

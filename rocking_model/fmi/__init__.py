@@ -63,10 +63,12 @@ the same checks here serve direct users of the class. Hence:
 * a rejected FMU state (foreign, corrupted, of another FMU): ``_set_fmu_state`` raises, the instance keeps its
   state (fmi2Error);
 * once the output named by ``freeze_output`` (``"overturned"``) is true the integration stops, the outputs
-  stay frozen (a warning says so) and ``do_step`` keeps returning True.
+  stay frozen and ``do_step`` keeps returning True; the overturning is an event of the motion, not a
+  warning: its step returns fmi2OK and the message is logged with fmi2OK under the category ``logEvents``.
 
 Messages are queued with `RockingSlave.log`; the binary passes each one to the importer's logger as data
-(``"%s"``): errors and warnings always, the others only with logging on.
+(``"%s"``): errors and warnings always, the others (the events) only with logging on and their category
+enabled by ``fmi2SetDebugLogging`` (no category named, ``logEvents`` or ``logAll``).
 
 Each FMU bundles the package under the digest of its sources (``rocking_model.fmi.build``), so FMUs built
 from other versions and a host's own ``rocking_model`` can live in one process.

@@ -372,8 +372,9 @@ def cross_check_input(name: str):
 def simulate_cross_check(fmu: Path, input_table, opts: dict, messages: list | None = None):
     """The reference run: fmpy.simulate_fmu with the default start values, the input table and the
     options of the _ref.opt file; every output recorded. The FMU's messages (an overturning of the reference
-    scene is one) are collected into ``messages`` as (status, category, text), not printed: they describe
-    the reference scene, not the user's run."""
+    scene is one, an event logged with fmi2OK: the run logs with logging on so that it arrives) are collected
+    into ``messages`` as (status, category, text), not printed: they describe the reference scene, not the
+    user's run."""
     import fmpy
     from fmpy import read_model_description
 
@@ -384,7 +385,7 @@ def simulate_cross_check(fmu: Path, input_table, opts: dict, messages: list | No
         try:
             return fmpy.simulate_fmu(str(fmu), start_time=opts["StartTime"], stop_time=opts["StopTime"],
                                      output_interval=opts["StepSize"], relative_tolerance=opts["RelTol"],
-                                     input=input_table, output=outputs)
+                                     input=input_table, output=outputs, debug_logging=True)
         finally:
             if messages is not None:
                 messages.extend(collected)
@@ -414,7 +415,8 @@ def write_cross_check(fmu: Path, root) -> Path:
     if errors or not math.isclose(t_last, spec["stop"], rel_tol=1e-9):
         raise ValueError(f"{name}: the cross-check run ended at t = {t_last:g} s (StopTime {spec['stop']:g} s): "
                          + ("; ".join(errors) or "no error message"))
-    notes = [text for status, _, text in messages if status == 1]    # fmi2Warning: part of the scene
+    # the events (the overturning) and any fmi2Warning: part of the scene
+    notes = [text for status, category, text in messages if status == 1 or category == "logEvents"]
     write_cross_check_csv(folder / f"{name}_ref.csv", result)
     inputs = ", ".join(spec["inputs"]) or "none"
     (folder / "ReadMe.md").write_text(
@@ -423,7 +425,7 @@ def write_cross_check(fmu: Path, root) -> Path:
         f"from {name}_in.csv held over each step (the table is sampled at the communication points). "
         f"The FMU embeds Python: the importer needs libpython loaded and numpy and scipy importable "
         f"(see the FMU page of rocking_model's documentation, 'Loading the FMUs in a non-Python host').\n"
-        + ("\nWarnings of the reference run (expected: they belong to this reference scene):\n\n"
+        + ("\nEvents and warnings of the reference run (expected: they belong to this reference scene):\n\n"
            + "".join(f"- {text}\n" for text in notes) if notes else ""))
     return folder
 

@@ -66,9 +66,15 @@ class RockingSlave(Fmi2Slave):
     #: inputs vary linearly over a step: canInterpolateInputs = true)
     interpolates_inputs: ClassVar[bool] = True
 
+    #: the category of the events of the motion (the overturning that freezes the outputs): logged with
+    #: fmi2OK, so the step's status stays fmi2OK; they reach the importer with logging on and the category
+    #: enabled by fmi2SetDebugLogging (none named, logEvents or logAll), as the binaries filter (fmi2_common.c)
+    EVENTS: ClassVar[str] = "logEvents"
+
     log_categories = {
         "logStatusWarning": "Log messages with fmi2Warning status.",
         "logStatusError": "Log messages with fmi2Error status.",
+        EVENTS: "Events of the motion: the overturning that freezes the outputs",
         "logAll": "Log all messages.",
     }
 
@@ -495,9 +501,10 @@ class RockingSlave(Fmi2Slave):
             self._freeze()
 
     def _freeze(self) -> None:
+        # an event of the motion, not a warning: the step that overturns returns fmi2OK
         self._frozen = True
         self.log(f"{self.freeze_output} at t = {self._sim.t:.6g} s: the outputs are frozen from now on",
-                 Fmi2Status.warning)
+                 Fmi2Status.ok, self.EVENTS)
 
     def _fail(self, msg: str) -> bool:
         self.log(msg, Fmi2Status.error)

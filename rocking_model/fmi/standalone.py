@@ -1,4 +1,4 @@
-"""Self-contained FMUs (issue 22): what the C FMI layer over the compiled engine needs from the Python
+"""Self-contained FMUs: what the C FMI layer over the compiled engine needs from the Python
 declarations, generated at build time from the same declarations the pythonfmu FMUs use (one source).
 
 From the FMU's slave class (e.g. `rocking_model.fmi.fmus.RigidRockingBlock`, a `ModelSlave`):

@@ -1,4 +1,4 @@
-/* A batch FMI 2.0 co-simulation host for every platform of the self-contained FMUs (issue 33): the same
+/* A batch FMI 2.0 co-simulation host for every platform of the self-contained FMUs: the same
  * source compiled for linux64 (cc), win64 (x86_64-w64-mingw32-gcc, run under wine) and aarch64-linux
  * (aarch64-linux-gnu-gcc, run under qemu-user), so that one start of the emulator runs every scene.
  *

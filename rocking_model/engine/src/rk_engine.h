@@ -1,5 +1,5 @@
 /* rk_engine.h -- the public C API of the engine: what the CPython extension (rocking_model._engine) and the
- * FMI binary (issue 22) link against. Nothing else is public.
+ * FMI binary link against. Nothing else is public.
  *
  * Contract
  * - One rk_engine per simulation: a fixed-size struct plus (with a bounded impact log) one block for the log,
@@ -23,7 +23,7 @@ extern "C" {
 /** The engine's version (the package version it was built with, e.g. "0.9.0") and the API version of this
  *  header (bumped on every incompatible change). */
 const char *rk_engine_version(void);
-/* 2: the vertical ground acceleration ag_v (issue 23) in rk_engine_advance / advance_motion / sample */
+/* 2: the vertical ground acceleration ag_v in rk_engine_advance / advance_motion / sample */
 #define RK_ENGINE_API_VERSION 2
 int rk_engine_api_version(void);
 /** The plain-data state format (simulation.STATE_VERSION). */

@@ -97,7 +97,7 @@ double rk_motion_next_breakpoint(rk_motion *m, double t);
 /** GroundMotion.continuous_at. */
 int rk_motion_continuous_at(const rk_motion *m, double tb);
 
-/* The two-component motion (issue 23; ground_motion.TwoComponentMotion): the horizontal ag and the vertical ag_v
+/* The two-component motion (ground_motion.TwoComponentMotion): the horizontal ag and the vertical ag_v
  * (NULL: none, GroundMotion.vertical is None; every function then reduces to the horizontal one's exactly). */
 /** TwoComponentMotion.constant: both components constant. */
 int rk_motion_pair_constant(const rk_motion *ag, const rk_motion *ag_v);

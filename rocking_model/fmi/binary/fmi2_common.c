@@ -85,10 +85,14 @@ static const char *state_name(int state) {
 static int valid(const void *c) { return c && ((const fmi2c_instance *)c)->magic == FMI2C_INSTANCE_MAGIC; }
 
 /* ------------------------------------------------------------------------------------------ messages */
+/* Whether fmi2SetDebugLogging enabled `category`: every category when it named none (or was never called) or
+ * named logAll ("Log all messages"), else the ones it named. Only messages of status fmi2OK (the events of
+ * logEvents) are filtered: with logging on and their category enabled; warnings and worse always pass. */
 static int category_enabled(const fmi2c_instance *F, const char *category) {
     if (F->n_categories == 0) return 1;
     for (size_t i = 0; i < F->n_categories; i++)
-        if (category && strcmp(F->categories[i], category) == 0) return 1;
+        if (strcmp(F->categories[i], "logAll") == 0 || (category && strcmp(F->categories[i], category) == 0))
+            return 1;
     return 0;
 }
 

@@ -22,7 +22,7 @@ typedef struct {
     fmi2CallbackLogger logger;
     fmi2ComponentEnvironment env;
     int logging_on;
-    char **categories;         /* enabled debug categories; none listed: all */
+    char **categories;         /* enabled debug categories; none listed, or logAll among them: all */
     size_t n_categories;
     double time;               /* [s] the communication point (fmi2LastSuccessfulTime) */
     int terminated_flag;       /* fmi2Terminated */

@@ -1,4 +1,4 @@
-/* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs of issue 22, with no
+/* FMI 2.0 co-simulation over the compiled engine (rk_engine.h): the self-contained FMUs, with no
  * Python at all. C99 + libm.
  *
  * The FMI calls (the state machine, the argument checks, the statuses, the messages, the FMU states) are
@@ -9,7 +9,9 @@
  * rocking_model/fmi/standalone.py from the declarations the pythonfmu FMUs use.
  *
  * Status of a call (FMI 2.0, section 2.1.3):
- *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when a warning was logged meanwhile);
+ *   fmi2OK / fmi2Warning  the call did its work (fmi2Warning when a warning was logged meanwhile: an inexact
+ *                         contact solve; the overturning is an event of the motion, not a warning: fmi2OK,
+ *                         its message logged with fmi2OK under logEvents);
  *   fmi2Discard           a refused step: the engine is where it was (fmi2Terminated true until a later step
  *                         succeeds, fmi2LastSuccessfulTime the instance's time);
  *   fmi2Error             an invalid argument, value or call sequence: the message goes to the logger, the
@@ -133,6 +135,9 @@ static void py_repr(double x, char *out, size_t size) {
 
 /* ------------------------------------------------------------------------------------------ messages */
 #define log_warning(S, ...) logf_(S, fmi2Warning, "logStatusWarning", __VA_ARGS__)
+/* an event of the motion (the overturning): fmi2OK, under the category logEvents (RockingSlave.EVENTS); it
+ * reaches the logger with logging on and the category enabled (fmi2c_emit), and leaves the call's status OK */
+#define log_event(S, ...) logf_(S, fmi2OK, "logEvents", __VA_ARGS__)
 
 /* ------------------------------------------------------------------------------------------ the slave */
 static void slave_clear(Slave *s) {
@@ -239,7 +244,7 @@ static fmi2Integer to_integer(double x) {
     return (fmi2Integer)x;
 }
 
-/* RockingSlave._update_outputs: the outputs from the engine; the freeze once overturned (with its warning) */
+/* RockingSlave._update_outputs: the outputs from the engine; the freeze once overturned (logged as an event) */
 static void update_outputs(Instance *S) {
     Slave *s = &S->s;
     double out[RK_MAX_OUTPUTS];
@@ -259,7 +264,7 @@ static void update_outputs(Instance *S) {
     }
     if (RK_FMU_FREEZE && overturned && !s->frozen) {
         s->frozen = 1;
-        log_warning(S, "overturned at t = %g s: the outputs are frozen from now on", rk_engine_time(S->engine));
+        log_event(S, "overturned at t = %g s: the outputs are frozen from now on", rk_engine_time(S->engine));
     }
 }
 
