@@ -328,3 +328,15 @@ def test_generated_pages_name_no_directory_of_the_machine():
         body = page.read_text()
         assert "Traceback" not in body and "failed:" not in body, rel(page)
         assert not machine_dir.search(body), (rel(page), machine_dir.search(body).group(0))
+
+
+def test_readme_is_short_and_says_what_a_newcomer_needs():
+    """The README stays a page a newcomer reads (at most 200 lines; the rest is in docs/): what the project is with
+    its paper, the two set-up commands, activating .venv, both quickstarts, which FMU to pick, where the docs are,
+    how to cite."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 200
+    for needed in ("doi:10.1007/s10518-016-0068-4", "bash run.sh demo", "bash run.sh test", "source .venv/bin/activate",
+                   "## Quickstart: Python", "## Quickstart: FMU with fmpy", "## Which FMU to pick",
+                   "bash run.sh docs", "## How to cite"):
+        assert needed in readme, needed
