@@ -587,16 +587,6 @@ def write_fragilities(results: Sequence[FragilityResult], out_dir, *, im_label: 
 
 def write_curves(curves: Sequence[IDACurve], path) -> Path:
     """The IDA curves' summary (`IDACurve.as_row`), one row per record and configuration, as CSV."""
-    import csv
+    from .fragility import write_rows
 
-    path = Path(path)
-    rows = [c.as_row() for c in curves]
-    cols: list = []
-    for r in rows:
-        cols += [k for k in r if k not in cols]
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
-    return path
+    return write_rows([c.as_row() for c in curves], path)

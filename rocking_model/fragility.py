@@ -505,8 +505,13 @@ def to_json(fits, path, bands=None) -> Path:
 def to_csv(fits, path, bands=None) -> Path:
     """Write the fits' parameters to ``path`` as CSV, one row per fit (the columns of `to_json`; non-finite
     numbers as inf/nan)."""
+    return write_rows(_rows(fits, bands), path)
+
+
+def write_rows(rows: list, path) -> Path:
+    """Write dicts as CSV rows to ``path``: the union of their keys as columns (in order of appearance), floats
+    by repr (exact, inf/nan as such)."""
     path = Path(path)
-    rows = _rows(fits, bands)
     cols: list[str] = []
     for r in rows:
         cols += [k for k in r if k not in cols]
