@@ -97,6 +97,21 @@ static inline int rk_same_bits(const double *a, const double *b, int n)
     return 1;
 }
 
+/** nextafter(x, INFINITY) - x, the gap above x (the time resolution at t = x), without libm's call: the next
+ *  representable double by its bits (finite x; x = 0: the smallest subnormal, as nextafter gives) */
+static inline double rk_gap_above(double x)
+{
+    union { double d; unsigned long long u; } b;
+    if (x == 0.0)
+        return 4.9406564584124654e-324;
+    b.d = x;
+    if (x > 0.0)
+        b.u++;
+    else
+        b.u--;
+    return b.d - x;
+}
+
 /** A function the compiler must not inline into its caller: a rarely taken branch of a hot function (whose
  *  registers it would otherwise make every call save). GCC and Clang only; elsewhere a hint is not needed. */
 #if defined(__GNUC__)

@@ -50,7 +50,7 @@ enum { ED_IMPACT = 0, ED_RELEASE = 1, ED_OVERTURN = 2, ED_SLIP = 3, ED_CONE = 4,
 /** math.ulp of a finite x >= 0 (the callers pass max(|t|, 1)) */
 static double ed_ulp(double x)
 {
-    return nextafter(x, INFINITY) - x;
+    return rk_gap_above(x);
 }
 
 static int ed_popcount(rk_set s)
@@ -348,21 +348,29 @@ static rk_status ed_pass(ed_fn *f, rk_status st, rk_error *err)
 #define ED_TRY(x) do { rk_status st_ = (x); if (st_ != RK_OK) return st_; } while (0)
 #define ED_TRYF(f, x) do { rk_status st_ = (x); if (st_ != RK_OK) return ed_pass((f), st_, err); } while (0)
 
-/** `_kinds`: the meaning of each event function of mode; returns their number */
-static int ed_kinds(const rk_model *m, int mode, int *kinds)
+/** `_kinds`: the meaning of each event function of mode; returns their number. A pure function of the mode for
+ *  an engine: the last mode's are kept (asked at every segment's start and settle) */
+static int ed_kinds(rk_engine *e, int mode, int *kinds)
 {
-    rk_set closed = rk_closed_of(m, mode);
-    int nc = m->ops->n_contacts, i, n = 0;
-    for (i = 0; i < nc; i++)
-        kinds[n++] = RK_IN(closed, i) ? ED_RELEASE : ED_IMPACT;
-    if (rk_mode_sliding(m, mode))
-        kinds[n++] = ED_SLIP;
-    else if (closed && !isinf(m->mu))
-        kinds[n++] = ED_CONE;
-    for (i = 0; i < m->ops->n_switches; i++)
-        kinds[n++] = ED_SWITCH;
-    kinds[n++] = ED_OVERTURN;
-    return n;
+    rk_ed_state *s = ED(e);
+    const rk_model *m = &e->model;
+    if (mode != s->kinds_mode) {
+        rk_set closed = rk_closed_of(m, mode);
+        int nc = m->ops->n_contacts, i, n = 0;
+        for (i = 0; i < nc; i++)
+            s->kinds[n++] = RK_IN(closed, i) ? ED_RELEASE : ED_IMPACT;
+        if (rk_mode_sliding(m, mode))
+            s->kinds[n++] = ED_SLIP;
+        else if (closed && !isinf(m->mu))
+            s->kinds[n++] = ED_CONE;
+        for (i = 0; i < m->ops->n_switches; i++)
+            s->kinds[n++] = ED_SWITCH;
+        s->kinds[n++] = ED_OVERTURN;
+        s->kinds_n = n;
+        s->kinds_mode = mode;
+    }
+    memcpy(kinds, s->kinds, (size_t)s->kinds_n * sizeof(int));
+    return s->kinds_n;
 }
 
 /** the switches' sides from their functions g at a segment's start (kinds of its n functions): each one clearly
@@ -530,6 +538,7 @@ rk_status rk_ed_init(rk_engine *e, int mode, const double *q, const double *v, r
     s->live = 0;
     for (i = 0; i < RK_MAX_SWITCHES; i++)
         s->switch_side[i] = 1.0;
+    s->kinds_mode = -1;
     s->rhs_mode = -1;
     s->max_work = -1;
     s->work_end = INFINITY;
@@ -975,7 +984,7 @@ static rk_status ed_handle(rk_engine *e, int kind, int idx, double t, ed_fn *f, 
         /* a force law changed (no impulse, the mode holds): the step ends here and the next one starts at the
          * kink; the crossed function's side flips */
         int n_events, kinds[RK_MAX_EVENTS];
-        n_events = ed_kinds(&e->model, s->mode, kinds);
+        n_events = ed_kinds(e, s->mode, kinds);
         s->switch_side[idx - (n_events - 1 - e->model.ops->n_switches)] *= -1.0;
         e->g_memo.valid = 0;
         e->core.token++;
@@ -1286,7 +1295,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         e->core.token++;
         return RK_OK;
     }
-    ev.n = ed_kinds(m, mode, kinds);
+    ev.n = ed_kinds(e, mode, kinds);
     /* the friction demand: at the segment's start, at step ends, at its peak inside a step, at the event
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
     peaks = has_totals && !rk_mode_sliding(m, mode);
@@ -1436,7 +1445,7 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
     ed_fn f;
     int kinds[RK_MAX_EVENTS];
     ed_fn_init(&f, e, mode, ag, ag_v);
-    n_e = ed_kinds(m, mode, kinds);
+    n_e = ed_kinds(e, mode, kinds);
     /* (with the totals where the segment reads them: the segment that follows starts from the same values, kept
      * in g_memo; G is the same with or without them) */
     ED_TRYF(&f, ed_G_totals(&f, t, s->y, 2 * s->k, ev, ed_has_totals(m, mode) ? lam : NULL));

@@ -74,6 +74,9 @@ typedef struct rk_ed_state {
      * function (the value times the side) falls through zero at the next crossing either way; set from the
      * value at each segment's start where clearly away from zero, flipped by each switch event */
     double switch_side[RK_MAX_SWITCHES];
+    /* the kinds of the event functions of mode kinds_mode (-1: none yet): ed_kinds' last answer */
+    int kinds_mode, kinds_n;
+    int kinds[RK_MAX_EVENTS];
     /* settings (from the options and the model; constant after create) */
     double tolerance, dt_max;
     const rk_tableau *tab;

@@ -438,7 +438,7 @@ static RK_ALWAYS_INLINE rk_status step_n(rk_stepper *s, const rk_tableau *tab, i
     int rejected = 0, i, j;
     rk_status st;
     err_exp = -1.0 / (tab->error_order + 1.0);
-    min_step = 10.0 * fabs(nextafter(t, INFINITY) - t);
+    min_step = 10.0 * fabs(rk_gap_above(t));
     h_abs = py_min(s->h_abs, s->max_step);
     for (;;) {
         if (!(h_abs >= min_step))       /* NaN too (an initial step from an overflowed derivative): the loop
