@@ -980,6 +980,23 @@ def _workers_now(client) -> set:
     return box[0] if box else set()
 
 
+class _OrphanedGather(logging.Filter):
+    """Drops asyncio's "Task exception was never retrieved" for a Dask gather that a `result(timeout=...)` left
+    behind and that ended when the cluster went away (distributed's AllExit): the run reports a cluster without
+    workers itself (`WorkersLost`), in one line, and the traceback would only hide it."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        return not (str(record.msg).startswith("Task exception was never retrieved")
+                    and type(exc).__name__ == "AllExit")
+
+
+def _quiet_orphaned_gathers() -> None:
+    log = logging.getLogger("asyncio")
+    if not any(isinstance(f, _OrphanedGather) for f in log.filters):
+        log.addFilter(_OrphanedGather())
+
+
 def _collect(client, futures, take, no_workers_timeout: float, out: Path) -> None:
     """Hand each batch's rows to ``take`` as it finishes; raise `WorkersLost` when the cluster has had no
     worker for ``no_workers_timeout`` seconds, when `MAX_DEATHS_WITHOUT_PROGRESS` workers died while no batch
@@ -1154,6 +1171,7 @@ class EnsembleRun:
     def _start(self) -> None:
         """Start (or join) the Dask cluster once, and warm its workers up before the clock starts."""
         t_setup = time.perf_counter()
+        _quiet_orphaned_gathers()
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
