@@ -112,7 +112,8 @@ def api_public() -> str:
     out = []
     for name in rocking_model.__all__:
         module = rocking_model._LAZY[name]
-        out.append(f"::: rocking_model.{module}.{name}\n")
+        # headed by the name a user imports (``from rocking_model import X``), documented where it is defined
+        out.append(f"::: rocking_model.{module}.{name}\n    options:\n      show_root_full_path: false\n")
     return "\n".join(out)
 
 
