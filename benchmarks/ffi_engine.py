@@ -7,40 +7,12 @@ per-call dict, one C call per creation and per sample). The cold calls are the p
 cffi releases the GIL around every C call (Dask workers run engines in threads); a ground motion written in
 Python is called back through ``extern "Python"`` functions, which take the GIL again."""
 from benchmarks.ffi_binding import load
+# the exception of each C status: the package's own mapping (its NonFiniteError is the extension's)
+from rocking_model._engine_cold import _error_type
 
 ffi, lib = load()
 
-__all__ = ["Engine", "NonFiniteError"]
-
-
-class NonFiniteError(ValueError):
-    """The motion overflowed (non-finite state or outputs); the state was restored."""
-
-
-#: the package this module belongs to ("rocking_model", or an FMU's bundled copy "rocking_model_<digest>"): its
-#: validation.WorkLimitError is the class the package's callers catch
-_PACKAGE = "rocking_model"
-
-
-def _error_type(status):
-    """The Python exception of a C status (DESIGN.md "Error handling")."""
-    if status == lib.RK_ERR_VALUE:
-        return ValueError
-    if status == lib.RK_ERR_NONFINITE:
-        return NonFiniteError
-    if status == lib.RK_ERR_NOT_IMPLEMENTED:
-        return NotImplementedError
-    if status == lib.RK_ERR_MEMORY:
-        return MemoryError
-    if status == lib.RK_ERR_WORK_LIMIT:
-        import importlib
-
-        return importlib.import_module(_PACKAGE + ".validation").WorkLimitError
-    if status == lib.RK_ERR_SOLVER:
-        from numpy.linalg import LinAlgError
-
-        return LinAlgError
-    return RuntimeError
+__all__ = ["Engine"]
 
 
 def _text(p) -> str:
