@@ -44,6 +44,26 @@ def extracted_fmus(built_fmus, tmp_path_factory) -> dict:
             for name, path in built_fmus.items()}
 
 
+@pytest.fixture
+def run_sh_stubbed(tmp_path):
+    """``run(command)``: ``bash run.sh <command>`` with a stand-in interpreter whose every call is only logged;
+    returns (the finished process, the logged calls' argument lines)."""
+    import os
+    import subprocess
+
+    def run(command: str):
+        venv = tmp_path / "venv"
+        (venv / "bin").mkdir(parents=True, exist_ok=True)
+        log = tmp_path / "calls.txt"
+        stub = venv / "bin" / "python"
+        stub.write_text(f"#!/bin/sh\necho \"$*\" >> '{log}'\n")
+        stub.chmod(0o755)
+        proc = subprocess.run(["bash", str(ROOT / "run.sh"), command], env={**os.environ, "VENV": str(venv)},
+                              capture_output=True, text=True, timeout=60)
+        return proc, (log.read_text().splitlines() if log.exists() else [])
+    return run
+
+
 def pytest_terminal_summary(terminalreporter):
     """A visible line when the bit-for-bit golden comparison was skipped on this CPU (tests/test_golden.py):
     a skip is otherwise one letter among the dots."""

@@ -209,19 +209,11 @@ def test_every_page_in_a_browser(site, server):
     assert (ARTEFACTS / "index.png").stat().st_size > 10_000 and (ARTEFACTS / "api.png").stat().st_size > 10_000
 
 
-def test_run_sh_docs_builds_the_site_strictly(tmp_path):
+def test_run_sh_docs_builds_the_site_strictly(run_sh_stubbed):
     """bash run.sh docs with a stand-in interpreter (each call only logged): it installs the docs extra, then runs
     `mkdocs build --strict` into site/, saying so first."""
-    venv = tmp_path / "venv"
-    (venv / "bin").mkdir(parents=True)
-    log = tmp_path / "calls.txt"
-    stub = venv / "bin" / "python"
-    stub.write_text(f"#!/bin/sh\necho \"$*\" >> '{log}'\n")
-    stub.chmod(0o755)
-    proc = subprocess.run(["bash", str(ROOT / "run.sh"), "docs"], env={**os.environ, "VENV": str(venv)},
-                          capture_output=True, text=True, timeout=60)
+    proc, calls = run_sh_stubbed("docs")
     assert proc.returncode == 0, proc.stderr
-    calls = log.read_text().splitlines()
     assert any("install" in c and ".[docs" in c for c in calls), calls
     assert calls[-1] == "-m mkdocs build --strict --site-dir site", calls
     assert "building the documentation site into site/" in proc.stdout

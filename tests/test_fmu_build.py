@@ -3,8 +3,6 @@ about their own scenes (an overturning there is expected, noted in the folder's 
 what each phase does before it runs."""
 from __future__ import annotations
 
-import os
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -28,23 +26,15 @@ def test_cross_check_build_prints_no_warning_of_its_reference_scenes(built_fmus,
         assert "expected: they belong to this reference scene" in readmes[name], name
 
 
-def test_run_sh_says_what_each_phase_does(tmp_path):
+def test_run_sh_says_what_each_phase_does(run_sh_stubbed):
     """bash run.sh demo with a stand-in interpreter (each call only logged): a line before the install,
     the build and the demo, so that the 40 s of pip are not silent."""
-    venv = tmp_path / "venv"
-    (venv / "bin").mkdir(parents=True)
-    log = tmp_path / "calls.txt"
-    stub = venv / "bin" / "python"
-    stub.write_text(f"#!/bin/sh\necho \"$*\" >> '{log}'\n")
-    stub.chmod(0o755)
-    proc = subprocess.run(["bash", str(ROOT / "run.sh"), "demo"], env={**os.environ, "VENV": str(venv)},
-                          capture_output=True, text=True, timeout=60)
+    proc, calls = run_sh_stubbed("demo")
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     phases = [next((i for i, line in enumerate(lines) if line.startswith("run.sh: ") and word in line), None)
               for word in ("installing", "building", "demo")]
     assert None not in phases and phases == sorted(phases), proc.stdout
-    calls = log.read_text().splitlines()
     assert [c.split()[0] for c in calls] == ["-m", "-m", "build_fmu.py", "examples/demo.py"], calls
 
 
