@@ -165,6 +165,7 @@ class ModelCode:
         self.cls = cls
         self.kind = cls.kind
         self.prefix = "g_" + re.sub(r"\W", "_", cls.kind)
+        self._sincos = "rk_sincos"          # the C function the blocks call for a sine and cosine pair
         self.params = list(cls.parameters()) if hasattr(cls, "parameters") else list(cls.fields())
         self.pnames = [p.name for p in self.params]
         self.psym = {n: sp.Symbol(n, real=True) for n in self.pnames}
@@ -345,7 +346,7 @@ class ModelCode:
                     done.add(e.args[0])
                     sn, cs = (pr.doprint(pairs[e.args[0]][f]) for f in (sp.sin, sp.cos))
                     lines.append(f"{indent}double {sn}, {cs};")
-                    lines.append(f"{indent}rk_sincos(m, {pr.doprint(e.args[0])}, &{sn}, &{cs});")
+                    lines.append(f"{indent}{self._sincos}(m, {pr.doprint(e.args[0])}, &{sn}, &{cs});")
                 continue
             lines.append(f"{indent}const double {pr.doprint(s)} = {pr.doprint(e)};")
         for (lhs, _), e in zip(targets, red):
@@ -607,12 +608,16 @@ class ModelCode:
                 f"    dy[{k + j}] = rdd[{j}];" for j in range(k))
         s.append(f"static void {P}_mode_rhs(const rk_model *m, int mode, const double *y, double ag, double ag_v, "
                  "double *dy)\n{\n    (void)y; (void)ag; (void)ag_v; (void)dy;\n" + self._switch(cases) + "\n}\n")
-        # mode_acc1: r_ddot of the one-dof modes alone, the same statements as mode_rhs's, from and to registers
+        # mode_acc1: r_ddot of the one-dof modes alone, the same statements as mode_rhs's, from and to registers.
+        # Only the Runge-Kutta stages call it, at points the memo cannot hold: rk_sincos_fresh skips the lookup
+        # and keeps the values for the evaluations at the step's end that follow its last stage
         cases = {}
+        self._sincos = "rk_sincos_fresh"
         for mode, md in self.modes.items():
             if md["k"] == 1:
                 body = self._with_names(self._y_names(md), lambda md=md: self._rdd_code(md))
                 cases[mode] = "    double rdd[1];\n" + body + "\n    return rdd[0];"
+        self._sincos = "rk_sincos"
         self.has_acc1 = bool(cases)
         if cases:
             s.append(f"static double {P}_mode_acc1(const rk_model *m, int mode, double y0, double y1, double ag, "

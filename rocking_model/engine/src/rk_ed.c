@@ -1207,6 +1207,12 @@ static rk_status ed_stepper(rk_engine *e, ed_fn *f, double max_step, rk_error *e
                                    s->k ? s->h : NAN, NULL, err));
     }
     st->fun1 = f->acc1 != NULL ? ed_acc1 : NULL;
+    /* (ed_acc1 under a constant input is the kernel with f->a0, f->v0) */
+    st->acc1 = f->acc1 != NULL && f->constant ? f->acc1 : NULL;
+    st->acc1_m = &e->model;
+    st->acc1_mode = f->mode;
+    st->acc1_ag = f->a0;
+    st->acc1_ag_v = f->v0;
     s->rhs_mode = f->mode;
     s->rhs_constant = f->constant;
     s->rhs_value = f->a0;
@@ -1262,18 +1268,15 @@ static int ed_lands_now(rk_engine *e, const int *kinds, int n_events, const doub
 }
 
 /** `_segment`: integrate the current mode towards t_stop; *event 1 if an event ended it */
-static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motion *ag_v, ed_out *o, int *event,
-                            rk_error *err)
+static rk_status ed_segment(rk_engine *e, double t_stop, ed_fn *f, ed_out *o, int *event, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
     int mode = s->mode, k = s->k, kinds[RK_MAX_EVENTS], has_totals, peaks, first, refusals, i;
-    ed_fn f;
     ed_ev ev;
     rk_event_ctx c;
     double lam[2], d_prev = NAN, max_step, g_prev[RK_MAX_EVENTS], g_new[RK_MAX_EVENTS];
     *event = 0;
-    ed_fn_init(&f, e, mode, ag, ag_v);
     if (ed_pending(o) && o->times[o->next] <= s->t) {
         while (ed_pending(o) && o->times[o->next] <= s->t)
             ed_row(e, o, mode, s->y, 0);
@@ -1281,11 +1284,11 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
             s->work_end = (double)s->n_steps + (double)s->max_work;
     }
     has_totals = ed_has_totals(m, mode);
-    if (k == 0 && f.constant) {
+    if (k == 0 && f->constant) {
         /* nothing moves and the (positive) contact forces cannot change */
         if (has_totals) {
             /* (through g_memo: the settle before it computed them at an input change) */
-            ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 0, g_prev, lam));
+            ED_TRYF(f, ed_G_totals(f, s->t, s->y, 0, g_prev, lam));
             if (lam[0] > s->force_floor)
                 ed_note_ratio(e, fabs(lam[1]) / lam[0]);
         }
@@ -1300,10 +1303,10 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
      * (a sliding mode's is mu wherever the normal force carries load: its ends suffice) */
     peaks = has_totals && !rk_mode_sliding(m, mode);
     /* (a motion with a callback is called as often as before: no memo) */
-    if (peaks && f.pure && k > 0)
-        f.memo_n = 2 * k;
+    if (peaks && f->pure && k > 0)
+        f->memo_n = 2 * k;
     /* G and the demand at the segment's start, from one kernel call (as at the step ends below) */
-    ED_TRYF(&f, ed_G_totals(&f, s->t, s->y, 2 * k, g_prev, has_totals ? lam : NULL));
+    ED_TRYF(f, ed_G_totals(f, s->t, s->y, 2 * k, g_prev, has_totals ? lam : NULL));
     ed_switch_sides(e, kinds, ev.n, g_prev);
     if (has_totals) {
         d_prev = ed_ratio(s, lam);
@@ -1317,22 +1320,22 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
         for (j = 0; j < nd; j++)
             if (idx[j] == m->ops->phi_index)
                 s->y[j] = s->y[j] < 0.0 ? -RK_HALF_PI : RK_HALF_PI;
-        ED_TRY(ed_handle(e, ED_OVERTURN, ev.n - 1, s->t, &f, err));
+        ED_TRY(ed_handle(e, ED_OVERTURN, ev.n - 1, s->t, f, err));
         *event = 1;
         return RK_OK;
     }
     if (ed_lands_now(e, kinds, ev.n, g_prev)) {
-        ED_TRY(ed_handle(e, ED_IMPACT, -1, s->t, &f, err));
+        ED_TRY(ed_handle(e, ED_IMPACT, -1, s->t, f, err));
         *event = 1;
         return RK_OK;
     }
     /* without state a step only samples the contact forces under a varying input: short enough for the dip
      * search to see a force that comes and goes */
     max_step = k ? s->dt_max : (s->dt_max < s->stateless_step ? s->dt_max : s->stateless_step);
-    ED_TRY(ed_stepper(e, &f, max_step, err));
+    ED_TRY(ed_stepper(e, f, max_step, err));
     c.stepper = &s->stepper;
     c.G = ed_G;
-    c.G_ctx = &f;
+    c.G_ctx = f;
     c.n_events = ev.n;
     c.G_one = ed_G_one;
     c.G_one_mask = ed_G_one_mask;
@@ -1347,7 +1350,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
     while (s->stepper.t < t_stop) {
         double d_new = NAN, te;
         int found, idx;
-        ED_TRYF(&f, rk_step(&s->stepper, t_stop, err));
+        ED_TRYF(f, rk_step(&s->stepper, t_stop, err));
         s->n_steps++;
         if (s->stepper.failed) {
             s->stepper.failed = 0;
@@ -1357,7 +1360,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
             return ed_work_limit(e, err);
         /* G and the demand at the step's end, from one evaluation (the kernels share their work between the
          * two, as the Python's closures do; part A pins the event functions with totals to those without) */
-        ED_TRYF(&f, ed_G_totals(&f, s->stepper.t, s->stepper.y, 2 * k, g_new, has_totals ? lam : NULL));
+        ED_TRYF(f, ed_G_totals(f, s->stepper.t, s->stepper.y, 2 * k, g_new, has_totals ? lam : NULL));
         if (has_totals)
             d_new = ed_ratio(s, lam);
         if (refusals < ED_MAX_SINK_REFUSALS && s->stepper.t > s->stepper.t_old) {
@@ -1367,12 +1370,12 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
                 if (ev.watch[i] && kinds[i] == ED_IMPACT && g_new[i] > -s->event_tol)
                     ids[n_ids++] = i;
             if (n_ids > 0)
-                ED_TRYF(&f, rk_sinks(&c, ids, n_ids, s->stepper.t_old, s->stepper.t,
+                ED_TRYF(f, rk_sinks(&c, ids, n_ids, s->stepper.t_old, s->stepper.t,
                                      e->options.tolerances.sub_samples, e->options.tolerances.gap, &sunk, err));
             if (sunk) {
                 double h_half = 0.5 * (s->stepper.t - s->stepper.t_old);
                 refusals++;
-                ED_TRYF(&f, rk_stepper_restart(&s->stepper, ed_rhs, &f, s->stepper.t_old, s->stepper.y_old,
+                ED_TRYF(f, rk_stepper_restart(&s->stepper, ed_rhs, f, s->stepper.t_old, s->stepper.y_old,
                                                h_half, err));
                 continue;
             }
@@ -1381,36 +1384,36 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
             ev.has_start[i] = 0;
         if (first) {
             first = 0;
-            ED_TRY(ed_bounces(e, &c, kinds, &ev, g_new, &f, err));
+            ED_TRY(ed_bounces(e, &c, kinds, &ev, g_new, f, err));
         }
-        ED_TRY(ed_find_event(e, &c, &ev, g_prev, g_new, &found, &te, &idx, &f, err));
+        ED_TRY(ed_find_event(e, &c, &ev, g_prev, g_new, &found, &te, &idx, f, err));
         if (found) {
             double t_old = s->stepper.t_old;
-            ED_TRY(ed_record_samples(e, o, mode, te, 0, &f, err));
+            ED_TRY(ed_record_samples(e, o, mode, te, 0, f, err));
             if (k && s->stepper.h_abs > 0)
                 s->h = s->stepper.h_abs;
             s->t = te;
-            ED_TRYF(&f, rk_dense_eval(&s->stepper, te, s->y, err));
+            ED_TRYF(f, rk_dense_eval(&s->stepper, te, s->y, err));
             s->live = 0;
             e->core.token++;
             if (has_totals) {
                 /* the demand up to the event, its left limit included */
                 double d_e;
-                ED_TRYF(&f, ed_totals(&f, te, s->y, lam));
+                ED_TRYF(f, ed_totals(f, te, s->y, lam));
                 d_e = ed_ratio(s, lam);
                 if (peaks)
-                    ED_TRY(ed_demand_peak(e, &f, t_old, d_prev, te, d_e, 0, err));
+                    ED_TRY(ed_demand_peak(e, f, t_old, d_prev, te, d_e, 0, err));
                 ed_note_ratio(e, d_e);
             }
-            ED_TRY(ed_handle(e, kinds[idx], idx, te, &f, err));
+            ED_TRY(ed_handle(e, kinds[idx], idx, te, f, err));
             *event = 1;
             return RK_OK;
         }
         if (ed_pending(o) && o->times[o->next] <= s->stepper.t)
-            ED_TRY(ed_record_samples(e, o, mode, s->stepper.t, 1, &f, err));
+            ED_TRY(ed_record_samples(e, o, mode, s->stepper.t, 1, f, err));
         if (has_totals) {
             if (peaks)
-                ED_TRY(ed_demand_peak(e, &f, s->stepper.t_old, d_prev, s->stepper.t, d_new, 1, err));
+                ED_TRY(ed_demand_peak(e, f, s->stepper.t_old, d_prev, s->stepper.t, d_new, 1, err));
             ed_note_ratio(e, d_new);
             d_prev = d_new;
         }
@@ -1434,7 +1437,7 @@ static rk_status ed_segment(rk_engine *e, double t_stop, rk_motion *ag, rk_motio
 /* ------------------------------------------------------------------------------------------ settle */
 
 /** `_settle`: re-decide the mode of the current state by the acceleration LCP (after an input change) */
-static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_v, rk_error *err)
+static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_v, ed_fn *f, rk_error *err)
 {
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
@@ -1442,13 +1445,11 @@ static rk_status ed_settle(rk_engine *e, double t, rk_motion *ag, rk_motion *ag_
     rk_set closed = rk_closed_of(m, mode), cc;
     double ev[RK_MAX_EVENTS], clear = e->options.tolerances.clearly_open, q[RK_MAX_DOF], v[RK_MAX_DOF];
     double v_new[RK_MAX_DOF], a, av, lam[2];
-    ed_fn f;
     int kinds[RK_MAX_EVENTS];
-    ed_fn_init(&f, e, mode, ag, ag_v);
     n_e = ed_kinds(e, mode, kinds);
     /* (with the totals where the segment reads them: the segment that follows starts from the same values, kept
      * in g_memo; G is the same with or without them) */
-    ED_TRYF(&f, ed_G_totals(&f, t, s->y, 2 * s->k, ev, ed_has_totals(m, mode) ? lam : NULL));
+    ED_TRYF(f, ed_G_totals(f, t, s->y, 2 * s->k, ev, ed_has_totals(m, mode) ? lam : NULL));
     /* fast path: closed corners loaded, open corners clearly open, friction within its cone or the slip going
      * on or just starting */
     ok = 1;
@@ -1491,6 +1492,7 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, 
     rk_ed_state *s = ED(e);
     const rk_model *m = &e->model;
     ed_out out, *o = NULL;
+    ed_fn f;
     long long n_events = 0;
     int kink, event;
     double end_tol;
@@ -1535,9 +1537,14 @@ rk_status rk_ed_run(rk_engine *e, double t_end, rk_motion *ag, rk_motion *ag_v, 
             break;
         tb = rk_motion_pair_next_breakpoint(ag, ag_v, s->t);
         t_stop = t_end < tb ? t_end : tb;
-        if (rk_closed_of(m, s->mode) && !kink)
-            ED_TRY(ed_settle(e, s->t, ag, ag_v, err));
-        ED_TRY(ed_segment(e, t_stop, ag, ag_v, o, &event, err));
+        /* (the settle's functions serve the segment unless it changed the mode) */
+        ed_fn_init(&f, e, s->mode, ag, ag_v);
+        if (rk_closed_of(m, s->mode) && !kink) {
+            ED_TRY(ed_settle(e, s->t, ag, ag_v, &f, err));
+            if (s->mode != f.mode)
+                ed_fn_init(&f, e, s->mode, ag, ag_v);
+        }
+        ED_TRY(ed_segment(e, t_stop, &f, o, &event, err));
         if (event) {
             s->live = 0;
             kink = 0;

@@ -585,16 +585,20 @@ static void float_text(char *buf, size_t n, double x)
 }
 
 /** Simulator._guarded's check of the outputs after an advance: FloatingPointError "non-finite outputs ...". */
-static rk_status check_outputs(rk_engine *e)
+/** RK_ERR_NONFINITE naming the outputs out[] (the model's n_outputs values) that are not finite; RK_OK if none */
+static rk_status check_output_values(rk_engine *e, const double *out)
 {
-    double out[RK_MAX_OUTPUTS];
     const rk_model_ops *ops = e->model.ops;
     char text[RK_MSG_LEN];
     size_t len = 0;
     int i;
-    rk_engine_outputs(e, out);
+    for (i = 0; i < ops->n_outputs; i++)
+        if (!isfinite(out[i]))
+            break;
+    if (i == ops->n_outputs)
+        return RK_OK;
     text[0] = '\0';
-    for (i = 0; i < ops->n_outputs; i++) {
+    for (; i < ops->n_outputs; i++) {
         if (!isfinite(out[i])) {
             char num[32];
             int k;
@@ -605,9 +609,14 @@ static rk_status check_outputs(rk_engine *e)
                 len += (size_t)k;
         }
     }
-    if (len)
-        return rk_fail(&e->error, RK_ERR_NONFINITE, "non-finite outputs %s", text);
-    return RK_OK;
+    return rk_fail(&e->error, RK_ERR_NONFINITE, "non-finite outputs %s", text);
+}
+
+static rk_status check_outputs(rk_engine *e)
+{
+    double out[RK_MAX_OUTPUTS];
+    rk_engine_outputs(e, out);
+    return check_output_values(e, out);
 }
 
 /** Run ``action`` with the internal checkpoint: on failure the engine is restored and e->fail_t says where
@@ -717,21 +726,37 @@ rk_status rk_engine_advance_motion(rk_engine *e, double t_end, rk_motion *ag, rk
 }
 
 /** Integrator._row into row ``r`` of the sample arrays. */
-static void write_row(rk_engine *e, long long r, int *modes, double *values, long long *impacts, int *overturned)
+/** Row r of a sample's arrays from the current state; with check, RK_ERR_NONFINITE (nothing written) where an
+ *  output is not finite */
+static rk_status put_row(rk_engine *e, long long r, int *modes, double *values, long long *impacts, int *overturned,
+                         int check)
 {
     int n = e->model.ops->n_outputs, j;
     /* entry (r, j) at values[r * rs + j * js]: rows of n + 2 values, or the column layout of
      * rk_engine_sample_columns (columns of sample_cs values) */
     long long cs = e->sample_cs, rs = cs > 1 ? 1 : n + 2, js = cs > 1 ? cs : 1;
-    double row[RK_MAX_OUTPUTS + 2];
+    double row[RK_MAX_OUTPUTS + 2], *dst = values + r * rs;
     rk_engine_outputs(e, row);
+    if (check && check_output_values(e, row) != RK_OK)
+        return e->error.status;
     row[n] = rk_engine_friction_demand(e);
     row[n + 1] = (double)rk_engine_painleve(e);
-    for (j = 0; j < n + 2; j++)
-        values[r * rs + j * js] = row[j];
+    if (js == 1) {
+        for (j = 0; j < n + 2; j++)
+            dst[j] = row[j];
+    } else {
+        for (j = 0; j < n + 2; j++)
+            dst[j * js] = row[j];
+    }
     modes[r] = rk_engine_contact_code(e);
     impacts[r] = rk_engine_impacts(e);
     overturned[r] = rk_engine_overturned(e);
+    return RK_OK;
+}
+
+static void write_row(rk_engine *e, long long r, int *modes, double *values, long long *impacts, int *overturned)
+{
+    (void)put_row(e, r, modes, values, impacts, overturned, 0);
 }
 
 static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const double *times, long long n_times,
@@ -834,10 +859,8 @@ static rk_status sample_impl(rk_engine *e, rk_motion *ag, rk_motion *ag_v, const
                 st = held_advance(e, times[i], a, av, max_steps);
             if (st == RK_OK) {
                 touch(e);
-                st = check_outputs(e);
+                st = put_row(e, i + 1, modes, values, impacts, overturned, 1);
             }
-            if (st == RK_OK)
-                write_row(e, i + 1, modes, values, impacts, overturned);
         }
     } else if (is_mj(e)) {
         write_row(e, 0, modes, values, impacts, overturned);
@@ -1097,6 +1120,9 @@ rk_status rk_engine_restore(rk_engine *e, const void *buf, size_t size)
         e->core.s.ed.stepper.tab = tab;
         e->core.s.ed.stepper.fun = NULL;
         e->core.s.ed.stepper.ctx = NULL;
+        e->core.s.ed.stepper.fun1 = NULL;
+        e->core.s.ed.stepper.acc1 = NULL;
+        e->core.s.ed.stepper.acc1_m = NULL;
     }
     e->has_saved = 0;
     touch(e);

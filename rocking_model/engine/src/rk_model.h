@@ -197,39 +197,58 @@ struct rk_model {
      *  the mode kernels of a model whose forces depend on where the base stands (a tendon anchored in the
      *  ground); 0 outside a driver. */
     double offset;
-    /* rk_sincos's memo: sin and cos of the last argument (trig_ok 0: none, as a zeroed model starts). Not part of
-     * the model's meaning: a cache, which the const kernels write through it */
-    int trig_ok;
-    uint64_t trig_bits;
-    double trig_s, trig_c;
+    /* rk_sincos's memo: sin and cos of the last two arguments (trig_ok[i] 0: slot i empty, as a zeroed model
+     * starts; trig_next: the slot written next). Not part of the model's meaning: a cache, which the const kernels
+     * write through it */
+    int trig_ok[2], trig_next;
+    uint64_t trig_bits[2];
+    double trig_s[2], trig_c[2];
 };
 
-/** sin(x) and cos(x) for the generated kernels, memoised for the last argument (compared bit for bit: the same
- *  values as computing them again). One step's end asks them repeatedly for the same coordinate: the rhs's last
- *  stage, the event functions there, the outputs of a sample, and at the next communication step the settle and
- *  the restart under the new input. */
-static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
+/** sin(x) and cos(x) for the generated kernels at an argument the memo cannot hold (a Runge-Kutta stage's: a new
+ *  point each time), without the lookup of rk_sincos below; the values are kept in the memo for the evaluations at
+ *  the same point that follow (the event functions and outputs at the end of a step, whose last stage is there). */
+static inline void rk_sincos_fresh(const rk_model *m, double x, double *s, double *c)
 {
     rk_model *w = (rk_model *)m;
-    uint64_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    if (w->trig_ok && bits == w->trig_bits) {
-        *s = w->trig_s;
-        *c = w->trig_c;
-        return;
-    }
+    int i;
+    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy; clang has
+     * no __builtin_sincos and merges the two calls itself) */
 #if defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
-    /* one call for both (GCC merges sin and cos of one argument itself, but not at every inlined copy; clang
-     * has no __builtin_sincos and merges the two calls itself) */
     __builtin_sincos(x, s, c);
 #else
     *s = sin(x);
     *c = cos(x);
 #endif
-    w->trig_bits = bits;
-    w->trig_s = *s;
-    w->trig_c = *c;
-    w->trig_ok = 1;
+    i = w->trig_next;
+    w->trig_next = 1 - i;
+    memcpy(&w->trig_bits[i], &x, sizeof x);
+    w->trig_s[i] = *s;
+    w->trig_c[i] = *c;
+    w->trig_ok[i] = 1;
+}
+
+/** sin(x) and cos(x) for the generated kernels, memoised for the last two arguments (compared bit for bit: the
+ *  same values as computing them again). One step's end asks them repeatedly for the same coordinate: the rhs's
+ *  last stage, the event functions there, the outputs of a sample, and at the next communication step the settle
+ *  and the restart under the new input; the second slot keeps the step's end while the dip search looks at its
+ *  middle. */
+static inline void rk_sincos(const rk_model *m, double x, double *s, double *c)
+{
+    rk_model *w = (rk_model *)m;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    if (w->trig_ok[0] && bits == w->trig_bits[0]) {
+        *s = w->trig_s[0];
+        *c = w->trig_c[0];
+        return;
+    }
+    if (w->trig_ok[1] && bits == w->trig_bits[1]) {
+        *s = w->trig_s[1];
+        *c = w->trig_c[1];
+        return;
+    }
+    rk_sincos_fresh(m, x, s, c);
 }
 
 /** ops->closed_of(m, mode) from the table (an indirect call for a mode beyond it). */

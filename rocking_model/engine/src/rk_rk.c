@@ -348,6 +348,11 @@ static RK_ALWAYS_INLINE rk_status stage(const rk_stepper *s, const rk_tableau *t
     lincomb_all(&tab->A[st_i], K, n, acc, fixed);
     for (j = 0; j < n; j++)
         arg[j] = s->y[j] + h * acc[j];
+    if (fixed && n == 2 && s->acc1 != NULL) {
+        K[st_i][0] = arg[1];
+        K[st_i][1] = s->acc1(s->acc1_m, s->acc1_mode, arg[0], arg[1], s->acc1_ag, s->acc1_ag_v);
+        return RK_OK;
+    }
     if (fixed && n == 2 && s->fun1 != NULL) {
         K[st_i][0] = arg[1];
         K[st_i][1] = s->fun1(s->ctx, t + tab->C[st_i] * h, arg[0], arg[1]);
@@ -383,7 +388,10 @@ static RK_ALWAYS_INLINE rk_status attempt_n(const rk_stepper *s, const rk_tablea
     lincomb_all(&tab->B, K, n, acc, fixed);
     for (j = 0; j < n; j++)
         y_new[j] = y[j] + h * acc[j];
-    if (fixed && n == 2 && s->fun1 != NULL) {
+    if (fixed && n == 2 && s->acc1 != NULL) {
+        K[ns - 1][0] = y_new[1];
+        K[ns - 1][1] = s->acc1(s->acc1_m, s->acc1_mode, y_new[0], y_new[1], s->acc1_ag, s->acc1_ag_v);
+    } else if (fixed && n == 2 && s->fun1 != NULL) {
         K[ns - 1][0] = y_new[1];
         K[ns - 1][1] = s->fun1(s->ctx, t_new, y_new[0], y_new[1]);
     } else if ((st = call_rhs(s, t_new, y_new, K[ns - 1], errp)) != RK_OK) {

@@ -36,6 +36,9 @@ typedef rk_status (*rk_rhs_fn)(void *ctx, double t, const double *y, double *dy)
 /** The second component of f(t, y) of a two-component system whose first is y1 (r_ddot of one degree of freedom),
  *  from and to registers; bit for bit what the rk_rhs_fn of the same stepper writes; never fails. */
 typedef double (*rk_rhs1_fn)(void *ctx, double t, double y0, double y1);
+struct rk_model;
+/** A model's own one-dof kernel (rk_model_ops.mode_acc1): r_ddot of mode at (y0, y1) under the inputs ag, ag_v. */
+typedef double (*rk_acc1_fn)(const struct rk_model *m, int mode, double y0, double y1, double ag, double ag_v);
 /** G(t, y): the event functions (n_events values) of the current mode. */
 typedef rk_status (*rk_event_fn)(void *ctx, double t, const double *y, double *g);
 /** G(t, y)[i] alone where that is cheaper than all of G and bit for bit the same value: *done = 1 with *gi set, or
@@ -59,6 +62,14 @@ typedef struct rk_stepper {
     /** optional (NULL: none; bound with fun, by the driver): fun as an rk_rhs1_fn, which rk_step's stages of DOP853 on
      *  two components call instead */
     rk_rhs1_fn fun1;
+    /** optional (NULL: none; bound with fun1, by the driver, where the input is constant over the segment): fun1 as
+     *  the model's kernel itself, acc1(acc1_m, acc1_mode, y0, y1, acc1_ag, acc1_ag_v), the same bits without
+     *  fun1's layer: one call less at each of a step's stages, the cost a communication step of a held input pays
+     *  most often */
+    rk_acc1_fn acc1;
+    const struct rk_model *acc1_m;
+    int acc1_mode;
+    double acc1_ag, acc1_ag_v;
     int n;                          /**< state size (0: nothing moves, steps only advance t) */
     double t, y[RK_MAX_Y], f[RK_MAX_Y];          /**< current point and its derivative (FSAL) */
     double t_old, y_old[RK_MAX_Y], f_old[RK_MAX_Y];
