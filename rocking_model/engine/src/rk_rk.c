@@ -10,6 +10,14 @@
  * Errors of the callbacks: every public function clears err on entry; a callback that fails may write its own
  * message into the error it shares through its context and return its status: that message is kept. A callback
  * that returns a status without a message gets a generic one naming the time. */
+/* GCC's straight-line (SLP) vectorizer packs the two components of a one-dof state into vector registers across
+ * a step's stages, which costs time here: without it a 40 s record held sample by sample runs 12 % faster
+ * (benchmarks/compiled_bench.py, holds_vs_lean), with the same bits (without fast-math a vector operation rounds
+ * as its scalar ones). Off for this file alone (the Moreau-Jean and contact code gain from it), before the headers: their inline
+ * functions then compile under the same options and inline here. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-tree-slp-vectorize")
+#endif
 #include "rk_fp.h" /* first: no contraction into multiply-adds (rk_fp.h) */
 #include "rk_rk.h"
 
