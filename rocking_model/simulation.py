@@ -146,7 +146,7 @@ class Simulator:
         self.model = model
         self.scheme = check_choice("scheme", scheme, SCHEMES)
         t0 = check_real("t0", t0)
-        mode, q, v = model.initial_state(**initial)
+        mode, q, v = model._start_state(**initial)
         if impact_log_size is not None:
             impact_log_size = int(check_real("impact_log_size", impact_log_size, lo=0.0))
         if max_steps is not None:

@@ -144,8 +144,14 @@ def kernel_call(cls, params: list, fn: str, mode: int = 0, a=None, b=None, ag: f
 _KERNELS_READY: set = set()
 
 
-def _floats(x) -> list:
-    """``x`` as a list of floats (a float64 array's tolist(): the same values without a numpy scalar each)."""
+def _floats(x) -> list | tuple:
+    """``x`` as a sequence of floats (a float64 array's tolist(): the same values without a numpy scalar each; a
+    tuple of floats, `RockingModel._start_state`'s, as it is)."""
+    if type(x) is tuple:
+        for a in x:
+            if type(a) is not float:
+                return [float(a) for a in x]
+        return x
     if type(x) is np.ndarray and x.dtype is _F64:
         return x.tolist()
     return [float(a) for a in x]

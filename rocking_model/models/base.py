@@ -419,12 +419,18 @@ class RockingModel(ABC):
     def initial_state(self, **initial) -> tuple[Mode, np.ndarray, np.ndarray]:
         """(mode, q, v) of the initial values (the keywords of `INITIAL`); a non-zero tilt starts on the
         corresponding pivot. Raises ValueError naming the variable and its allowed range for unphysical values."""
+        mode, q, v = self._start_state(**initial)
+        return mode, np.array(q), np.array(v)
+
+    def _start_state(self, **initial) -> tuple:
+        """`initial_state` with q and v as tuples of floats (what the engine reads: no arrays made and converted
+        back per run; the default start is computed once per model)."""
         if not initial:
             start = self._info.start
             if start is None:
                 mode, q, v = self._kernel("initial_state", 0, [float(p.default) for p in self.INITIAL])
-                start = self._info.start = (Mode(mode), q, v)
-            return start[0], np.array(start[1]), np.array(start[2])
+                start = self._info.start = (Mode(mode), tuple(map(float, q)), tuple(map(float, v)))
+            return start
         names = {p.name for p in self.INITIAL}
         self.check_initial_names([k for k in initial if k not in names])
         # numbers go to the kernel, which checks their ranges (some depend on the parameters: the declaration's
@@ -434,7 +440,7 @@ class RockingModel(ABC):
             x = initial.get(p.name, p.default)
             values.append(float(x) if isinstance(x, (int, float)) and not isinstance(x, bool) else float(p.check(x)))
         mode, q, v = self._kernel("initial_state", 0, values)
-        return Mode(mode), np.array(q), np.array(v)
+        return Mode(mode), tuple(map(float, q)), tuple(map(float, v))
 
     def mode_of_initial_state(self, phi_0: float, phi_dot_0: float) -> Mode:
         """Mode of an initial tilt: phi > 0 (or phi = 0 rotating positive) pivots on the left corner."""
