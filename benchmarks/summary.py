@@ -123,7 +123,10 @@ def _per_step_table(raw: str, w) -> None:
 
 
 def _fmu_table(raw: str, w) -> None:
-    _, rows = table_after(raw, "**The FMUs on each engine**")
+    # (the title of runs made before the Python engine's removal too)
+    _, rows = table_after(raw, "**The FMUs against the do-nothing FMU**")
+    if not rows:
+        _, rows = table_after(raw, "**The FMUs on each engine**")
     _, cold = table_after(raw, "Cold start, fresh interpreter per sample")
     if not rows and not cold:
         return
