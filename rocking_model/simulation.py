@@ -13,6 +13,7 @@ from .engine import ENGINES, CompiledIntegrator
 from .ground_motion import ConstantMotion, GroundMotion, TwoComponentMotion, as_ground_motion, checked_motion
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
+from .integrators.schemes import METHOD_CHOICES
 from .models.base import RockingModel
 from .params import Param
 from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
@@ -102,7 +103,7 @@ class Simulator:
     theta : [1] Moreau-Jean theta in [0.5, 1].
     zeno_tol : [1] event-driven Zeno rule, v_Zeno = zeno_tol * sqrt(g L).
     method : event-driven Runge-Kutta scheme, "DOP853" (order 8, default) or "DOPRI5" (order 5, cheaper
-        at tolerances of 1e-6 and looser).
+        at tolerances of 1e-6 and looser; scipy's name "RK45" is accepted for it).
     impact_log_size : number of impact times kept in ``impact_times`` (None: all; the FMUs keep a bounded
         log so that memory stays flat); ``outputs()["impacts"]`` counts every impact.
     max_steps : work budget of one `advance` call: internal steps (Moreau-Jean steps, or Runge-Kutta steps
@@ -165,6 +166,8 @@ class Simulator:
         if not isinstance(tolerances, ContactTolerances):
             raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
         self.on_report = check_choice("on_report", on_report, _ON_REPORT)
+        # (scipy's name RK45 is accepted for DOPRI5; the engine reads the canonical names)
+        method = check_choice("method", method, METHOD_CHOICES)
         options = SolverOptions.of(dt, tolerance, theta, zeno_tol, method, impact_log_size, tolerances)
         if isinstance(engine, str) and engine == "python":
             raise ValueError("engine = 'python' is not supported: the Python reference engine was removed; "

@@ -139,6 +139,19 @@ def test_parameters_inside_the_ranges_are_accepted():
             assert all(math.isfinite(float(v)) for v in sim.outputs().values())
 
 
+@pytest.mark.parametrize("scheme", ["event_driven", "moreau_jean"])
+def test_method_is_checked_for_every_scheme_and_rk45_is_dopri5(scheme):
+    """The Runge-Kutta method is checked by the Simulator whatever the scheme (a name the engine would refuse
+    never reaches it); scipy's name RK45 runs DOPRI5, bit for bit."""
+    with pytest.raises(ValueError, match=r"method = 'RK23' is not supported; allowed values: 'DOP853', 'DOPRI5'"):
+        Simulator(RigidBlock(), scheme, method="RK23")
+    runs = [simulate(RigidBlock(b=0.2, h=1.0), lambda t: 4.0 if t < 0.5 else 0.0, 2.0, scheme=scheme, method=m)
+            for m in ("RK45", "DOPRI5", 1)]
+    assert max(abs(runs[0].phi)) > 1e-3, "the block rocks"
+    for other in runs[1:]:
+        assert np.array_equal(runs[0].phi, other.phi)
+
+
 def test_dt_max_zero_selects_the_scheme_default():
     # the FMUs' start value dt_max = 0: Moreau-Jean 1e-3 s, the event-driven scheme uncapped
     assert Simulator(RigidBlock(), 0, dt_max=0.0).integrator.dt_max == 1e-3
