@@ -15,6 +15,8 @@ import sys
 
 import cffi
 
+from rocking_model.engine import cdefs
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SRC = os.path.join(ROOT, "rocking_model", "engine", "src")
 MODULE = "_rk_ab"
@@ -32,12 +34,7 @@ CDEF = r"""
 #define RK_ADVANCE_LINEAR 2
 #define RK_ADVANCE_LINEAR_V 4
 
-typedef enum rk_status { RK_OK = 0, RK_ERR_VALUE = 1, RK_ERR_WORK_LIMIT = 2, RK_ERR_NONFINITE = 3,
-                         RK_ERR_SOLVER = 4, RK_ERR_NOT_IMPLEMENTED = 5, RK_ERR_MEMORY = 6,
-                         RK_ERR_INTERNAL = 7 } rk_status;
-typedef struct rk_error { rk_status status; char message[512]; } rk_error;
-typedef unsigned int rk_set;
-typedef enum rk_scheme { RK_SCHEME_MOREAU_JEAN = 0, RK_SCHEME_EVENT_DRIVEN = 1 } rk_scheme;
+""" + cdefs.STATUS + cdefs.COMMON + r"""
 typedef enum rk_method { RK_METHOD_DOP853 = 0, RK_METHOD_DOPRI5 = 1 } rk_method;
 typedef struct rk_tolerances {
     double gap, step_gap, grazing, rest_velocity, step_rest_velocity, event, rise, clearly_open, stateless_step;
@@ -49,32 +46,7 @@ typedef struct rk_options {
     long long impact_log_size; int max_events; rk_tolerances tolerances;
 } rk_options;
 void rk_options_default(rk_options *opt);
-typedef enum rk_report_kind { RK_REPORT_INEXACT_CONTACT = 0, RK_REPORT_FAILED_STEP = 1 } rk_report_kind;
-typedef struct rk_report { rk_report_kind kind; double t; char message[512]; } rk_report;
-typedef struct rk_reports { int count; rk_report items[16]; } rk_reports;
-
-
-typedef enum rk_motion_kind { RK_MOTION_CALLBACK = 4, RK_MOTION_SCALED = 5, ... } rk_motion_kind;
-typedef struct rk_motion {
-    rk_motion_kind kind; double value; double factor; const struct rk_motion *inner;
-    double (*fn)(void *ctx, double t, int *failed, char *msg);
-    double (*fn_breakpoint)(void *ctx, double t, int *failed, char *msg);
-    int (*fn_continuous)(void *ctx, double tb);
-    void *ctx; int constant; unsigned long long identity; ...;
-} rk_motion;
-void rk_motion_constant(rk_motion *m, double value);
-void rk_motion_linear(rk_motion *m, double value, double rate, double t_ref);
-rk_status rk_motion_sampled(rk_motion *m, const double *t, const double *ag, long long n, rk_error *err);
-rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
-rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
-double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
-double rk_motion_next_breakpoint(rk_motion *m, double t);
-int rk_motion_continuous_at(const rk_motion *m, double tb);
-double rk_motion_pair_next_breakpoint(rk_motion *ag, rk_motion *ag_v, double t);
-int rk_motion_pair_continuous_at(rk_motion *ag, rk_motion *ag_v, double tb);
-
+""" + cdefs.MOTION + r"""
 extern "Python" double rk_py_eval(void *ctx, double t, int *failed, char *msg);
 extern "Python" double rk_py_breakpoint(void *ctx, double t, int *failed, char *msg);
 extern "Python" int rk_py_continuous(void *ctx, double tb);

@@ -14,31 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from rocking_model.engine import cdefs
+
 SRC = Path(__file__).resolve().parent.parent / "rocking_model" / "engine" / "src"
 
-CDEF = """
-typedef enum { RK_OK = 0, ... } rk_status;
-typedef struct { rk_status status; char message[512]; } rk_error;
-typedef enum { RK_MOTION_CALLBACK = 4, RK_MOTION_SCALED = 5, ... } rk_motion_kind;
-typedef struct rk_motion {
-    rk_motion_kind kind; double value; double factor; const struct rk_motion *inner;
-    double (*fn)(void *ctx, double t, int *failed, char *msg);
-    double (*fn_breakpoint)(void *ctx, double t, int *failed, char *msg);
-    int (*fn_continuous)(void *ctx, double tb);
-    void *ctx; int constant; ...;
-} rk_motion;
-void rk_motion_constant(rk_motion *m, double value);
-void rk_motion_linear(rk_motion *m, double value, double rate, double t_ref);
-rk_status rk_motion_sampled(rk_motion *m, const double *t, const double *ag, long long n, rk_error *err);
-rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
-rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
-double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
-double rk_motion_next_breakpoint(rk_motion *m, double t);
-int rk_motion_continuous_at(const rk_motion *m, double tb);
-double rk_motion_pair_next_breakpoint(rk_motion *ag, rk_motion *ag_v, double t);
-int rk_motion_pair_continuous_at(rk_motion *ag, rk_motion *ag_v, double tb);
+CDEF = cdefs.STATUS + cdefs.MOTION + """
 extern "Python" double m_eval(void *ctx, double t, int *failed, char *msg);
 extern "Python" double m_breakpoint(void *ctx, double t, int *failed, char *msg);
 extern "Python" int m_continuous(void *ctx, double tb);

@@ -6,21 +6,17 @@ engine inside rocking_model._engine through the table of rk_py_api.h, which that
 The hot calls (engine creation, advance, sample, outputs) stay hand-written in _engine.c: see the comment there."""
 import cffi
 
+try:
+    from . import cdefs
+except ImportError:           # setup.py loads this file as a top-level module (nothing installed yet)
+    import cdefs
+
 CDEF = r"""
 #define RK_MAX_DOF 8
 #define RK_MAX_CONTACTS 4
 #define RK_MAX_Y 16
 #define RK_MAX_REPORTS 16
-
-typedef enum rk_status { RK_OK = 0, RK_ERR_VALUE = 1, RK_ERR_WORK_LIMIT = 2, RK_ERR_NONFINITE = 3,
-                         RK_ERR_SOLVER = 4, RK_ERR_NOT_IMPLEMENTED = 5, RK_ERR_MEMORY = 6,
-                         RK_ERR_INTERNAL = 7 } rk_status;
-typedef struct rk_error { rk_status status; char message[512]; } rk_error;
-typedef unsigned int rk_set;
-typedef enum rk_scheme { RK_SCHEME_MOREAU_JEAN = 0, RK_SCHEME_EVENT_DRIVEN = 1 } rk_scheme;
-typedef enum rk_report_kind { RK_REPORT_INEXACT_CONTACT = 0, RK_REPORT_FAILED_STEP = 1 } rk_report_kind;
-typedef struct rk_report { rk_report_kind kind; double t; char message[512]; } rk_report;
-typedef struct rk_reports { int count; rk_report items[16]; } rk_reports;
+""" + cdefs.STATUS + cdefs.COMMON + r"""
 typedef struct rk_param_decl {
     const char *name; const char *unit; double default_value; double lo, hi; int lo_open, hi_open; int inf_ok;
     int integer; int n_items; ...;
