@@ -2,9 +2,26 @@
 cold-call module (`build_ffi`), the binding A/B of the benchmarks (benchmarks/ffi_binding.py) and the motion
 harness of the tests (tests/c_motion.py). Each module adds its own functions to these. API mode checks every
 declaration against the headers (src/rk_common.h, src/rk_motion.h) when the module compiles; ``...`` leaves a
-struct's layout or an enum's other values to the compiler.
+struct's layout or an enum's other values to the compiler. The ground motion's functions are read from their
+header (cffi cannot read a header itself: its macros and inline functions); the types are restated, checked by
+the compiler.
 
-Plain strings, no imports: setup.py reads this file before anything is installed."""
+The standard library only: setup.py reads this file before anything is installed."""
+import re
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parent / "src"
+
+
+def prototypes(header: str, prefix: str) -> str:
+    """The one-line declarations of the functions of ``header`` (a file of src/) whose names start with ``prefix``,
+    one per line, as the header writes them."""
+    text = (SRC / header).read_text(encoding="utf-8")
+    found = re.findall(rf"^(?:void|int|double|rk_status) {prefix}\w+\([^;{{}}]*\);$", text, re.M)
+    if not found:
+        raise RuntimeError(f"no declaration of a function {prefix}* in {SRC / header}")
+    return "\n".join(found) + "\n"
+
 
 #: rk_common.h: the status of every fallible call and the error it fills
 STATUS = r"""
@@ -34,16 +51,4 @@ typedef struct rk_motion {
     int (*fn_continuous)(void *ctx, double tb);
     void *ctx; int constant; unsigned long long identity; ...;
 } rk_motion;
-void rk_motion_constant(rk_motion *m, double value);
-void rk_motion_linear(rk_motion *m, double value, double rate, double t_ref);
-rk_status rk_motion_sampled(rk_motion *m, const double *t, const double *ag, long long n, rk_error *err);
-rk_status rk_motion_sine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_cosine(rk_motion *m, double A, double omega_p, double t0, rk_error *err);
-rk_status rk_motion_ricker(rk_motion *m, double A, double omega_p, double t_c, rk_error *err);
-rk_status rk_motion_rect(rk_motion *m, double A, double duration, double t0, rk_error *err);
-double rk_motion_eval(rk_motion *m, double t, int *failed, char *msg);
-double rk_motion_next_breakpoint(rk_motion *m, double t);
-int rk_motion_continuous_at(const rk_motion *m, double tb);
-double rk_motion_pair_next_breakpoint(rk_motion *ag, rk_motion *ag_v, double t);
-int rk_motion_pair_continuous_at(rk_motion *ag, rk_motion *ag_v, double tb);
-"""
+""" + prototypes("rk_motion.h", "rk_motion_")
