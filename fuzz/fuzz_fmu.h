@@ -52,16 +52,8 @@ static fmi2Status fuzz_checked(fmi2Status s) {
 }
 #define CALL(x) fuzz_checked(x)
 
-/* A state the FMU serialized, refused when read back: a finding (abort), except the known one when
- * FUZZ_TOLERATE_KNOWN is set (tests/sanitize.py's bounded CI runs; fuzz/README.md, "Findings"): from a state
- * with absurd but finite values, accepted, a Moreau-Jean step ends with a corner far below the ground, a state
- * the engine's own check then refuses. */
+/* A state the FMU serialized, refused when read back: a finding (abort). */
 static void fuzz_refused_own_state(size_t n) {
-    static int told = 0;
-    if (getenv("FUZZ_TOLERATE_KNOWN") && strstr(fuzz_last_error, "state field 'q': a base corner is")) {
-        if (!told++) fprintf(stderr, "fuzz: known finding hit (tolerated): %s\n", fuzz_last_error);
-        return;
-    }
     fprintf(stderr, "fuzz: %s refuses the state it serialized (%zu bytes): %s\n", FUZZ_MODEL_NAME, n,
             fuzz_last_error);
     abort();

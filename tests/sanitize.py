@@ -334,7 +334,7 @@ def write_seeds(work: Path, cc: str, dest: Path) -> None:
 _STAT = re.compile(r"#(\d+)\s+(?:DONE|pulse|INITED|NEW|REDUCE)\s+cov: (\d+) ft: (\d+)")
 
 
-def fuzz(work: Path, cc: str, seconds: float, only=None, strict: bool = False) -> dict:
+def fuzz(work: Path, cc: str, seconds: float, only=None) -> dict:
     """Each harness on each model for `seconds` / (number of models), from the committed seeds (plus fresh
     ones: the GUID in a committed state changes with the sources; the harness signs states anyway). Returns
     {harness: {model: {"execs", "cov", "ft", "crash"}}}; a crash is kept under work/crashes."""
@@ -361,7 +361,7 @@ def fuzz(work: Path, cc: str, seconds: float, only=None, strict: bool = False) -
                    *[str(s) for s in seeds if s.is_dir()]]
             t0 = time.perf_counter()
             proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True,
-                                  env={**os.environ, **SAN_ENV, **({} if strict else {"FUZZ_TOLERATE_KNOWN": "1"})}, cwd=work)
+                                  env={**os.environ, **SAN_ENV}, cwd=work)
             stats = _STAT.findall(proc.stderr)
             execs, cov, ft = (int(x) for x in stats[-1]) if stats else (0, 0, 0)
             m = re.search(r"stat::number_of_executed_units:\s*(\d+)", proc.stderr)
@@ -423,8 +423,6 @@ def main(argv=None) -> int:
     p.add_argument("--harness", action="append", choices=HARNESSES, help="fuzz: only this harness")
     p.add_argument("--all", action="store_true", help="faults / engine: every case / the whole test suite")
     p.add_argument("--report", help="write the fuzz report (JSON) here")
-    p.add_argument("--strict", action="store_true",
-                   help="fuzz: the known finding (fuzz/README.md) fails the run too")
     args, extra = p.parse_known_args(argv)
     why = missing_reason()
     if why:
@@ -447,7 +445,7 @@ def main(argv=None) -> int:
         if args.what == "ci":
             build_fmus(work, cc)          # from the sources as they are now (unchanged objects are cached)
             run_regressions(work, cc)
-        report = fuzz(work, cc, args.seconds, args.harness, args.strict)
+        report = fuzz(work, cc, args.seconds, args.harness)
         if args.report:
             Path(args.report).write_text(json.dumps(report, indent=1))
         if any(r["crash"] for per in report.values() for r in per.values()):

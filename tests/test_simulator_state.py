@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
 
-from rocking_model import FlexibleOscillator, Mode, RigidBlock, Simulator
+from rocking_model import FlexibleOscillator, Mode, RigidBlock, Simulator, WorkLimitError
 from rocking_model.cosim import MotionSource
 from rocking_model.ground_motion import SinePulse
 from rocking_model.models.linear_building import LinearStorey, StoreySimulator
@@ -249,6 +250,67 @@ def test_a_valid_but_huge_state_is_refused_at_advance_and_kept():
         with pytest.raises(ValueError, match="not finite.*Likely cause"):
             sim.advance(0.01, 0.0)
         assert json.dumps(sim.get_state()) == before
+
+
+#: states with absurd but finite velocities that set_state accepts, whose event-driven advance diverged into a pose
+#: with a corner kilometres below the ground (found by fuzzing the FMU's state, fuzz/README.md): (model, state
+#: fields, t_end, ag)
+_DIVERGING = [
+    (dict(m_c=30.14453125, EI=1431248.0),
+     dict(t=0.31, mode=1, y=[-0.0012249407628530662, 0.02987721141020171, -0.0012431255314855668,
+                             -4295153942528.1152], h=4.836298536748469e-193, n_steps=57), 0.32, 4.0),
+    (dict(m_c=30.14453125, EI=1431248.0),
+     dict(mode=2, y=[0.0, -0.05323353753625318, 4330.578885401834, 5559058514220.813]), 0.015782479493159623,
+     -4.718334464929004),
+    (dict(m_c=30.14453125, EI=1431248.0),
+     dict(mode=2, y=[0.0, -0.09190809793018517, -6971807.0678922245, 871743453305.2798]), 0.009279781827465826,
+     -1.1136735536585967),
+]
+
+
+@pytest.mark.parametrize("params, fields, t_end, ag", _DIVERGING)
+def test_a_diverging_advance_is_refused_so_every_state_reads_back(params, fields, t_end, ag):
+    """The engine never ends a call in a state its set_state refuses: an advance whose pose ends past the bounds a
+    state may have (a corner far below the ground, |phi| past pi/2 without the overturning) is refused as a
+    diverged motion (ValueError naming the likely cause), with the state before it kept."""
+    model = FlexibleOscillator(**params)
+    sim = Simulator(model, "event_driven")
+    state = dict(sim.get_state(), **fields)
+    sim.set_state(state)
+    before = json.dumps(sim.get_state())
+    with pytest.raises(ValueError, match="diverged.*below the ground.*Likely cause"):
+        sim.advance(t_end, ag)
+    assert json.dumps(sim.get_state()) == before
+    Simulator(model, "event_driven").set_state(sim.get_state())
+
+
+def test_every_state_an_advance_ends_in_reads_back():
+    """Random absurd velocities that set_state accepts, both models and schemes: whatever the advance does (it
+    may raise), the state the simulator holds afterwards is taken back by a fresh one."""
+    rng = np.random.default_rng(1)
+    read_back = 0
+    for model in (FlexibleOscillator(m_c=30.14453125, EI=1431248.0), RigidBlock()):
+        for scheme in ("moreau_jean", "event_driven"):
+            for _ in range(120):
+                sim = Simulator(model, scheme, phi_0=float(rng.uniform(-0.1, 0.1)))
+                state = sim.get_state()
+                key = "v" if scheme == "moreau_jean" else "y"
+                values = list(state[key])
+                for i in range(0 if key == "v" else len(values) // 2, len(values)):
+                    values[i] = float(rng.choice([-1, 1]) * 10 ** rng.uniform(0, 13))
+                try:
+                    sim.set_state(dict(state, **{key: values}))
+                except ValueError:
+                    continue
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    try:
+                        sim.advance(float(rng.uniform(0.001, 0.05)), float(rng.uniform(-10, 10)))
+                    except (ValueError, WorkLimitError):
+                        pass
+                Simulator(model, scheme).set_state(sim.get_state())
+                read_back += 1
+    assert read_back > 300
 
 
 # ---------------------------------------------------------------------------------------------- components

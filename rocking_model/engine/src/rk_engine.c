@@ -619,6 +619,35 @@ static rk_status check_outputs(rk_engine *e)
     return check_output_values(e, out);
 }
 
+/** The pose the engine ends a call in, held to the bounds its set_state holds a state to (rk_check_configuration:
+ *  |phi| below pi/2 unless overturned, no base corner more than the model's length scale below the ground), so
+ *  that every state the engine reports it also takes back (an FMU serializes it and reads it back). An
+ *  integration never ends there; a run from an absurd state that set_state accepted may (a velocity of 1e12
+ *  rad/s): that is a diverged motion, refused with the state before the call kept. The outputs were found finite
+ *  before. */
+static rk_status check_end_pose(rk_engine *e)
+{
+    const rk_model *m = &e->model;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF], g[RK_MAX_CONTACTS], phi;
+    int i;
+    if (rk_engine_overturned(e))
+        return RK_OK;
+    rk_engine_full_state(e, q, v);
+    phi = q[m->ops->phi_index];
+    if (!(fabs(phi) < RK_HALF_PI))
+        return rk_fail(&e->error, RK_ERR_NONFINITE, "the motion diverged: at t = %.17g s |phi| = %g rad is past "
+                       "pi/2 without the overturning found; the state before the call is kept", rk_engine_time(e),
+                       fabs(phi));
+    m->ops->gaps(m, q, g);
+    for (i = 0; i < m->ops->n_contacts; i++) {
+        if (!(g[i] >= -m->length_scale))
+            return rk_fail(&e->error, RK_ERR_NONFINITE, "the motion diverged: at t = %.17g s a base corner would "
+                           "be %g m below the ground, beyond the %g m a state may have; the state before the call "
+                           "is kept", rk_engine_time(e), -g[i], m->length_scale);
+    }
+    return RK_OK;
+}
+
 /** Run ``action`` with the internal checkpoint: on failure the engine is restored and e->fail_t says where
  *  the scheme was. */
 static rk_status guarded_end(rk_engine *e, rk_status st, const rk_core *saved)
@@ -626,6 +655,8 @@ static rk_status guarded_end(rk_engine *e, rk_status st, const rk_core *saved)
     if (st == RK_OK) {
         touch(e);
         st = check_outputs(e);
+        if (st == RK_OK)
+            st = check_end_pose(e);
     } else if (e->error.status == RK_OK) {
         rk_fail(&e->error, st, "the engine failed without a message (status %s)", rk_status_name(st));
     }
