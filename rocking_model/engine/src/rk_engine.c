@@ -584,7 +584,6 @@ static void float_text(char *buf, size_t n, double x)
         snprintf(buf, n, "%.17g", x);
 }
 
-/** Simulator._guarded's check of the outputs after an advance: FloatingPointError "non-finite outputs ...". */
 /** RK_ERR_NONFINITE naming the outputs out[] (the model's n_outputs values) that are not finite; RK_OK if none */
 static rk_status check_output_values(rk_engine *e, const double *out)
 {
@@ -612,6 +611,7 @@ static rk_status check_output_values(rk_engine *e, const double *out)
     return rk_fail(&e->error, RK_ERR_NONFINITE, "non-finite outputs %s", text);
 }
 
+/** Simulator._guarded's check of the outputs after an advance: FloatingPointError "non-finite outputs ...". */
 static rk_status check_outputs(rk_engine *e)
 {
     double out[RK_MAX_OUTPUTS];
