@@ -8,45 +8,15 @@
  * finds numpy by itself (the paths recorded when it was built): no LD_PRELOAD, no PYTHONPATH.
  * With a 9th argument --maps, the host reports on stderr whether libpython is mapped into the process
  * (/proc/self/maps) after the run: "host: libpython mapped: yes|no" (the self-contained FMUs never map it).
- * Build: cc -std=c99 -I<dir with fmi2Functions.h> host.c -o host -ldl
+ * Build: cc -std=c99 -I<dir with fmi2Functions.h> host.c -o host -ldl (fmi_host.h beside it)
  */
 #define _XOPEN_SOURCE 700
-#include <dlfcn.h>
+#define HOST_NAME "host"
+#include "fmi_host.h"
+
 #include <limits.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
-
-#include "fmi2Functions.h"
-
-static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env;
-    va_list args;
-    va_start(args, message);
-    fprintf(stderr, "[%s] status=%d %s: ", instance ? instance : "?", (int)status, category ? category : "");
-    vfprintf(stderr, message, args);
-    fprintf(stderr, "\n");
-    va_end(args);
-}
-
-#define LOAD(name)                                                                   \
-    name##TYPE *name = (name##TYPE *)dlsym(lib, #name);                              \
-    if (!name) {                                                                     \
-        fprintf(stderr, "host: symbol %s not found: %s\n", #name, dlerror());        \
-        return 2;                                                                    \
-    }
-
-#define CHECK(call)                                                                  \
-    do {                                                                             \
-        fmi2Status s_ = (call);                                                      \
-        if (s_ > fmi2Warning) {                                                      \
-            fprintf(stderr, "host: %s failed with status %d\n", #call, (int)s_);     \
-            return 3;                                                                \
-        }                                                                            \
-    } while (0)
 
 int main(int argc, char **argv) {
     int check_maps = argc == 10 && strcmp(argv[9], "--maps") == 0;
@@ -69,9 +39,9 @@ int main(int argc, char **argv) {
     snprintf(so, sizeof so, "%s/binaries/linux64/%s.so", dir, model);
     snprintf(resources, sizeof resources, "file://%s/resources", dir);
 
-    void *lib = dlopen(so, RTLD_NOW | RTLD_LOCAL);
+    lib_t lib = lib_open(so);
     if (!lib) {
-        fprintf(stderr, "host: dlopen failed: %s\n", dlerror());
+        fprintf(stderr, "host: dlopen failed: %s\n", lib_error());
         return 2;
     }
     LOAD(fmi2Instantiate)
@@ -84,7 +54,7 @@ int main(int argc, char **argv) {
     LOAD(fmi2Terminate)
     LOAD(fmi2FreeInstance)
 
-    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    fmi2CallbackFunctions callbacks = {host_logger, calloc, free, NULL, NULL};
     fmi2Component c = fmi2Instantiate("host", fmi2CoSimulation, guid, resources, &callbacks, fmi2False, fmi2False);
     if (!c) {
         fprintf(stderr, "host: fmi2Instantiate failed (resources %s)\n", resources);
@@ -115,6 +85,6 @@ int main(int argc, char **argv) {
     fmi2FreeInstance(c);
     fflush(stdout);
     /* the binary never finalizes the interpreter it started: unloading it and returning is safe */
-    dlclose(lib);
+    lib_close(lib);
     return 0;
 }

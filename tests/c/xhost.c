@@ -21,44 +21,16 @@
  * communication point (before the first step, then after each): the status of fmi2DoStep (0 before the first)
  * and every output (Real: hex bits; Integer, Boolean: decimal). A step with a status above fmi2Discard ends
  * the job ("end error"); a job ends with "end". The FMU's messages go to stderr.
- * Build: cc -std=c99 -I<dir with fmi2Functions.h> xhost.c -o xhost [-ldl] */
+ * Build: cc -std=c99 -I<dir with fmi2Functions.h> xhost.c -o xhost [-ldl] (fmi_host.h beside it) */
 #ifndef _WIN32
 #define _POSIX_C_SOURCE 200809L
 #endif
-#include <stdarg.h>
+#define HOST_NAME "xhost"
+#include "fmi_host.h"
+
 #include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#ifdef _WIN32
-#include <windows.h>
-typedef HMODULE lib_t;
-static lib_t lib_open(const char *path) { return LoadLibraryA(path); }
-static void *lib_sym(lib_t lib, const char *name) { return (void *)GetProcAddress(lib, name); }
-static void lib_close(lib_t lib) { FreeLibrary(lib); }
-static const char *lib_error(void) { static char buf[64]; sprintf(buf, "error %lu", (unsigned long)GetLastError()); return buf; }
-#else
-#include <dlfcn.h>
-typedef void *lib_t;
-static lib_t lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
-static void *lib_sym(lib_t lib, const char *name) { return dlsym(lib, name); }
-static void lib_close(lib_t lib) { dlclose(lib); }
-static const char *lib_error(void) { const char *e = dlerror(); return e ? e : "?"; }
-#endif
-
-#include "fmi2Functions.h"
-
-static void logger_impl(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
-                        fmi2String message, ...) {
-    (void)env;
-    va_list args;
-    va_start(args, message);
-    fprintf(stderr, "[%s] status=%d %s: ", instance ? instance : "?", (int)status, category ? category : "");
-    vfprintf(stderr, message, args);
-    fprintf(stderr, "\n");
-    va_end(args);
-}
 
 static char token[8192];
 
@@ -94,22 +66,6 @@ static void print_real(double x) {
     memcpy(&bits, &x, sizeof bits);
     printf(" %08x%08x", (unsigned)(bits >> 32), (unsigned)(bits & 0xffffffffu));
 }
-
-#define LOAD(name)                                                                   \
-    name##TYPE *name = (name##TYPE *)lib_sym(lib, #name);                            \
-    if (!name) {                                                                     \
-        fprintf(stderr, "xhost: symbol %s not found\n", #name);                      \
-        return 2;                                                                    \
-    }
-
-#define CHECK(call)                                                                  \
-    do {                                                                             \
-        fmi2Status s_ = (call);                                                      \
-        if (s_ > fmi2Warning) {                                                      \
-            fprintf(stderr, "xhost: %s failed with status %d\n", #call, (int)s_);    \
-            return 3;                                                                \
-        }                                                                            \
-    } while (0)
 
 enum { MAX_OUT = 64, MAX_START = 64 };
 
@@ -164,7 +120,7 @@ static int run_job(FILE *f, int job) {
     LOAD(fmi2Terminate)
     LOAD(fmi2FreeInstance)
 
-    fmi2CallbackFunctions callbacks = {logger_impl, calloc, free, NULL, NULL};
+    fmi2CallbackFunctions callbacks = {host_logger, calloc, free, NULL, NULL};
     fmi2Component c = fmi2Instantiate("xhost", fmi2CoSimulation, guid, uri, &callbacks, fmi2False, fmi2False);
     if (!c) {
         fprintf(stderr, "xhost: fmi2Instantiate failed (%s, resources %s)\n", library, uri);
