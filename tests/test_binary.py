@@ -39,7 +39,8 @@ def fmus(built_fmus):
 def test_binary_compiles_without_warnings(tmp_path):
     include = sysconfig.get_paths()["include"]
     cmd = [CC, "-fsyntax-only", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", f"-I{HEADERS}",
-           f"-I{include}", f"-I{ROOT / 'rocking_model' / 'fmi' / 'binary'}", '-DFMI_PYTHON_LIBRARY="libpython.so"',
+           f"-I{include}", f"-I{ROOT / 'rocking_model' / 'fmi' / 'binary'}",
+           f"-I{ROOT / 'rocking_model' / 'engine' / 'src'}", '-DFMI_PYTHON_LIBRARY="libpython.so"',
            '-DFMI_PYTHON_EXECUTABLE="python3"', *map(str, sorted((ROOT / "rocking_model" / "fmi" / "binary").glob("*.c")))]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr

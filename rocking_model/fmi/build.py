@@ -248,7 +248,7 @@ def compile_binary(out_dir: Path) -> Path:
     out = Path(out_dir) / f"fmi2_python{suffix}"
     sources = sorted(str(p) for p in FMI_BINARY.glob("*.c"))
     cmd = [cc, "-shared", "-fPIC", "-O2", "-std=c99", "-Wall", "-Wextra", "-fvisibility=hidden",
-           f"-I{fmi_headers()}", f"-I{include}", f"-I{FMI_BINARY}",
+           f"-I{fmi_headers()}", f"-I{include}", f"-I{FMI_BINARY}", f"-I{ENGINE_SRC}",
            f"-DFMI_PYTHON_LIBRARY={_c_string(libpython())}", f"-DFMI_PYTHON_EXECUTABLE={_c_string(sys.executable)}",
            *sources, "-o", str(out)]
     if platform.system() == "Linux":

@@ -1,17 +1,7 @@
 /* The FMI 2.0 plumbing shared by fmi2_cs.c and standalone/fmi2_engine.c (fmi2_common.h): messages, state
  * checks, status bookkeeping, the serialized state's header, and every FMI call but fmi2Instantiate, each
  * written once over the backend's hooks (fmi2c_backend_*). */
-/* the floating-point contract of rocking_model/engine/src/rk_fp.h (this file is also built into the pythonfmu
- * FMUs' binary, without the engine's headers): no contraction into multiply-adds, whatever the flags */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#elif defined(__GNUC__)
-#pragma GCC optimize("fp-contract=off")
-#elif defined(_MSC_VER)
-#pragma fp_contract(off)
-#else
-#pragma STDC FP_CONTRACT OFF
-#endif
+#include "rk_fp.h" /* first: the engine's floating-point contract, no contraction into multiply-adds */
 #define FMI2C_IMPLEMENTATION /* none of the backends' shorthands */
 #include "fmi2_common.h"
 #include "uri.h"
