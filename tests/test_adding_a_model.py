@@ -84,7 +84,6 @@ MODEL_FILE = textwrap.dedent('''
         model_class = CappedBlock
         description = "Rigid block with a lumped top mass on a rigid ground with horizontal acceleration ag."
         default_experiment = DefaultExperiment(start_time=0.0, stop_time=2.0, step_size=0.01)
-        variables = ModelSlave.variables_of(CappedBlock)
 ''')
 
 

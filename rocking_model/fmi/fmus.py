@@ -41,7 +41,6 @@ class RigidRockingBlock(ModelSlave):
                    "the vertical ground acceleration ag_v (positive upward: an effective gravity g + ag_v). "
                    "Outputs freeze once the block overturns.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
-    variables = ModelSlave.variables_of(RigidBlock)
 
 
 class FlexibleRockingOscillator(ModelSlave):
@@ -58,7 +57,6 @@ class FlexibleRockingOscillator(ModelSlave):
                    "effective gravity g + ag_v) are held constant over each communication step (or "
                    "interpolated linearly with fmi2SetRealInputDerivatives).")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
-    variables = ModelSlave.variables_of(FlexibleOscillator)
 
 
 class PostTensionedRockingBlock(ModelSlave):
@@ -74,7 +72,6 @@ class PostTensionedRockingBlock(ModelSlave):
                    "interpolated linearly with fmi2SetRealInputDerivatives). Outputs freeze once the block "
                    "overturns.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=5.0, step_size=0.01)
-    variables = ModelSlave.variables_of(PostTensionedBlock)
 
 
 class GroundMotionSource(RockingSlave):

@@ -845,15 +845,20 @@ class ModelSlave(RockingSlave):
     model's declarations: parameters (start values, units, ranges, descriptions), initial values, the solver
     options (`rocking_model.simulation.SOLVER_PARAMETERS`), the work budget, the inputs ag and ag_v (horizontal
     and vertical ground acceleration), the model's outputs and the simulator's (contact, impacts,
-    overturned). An FMU script only names the model::
+    overturned). An FMU script only names the model; its variable table follows (`variables_of`, set when the
+    class is made, unless the class writes its own)::
 
         class RigidRockingBlock(ModelSlave):
             model_class = RigidBlock
             description = "..."
-            variables = ModelSlave.variables_of(RigidBlock)
     """
 
     model_class: ClassVar[type] = None
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("model_class") is not None and "variables" not in cls.__dict__:
+            cls.variables = ModelSlave.variables_of(cls.model_class)
 
     @staticmethod
     def variables_of(model_class) -> tuple:
