@@ -13,7 +13,6 @@ from .engine import ENGINES, CompiledIntegrator
 from .ground_motion import ConstantMotion, GroundMotion, TwoComponentMotion, as_ground_motion, checked_motion
 from .integrators import SCHEMES as SCHEME_CLASSES
 from .integrators import Report, SolverOptions, scheme_choices
-from .integrators.schemes import METHOD_CHOICES
 from .models.base import RockingModel
 from .params import Param
 from .tolerances import DEFAULT_TOLERANCES, ZENO_TOL, ContactTolerances
@@ -166,8 +165,6 @@ class Simulator:
         if not isinstance(tolerances, ContactTolerances):
             raise ValueError(f"tolerances must be a ContactTolerances, got {tolerances!r}")
         self.on_report = check_choice("on_report", on_report, _ON_REPORT)
-        # (scipy's name RK45 is accepted for DOPRI5; the engine reads the canonical names)
-        method = check_choice("method", method, METHOD_CHOICES)
         options = SolverOptions.of(dt, tolerance, theta, zeno_tol, method, impact_log_size, tolerances)
         if isinstance(engine, str) and engine == "python":
             raise ValueError("engine = 'python' is not supported: the Python reference engine was removed; "

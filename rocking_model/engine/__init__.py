@@ -208,7 +208,7 @@ class CompiledIntegrator(Integrator):
 
     engine = "c"
 
-    def __init__(self, model, scheme: str, mode, q, v, t0: float, options):
+    def __init__(self, model, scheme: str, mode, q, v, t0: float, options, settings: dict):
         try:
             _engine = _extension()
         except ImportError as exc:
@@ -221,6 +221,7 @@ class CompiledIntegrator(Integrator):
         self.model = model
         self._scheme_cls = ref_cls
         self._options = options
+        self._settings = settings               # the scheme's checked options (the method's canonical name)
         self._t0 = float(t0)
         self._start = (int(mode), _floats(q), _floats(v))
         self._engine = self._new_engine(_engine)
@@ -247,9 +248,7 @@ class CompiledIntegrator(Integrator):
     def from_options(cls, model, mode, q, v, t0, options, scheme: str = "event_driven") -> "CompiledIntegrator":
         # the scheme's checks of its options first (messages naming the option), then the engine's
         settings = SCHEMES[scheme].settings(model, options)
-        integ = cls(model, scheme, mode, q, v, t0, options)
-        integ._settings = settings
-        return integ
+        return cls(model, scheme, mode, q, v, t0, options, settings)
 
     def __getattr__(self, name):
         # the scheme's settings (dt_max, theta, tolerance, method, tolerances) as checked from the options;
@@ -278,13 +277,13 @@ class CompiledIntegrator(Integrator):
         position, in the extension's order (a keyword costs it a dictionary lookup each)."""
         o = self._options
         return _engine.Engine(*self._engine_args(), None, self._scheme_cls.code, self._t0, float(o.dt_max),
-                              float(o.tolerance), float(o.theta), float(o.zeno_tol), o.method, o.impact_log_size,
-                              _MAX_EVENTS, o.tolerances, self._start)
+                              float(o.tolerance), float(o.theta), float(o.zeno_tol), self._settings["method"],
+                              o.impact_log_size, _MAX_EVENTS, o.tolerances, self._start)
 
     def _engine_kwargs(self):
         o = self._options
         return dict(scheme=self._scheme_cls.code, t0=self._t0, dt_max=float(o.dt_max), tolerance=float(o.tolerance),
-                    theta=float(o.theta), zeno_tol=float(o.zeno_tol), method=o.method,
+                    theta=float(o.theta), zeno_tol=float(o.zeno_tol), method=self._settings["method"],
                     impact_log_size=o.impact_log_size, tolerances=o.tolerances)
 
     # ------------------------------------------------------------------ pickling (ensembles)

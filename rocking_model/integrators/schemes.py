@@ -37,8 +37,10 @@ class MoreauJean(Integrator):
 
     @staticmethod
     def settings(model, options) -> dict:
+        # (the method is unused here, but the engine reads it for both schemes: checked as the other scheme does)
         return {"theta": check_real("theta", options.theta, lo=0.5, hi=1.0),
-                "dt_max": min(options.dt_max or DT_DEFAULT, model.step_limit), "tolerances": options.tolerances}
+                "dt_max": min(options.dt_max or DT_DEFAULT, model.step_limit), "tolerances": options.tolerances,
+                "method": check_choice("method", options.method, METHOD_CHOICES)}
 
     @staticmethod
     def read_state(model, state, impact_log_size) -> dict:
