@@ -184,11 +184,11 @@ rk_status rk_check_times(const char *key, const double *times, long long n, doub
     return RK_OK;
 }
 
-rk_status rk_check_configuration(const rk_model *m, const char *key, const double *q, const double *v,
-                                 int overturned, double gap_tol, rk_error *err)
+rk_status rk_check_pose(const rk_model *m, const char *key, const double *q, const double *v, int overturned,
+                        double gap_tol, rk_error *err)
 {
     const rk_model_ops *ops = m->ops;
-    double phi = q[ops->phi_index], g[RK_MAX_CONTACTS], out[RK_MAX_OUTPUTS], gmin;
+    double phi = q[ops->phi_index], g[RK_MAX_CONTACTS], gmin;
     int i;
     if (!overturned && !(fabs(phi) < RK_HALF_PI))
         return rk_fail(err, RK_ERR_VALUE, "state field '%s': |phi| = %g rad reaches pi/2 but 'overturned' is "
@@ -210,6 +210,18 @@ rk_status rk_check_configuration(const rk_model *m, const char *key, const doubl
     if (!overturned && gmin < -gap_tol)
         return rk_fail(err, RK_ERR_VALUE, "state field '%s': a base corner is %g m below the ground; allowed at "
                        "most %g m", key, -gmin, gap_tol);
+    return RK_OK;
+}
+
+rk_status rk_check_configuration(const rk_model *m, const char *key, const double *q, const double *v,
+                                 int overturned, double gap_tol, rk_error *err)
+{
+    const rk_model_ops *ops = m->ops;
+    double out[RK_MAX_OUTPUTS];
+    int i;
+    rk_status st = rk_check_pose(m, key, q, v, overturned, gap_tol, err);
+    if (st != RK_OK)
+        return st;
     ops->outputs(m, q, v, out);
     {
         char names[RK_MSG_LEN];
@@ -619,33 +631,22 @@ static rk_status check_outputs(rk_engine *e)
     return check_output_values(e, out);
 }
 
-/** The pose the engine ends a call in, held to the bounds its set_state holds a state to (rk_check_configuration:
- *  |phi| below pi/2 unless overturned, no base corner more than the model's length scale below the ground), so
+/** The pose the engine ends a call in, held to the bounds its set_state holds a state to (rk_check_pose), so
  *  that every state the engine reports it also takes back (an FMU serializes it and reads it back). An
- *  integration never ends there; a run from an absurd state that set_state accepted may (a velocity of 1e12
- *  rad/s): that is a diverged motion, refused with the state before the call kept. The outputs were found finite
- *  before. */
+ *  integration never ends outside them; a run from an absurd state that set_state accepted may (a velocity of
+ *  1e12 rad/s): that is a diverged motion, refused with the state before the call kept. (The outputs were found
+ *  finite before.) */
 static rk_status check_end_pose(rk_engine *e)
 {
-    const rk_model *m = &e->model;
-    double q[RK_MAX_DOF], v[RK_MAX_DOF], g[RK_MAX_CONTACTS], phi;
-    int i;
-    if (rk_engine_overturned(e))
-        return RK_OK;
+    double q[RK_MAX_DOF], v[RK_MAX_DOF];
+    rk_error why;
     rk_engine_full_state(e, q, v);
-    phi = q[m->ops->phi_index];
-    if (!(fabs(phi) < RK_HALF_PI))
-        return rk_fail(&e->error, RK_ERR_NONFINITE, "the motion diverged: at t = %.17g s |phi| = %g rad is past "
-                       "pi/2 without the overturning found; the state before the call is kept", rk_engine_time(e),
-                       fabs(phi));
-    m->ops->gaps(m, q, g);
-    for (i = 0; i < m->ops->n_contacts; i++) {
-        if (!(g[i] >= -m->length_scale))
-            return rk_fail(&e->error, RK_ERR_NONFINITE, "the motion diverged: at t = %.17g s a base corner would "
-                           "be %g m below the ground, beyond the %g m a state may have; the state before the call "
-                           "is kept", rk_engine_time(e), -g[i], m->length_scale);
-    }
-    return RK_OK;
+    if (rk_check_pose(&e->model, is_mj(e) ? "q" : "y", q, v, rk_engine_overturned(e), e->model.length_scale,
+                      &why) == RK_OK)
+        return RK_OK;
+    return rk_fail(&e->error, RK_ERR_NONFINITE, "the motion diverged: the state it ends in at t = %.17g s is "
+                   "outside the states the engine takes (%s); the state before the call is kept", rk_engine_time(e),
+                   why.message);
 }
 
 /** Run ``action`` with the internal checkpoint: on failure the engine is restored and e->fail_t says where

@@ -153,8 +153,12 @@ struct rk_engine {
  *  round-off); RK_ERR_VALUE naming field ``key`` otherwise. */
 rk_status rk_check_times(const char *key, const double *times, long long n, double t, long long impacts,
                          rk_error *err);
-/** state.check_configuration: |phi| < pi/2 unless overturned, at rest if overturned, corners not below the
- *  ground by more than gap_tol [m], outputs finite; RK_ERR_VALUE naming field ``key`` otherwise. */
+/** The pose of a state: |phi| < pi/2 unless overturned, at rest if overturned, corners not below the ground by
+ *  more than gap_tol [m]; RK_ERR_VALUE naming field ``key`` otherwise. */
+rk_status rk_check_pose(const rk_model *m, const char *key, const double *q, const double *v, int overturned,
+                        double gap_tol, rk_error *err);
+/** state.check_configuration: rk_check_pose, and the outputs finite; RK_ERR_VALUE naming field ``key``
+ *  otherwise. */
 rk_status rk_check_configuration(const rk_model *m, const char *key, const double *q, const double *v,
                                  int overturned, double gap_tol, rk_error *err);
 /** Save / load the state (rk_core and the log cursors) to / from a caller's slot (the extension's guard
